@@ -1,0 +1,44 @@
+#pragma once
+// Candidate pairs from the Verlet list and the contacts among them, as flat arrays walked in
+// order by the force loop. A pair is a contact while its normal force is > 0. Pairs persist
+// between detections so the tangential force keeps its history.
+#include <vector>
+
+#include "core/Types.hpp"
+
+namespace trueaniso {
+
+struct Contacts {
+  // Pair identity: member spheres m1 < m2, their bodies, and the periodic image of m2
+  // (member positions are unwrapped, so this stays valid as the bodies move).
+  std::vector<int> m1, m2, b1, b2;
+  std::vector<Vec3i> shift;
+  std::vector<Real> rbar;        // Eq. (7): 2 r1 r2 / (r1 + r2)
+
+  // State of the last force evaluation.
+  std::vector<Vec3> normal;      // unit n from sphere 1 to sphere 2
+  std::vector<Vec3> branch;      // L between the two body centres (periodic image aware)
+  std::vector<Real> overlap;     // delta, <= 0 when not touching
+  std::vector<Real> normalForce; // N >= 0
+  std::vector<Real> kn;          // tangent normal stiffness, Eq. (5)
+  std::vector<Vec3> shearForce;  // tangential force on sphere 2 (history variable)
+  std::vector<Vec3> force;       // total force on body 2 (= -force on body 1)
+  std::vector<Vec3> torque1, torque2;
+
+  // Incidence lists for gathering forces on bodies without write conflicts:
+  // contacts of body b are incidence[incBegin[b] .. incBegin[b+1]), an entry c >= 0 means b is
+  // side 2 of pair c, an entry ~c (< 0) means side 1.
+  std::vector<int> incBegin, incidence;
+
+  int size() const { return static_cast<int>(m1.size()); }
+  bool active(int c) const { return normalForce[c] > 0; }
+
+  void resize(int n) {
+    m1.resize(n); m2.resize(n); b1.resize(n); b2.resize(n); shift.resize(n); rbar.resize(n);
+    normal.resize(n, Vec3::Zero()); branch.resize(n, Vec3::Zero()); overlap.resize(n, 0.0);
+    normalForce.resize(n, 0.0); kn.resize(n, 0.0); shearForce.resize(n, Vec3::Zero());
+    force.resize(n, Vec3::Zero()); torque1.resize(n, Vec3::Zero()); torque2.resize(n, Vec3::Zero());
+  }
+};
+
+}  // namespace trueaniso

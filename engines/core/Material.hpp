@@ -1,0 +1,33 @@
+#pragma once
+// Particle material of the paper's Table 1 and the coefficients of Eqs. (5)-(6).
+#include <cmath>
+
+#include "core/Types.hpp"
+
+namespace trueaniso {
+
+struct Material {
+  Real shearModulus = 18e9;  // G_g (Pa)
+  Real poisson = 0.15;       // nu_g
+  Real density = 2500.0;     // kg/m^3
+  Real friction = 0.5;       // mu: 0.5 while consolidating, 1e23 while probing
+
+  void validate() const {
+    require(shearModulus > 0, "shear modulus must be > 0");
+    require(poisson > -1.0 && poisson < 0.5, "Poisson's ratio must lie in (-1, 0.5)");
+    require(density > 0, "density must be > 0");
+    require(friction >= 0, "friction coefficient must be >= 0");
+  }
+  // E* = G/(1-nu): the contact modulus of two identical spheres, E/(2(1-nu^2)).
+  Real contactModulus() const { return shearModulus / (1.0 - poisson); }
+  // C_n of Eq. (5): (3/4) [8G/(3(1-nu))]^(2/3), equal to (3 E*^2)^(1/3).
+  Real Cn() const { return 0.75 * std::pow(8.0 * shearModulus / (3.0 * (1.0 - poisson)), 2.0 / 3.0); }
+  // C_s of Eq. (6): 2 [3 G^2 (1-nu)]^(1/3) / (2-nu).
+  Real Cs() const {
+    return 2.0 * std::cbrt(3.0 * shearModulus * shearModulus * (1.0 - poisson)) / (2.0 - poisson);
+  }
+  // k_s/k_n = C_s/C_n = 2(1-nu)/(2-nu) for every contact of this law.
+  Real stiffnessRatio() const { return 2.0 * (1.0 - poisson) / (2.0 - poisson); }
+};
+
+}  // namespace trueaniso

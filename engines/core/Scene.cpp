@@ -1,0 +1,123 @@
+#include "core/Scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace trueaniso {
+
+namespace {
+constexpr Real kPi = 3.14159265358979323846;
+Real sphereVolume(Real r) { return 4.0 / 3.0 * kPi * r * r * r; }
+}  // namespace
+
+int Scene::addSphere(const Vec3& pos, Real radius) {
+  require(radius > 0 && std::isfinite(radius), "sphere radius must be > 0");
+  require(pos.allFinite(), "sphere position must be finite");
+  const int b = bodies.size();
+  const Real m = material.density * sphereVolume(radius);
+  bodies.pos.push_back(pos);
+  bodies.mass.push_back(m);
+  bodies.inertia.push_back(Vec3::Constant(0.4 * m * radius * radius));
+  bodies.orientation.push_back(Quat::Identity());
+  bodies.memberBegin.push_back(members.size() + 1);
+  bodies.resizeDynamics();
+  members.body.push_back(b);
+  members.offset.push_back(Vec3::Zero());
+  members.radius.push_back(radius);
+  members.pos.push_back(pos);
+  detectionInvalid = true;
+  return b;
+}
+
+int Scene::addClump(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,
+                    const std::vector<Real>& radii, Real mass, const Vec3& inertia) {
+  require(!offsets.empty() && offsets.size() == radii.size(),
+          "a clump needs as many member offsets as radii, at least one");
+  require(mass > 0 && (inertia.array() > 0).all(), "clump mass and inertia must be > 0");
+  for (Real r : radii) require(r > 0 && std::isfinite(r), "clump member radius must be > 0");
+  const int b = bodies.size();
+  bodies.pos.push_back(pos);
+  bodies.mass.push_back(mass);
+  bodies.inertia.push_back(inertia);
+  bodies.orientation.push_back(orientation.normalized());
+  for (size_t k = 0; k < offsets.size(); ++k) {
+    members.body.push_back(b);
+    members.offset.push_back(offsets[k]);
+    members.radius.push_back(radii[k]);
+    members.pos.push_back(pos + bodies.orientation.back() * offsets[k]);
+  }
+  bodies.memberBegin.push_back(members.size());
+  bodies.resizeDynamics();
+  detectionInvalid = true;
+  return b;
+}
+
+void Scene::setSphereRadius(int b, Real radius) {
+  require(bodies.memberCount(b) == 1, "setSphereRadius applies to single spheres only");
+  require(radius > 0, "sphere radius must be > 0");
+  const Real m = material.density * sphereVolume(radius);
+  bodies.mass[b] = m;
+  bodies.inertia[b] = Vec3::Constant(0.4 * m * radius * radius);
+  members.radius[bodies.memberBegin[b]] = radius;
+}
+
+void Scene::refreshMembers() {
+  const int nb = bodies.size();
+  if (!hasClumps()) {
+    members.pos = bodies.pos;
+    return;
+  }
+#pragma omp parallel for schedule(static)
+  for (int b = 0; b < nb; ++b) {
+    const Quat& q = bodies.orientation[b];
+    for (int m = bodies.memberBegin[b]; m < bodies.memberBegin[b + 1]; ++m)
+      members.pos[m] = bodies.pos[b] + q * members.offset[m];
+  }
+}
+
+void Scene::rescale(Real f) {
+  require(f > 0 && std::isfinite(f), "rescale factor must be > 0");
+  const Real f2 = f * f, f3 = f2 * f;
+  cell.size *= f;
+  cell.refSize *= f;
+  for (int b = 0; b < bodies.size(); ++b) {
+    bodies.pos[b] *= f;
+    bodies.vel[b] *= f;  // same strain rate field, same angular velocities
+    bodies.mass[b] *= f3;
+    bodies.inertia[b] *= f3 * f2;
+    bodies.force[b] *= f2;
+    bodies.torque[b] *= f3;
+  }
+  for (int m = 0; m < members.size(); ++m) {
+    members.offset[m] *= f;
+    members.radius[m] *= f;
+    members.pos[m] *= f;
+  }
+  Contacts& C = contacts;
+  for (int c = 0; c < C.size(); ++c) {
+    C.rbar[c] *= f; C.branch[c] *= f; C.overlap[c] *= f; C.kn[c] *= f;
+    C.normalForce[c] *= f2; C.shearForce[c] *= f2; C.force[c] *= f2;
+    C.torque1[c] *= f3; C.torque2[c] *= f3;
+  }
+  detectionInvalid = true;
+}
+
+Real Scene::solidVolume() const {
+  Real v = 0;
+  for (Real r : members.radius) v += sphereVolume(r);
+  return v;
+}
+
+Real Scene::maxRadius() const {
+  return members.radius.empty() ? 0.0 : *std::max_element(members.radius.begin(), members.radius.end());
+}
+
+void Scene::validate() const {
+  material.validate();
+  require(bodies.size() > 0, "the scene has no particles");
+  require((cell.size.array() > 0).all() && cell.size.allFinite(), "cell sizes must be > 0");
+  require(solidVolume() < cell.volume(),
+          "the particles' volume exceeds the cell's: the size distribution cannot fit the box");
+}
+
+}  // namespace trueaniso

@@ -1,0 +1,52 @@
+#pragma once
+// The scene owns the particles, the cell and the contacts; engines own only their parameters
+// and state (as YADE's Scene and O.engines).
+#include <vector>
+
+#include "core/Bodies.hpp"
+#include "core/Cell.hpp"
+#include "core/Contacts.hpp"
+#include "core/Material.hpp"
+
+namespace trueaniso {
+
+struct Scene {
+  Cell cell;
+  Material material;
+  Bodies bodies;
+  Members members;
+  Contacts contacts;
+
+  Real dt = 0;       // time step; set by TimeStepper or by the user
+  Real time = 0;
+  long step = 0;
+  bool blockRotations = false;  // scene-wide: no angular velocity is integrated
+  // Set whenever something outside the integrator moves bodies, changes radii or the cell,
+  // so that the contact detection rebuilds its list before the next force evaluation.
+  bool detectionInvalid = true;
+
+  int addSphere(const Vec3& pos, Real radius);
+  // A rigid clump of member spheres with given offsets (body frame, about the centre of mass),
+  // mass and principal inertia; the caller computes them for overlapping members.
+  int addClump(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,
+               const std::vector<Real>& radii, Real mass, const Vec3& inertia);
+  // Single spheres only: change the radius and the mass and inertia that follow from it.
+  void setSphereRadius(int body, Real radius);
+
+  bool hasClumps() const { return members.size() != bodies.size(); }
+  // Member world positions from body positions and orientations (clumps only; for single
+  // spheres the member position is the body position and is kept equal by this call).
+  void refreshMembers();
+
+  // Geometric similarity x -> f x of the whole scene (cell, positions, radii, clump offsets).
+  // Hertz-Mindlin forces scale as f^2 (N ~ sqrt(R) delta^1.5, k_s ~ sqrt(R delta)) and lengths
+  // as f, so every stress is unchanged and an equilibrium stays one: this is how a specimen made
+  // by radius expansion is brought back to the exact size distribution. Masses scale as f^3.
+  void rescale(Real f);
+
+  Real solidVolume() const;  // sum of the member sphere volumes (clumps: see Fabric for overlap)
+  Real maxRadius() const;
+  void validate() const;     // throws InputError for an unusable scene
+};
+
+}  // namespace trueaniso

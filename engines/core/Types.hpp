@@ -1,0 +1,26 @@
+#pragma once
+// Basic numeric types. Everything is SI (m, kg, s, N, Pa) and double precision, as in yade-double.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace trueaniso {
+
+using Real = double;
+using Vec3 = Eigen::Vector3d;
+using Vec3i = Eigen::Vector3i;
+using Mat3 = Eigen::Matrix3d;
+using Quat = Eigen::Quaterniond;
+
+// Thrown for bad input before any work starts; the Python layer turns it into one clear line.
+struct InputError : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+inline void require(bool ok, const std::string& what) {
+  if (!ok) throw InputError(what);
+}
+
+}  // namespace trueaniso

@@ -1,0 +1,22 @@
+#pragma once
+// An engine acts on the scene once per step (or every `every` steps), in the order of the
+// simulation's engine list, as in YADE's O.engines. It owns only its parameters and state.
+#include <string>
+
+#include "core/Scene.hpp"
+
+namespace trueaniso {
+
+class Engine {
+ public:
+  virtual ~Engine() = default;
+  virtual void apply(Scene& scene) = 0;
+  virtual std::string name() const = 0;
+  long every = 1;  // run at steps where step % every == 0
+  bool dead = false;  // skipped when true (for example contact detection during a probe)
+  // Set by an engine that reached its goal (a servo at its target, a probe at gamma): the
+  // simulation finishes the current step and returns. Cleared by the next run().
+  bool done = false;
+};
+
+}  // namespace trueaniso

@@ -1,0 +1,28 @@
+#pragma once
+// Leap-frog integration of body motion with the local non-viscous damping of YADE's
+// NewtonIntegrator (each acceleration component scaled by 1 -/+ damping against the velocity),
+// plus the cell's deformation: positions follow the affine field of the cell's strain rates
+// and velocities are stored as fluctuations about it.
+#include "dynamics/Engine.hpp"
+
+namespace trueaniso {
+
+class NewtonIntegrator : public Engine {
+ public:
+  Real damping = 0.2;  // YADE's default
+  // The step is checked against the two-body stability limit of every contact whenever it
+  // changes and at least every `checkEvery` steps; an unstable step is refused with an error.
+  long checkEvery = 100;
+
+  void apply(Scene& scene) override;
+  std::string name() const override { return "NewtonIntegrator"; }
+
+ private:
+  template <bool Rotations, bool Clumps>
+  void integrate(Scene& scene) const;
+  void checkStability(const Scene& scene);
+  Real checkedDt_ = -1;
+  long checkedStep_ = -1;
+};
+
+}  // namespace trueaniso

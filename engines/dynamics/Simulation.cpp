@@ -1,0 +1,29 @@
+#include "dynamics/Simulation.hpp"
+
+namespace trueaniso {
+
+Simulation::Simulation(std::shared_ptr<Scene> scene) : scene_(std::move(scene)) {
+  require(scene_ != nullptr, "Simulation needs a scene");
+}
+
+long Simulation::run(long n) {
+  require(n >= 0, "number of steps must be >= 0");
+  scene_->validate();
+  for (auto& e : engines_) e->done = false;
+  long steps = 0;
+  while (steps < n) {
+    bool stop = false;
+    for (auto& e : engines_) {
+      if (e->dead || (e->every > 1 && scene_->step % e->every != 0)) continue;
+      e->apply(*scene_);
+      stop = stop || e->done;
+    }
+    scene_->time += scene_->dt;
+    ++scene_->step;
+    ++steps;
+    if (stop) break;
+  }
+  return steps;
+}
+
+}  // namespace trueaniso

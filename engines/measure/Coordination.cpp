@@ -1,0 +1,53 @@
+#include "measure/Coordination.hpp"
+
+#include <limits>
+
+#include "measure/Reduce.hpp"
+
+namespace trueaniso {
+
+Real Coordination::mechanical() const {
+  const long active = particles - noContact - oneContact;
+  if (active <= 0) return std::numeric_limits<Real>::quiet_NaN();
+  return (2.0 * contacts - oneContact) / active;
+}
+
+std::vector<int> contactsPerBody(const Scene& s) {
+  const Contacts& C = s.contacts;
+  const int nb = s.bodies.size();
+  std::vector<int> count(nb, 0);
+  if (C.incBegin.size() != static_cast<size_t>(nb) + 1) return count;
+#pragma omp parallel for schedule(static)
+  for (int b = 0; b < nb; ++b) {
+    int k = 0;
+    for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
+      const int e = C.incidence[q];
+      if (C.normalForce[e >= 0 ? e : ~e] > 0) ++k;
+    }
+    count[b] = k;
+  }
+  return count;
+}
+
+Coordination coordination(const Scene& s) {
+  Coordination z;
+  const std::vector<int> count = contactsPerBody(s);
+  z.particles = static_cast<long>(count.size());
+  long ends = 0;
+  for (int k : count) {
+    ends += k;
+    if (k == 0) ++z.noContact;
+    if (k == 1) ++z.oneContact;
+  }
+  z.contacts = ends / 2;
+  return z;
+}
+
+Real voidRatio(const Scene& s) {
+  const Bodies& B = s.bodies;
+  const Real mass = blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.mass[b]; });
+  const Real solid = mass / s.material.density;
+  return (s.cell.volume() - solid) / solid;
+}
+
+}  // namespace trueaniso

@@ -1,0 +1,49 @@
+#include "measure/Stress.hpp"
+
+#include <limits>
+
+#include "measure/Reduce.hpp"
+
+namespace trueaniso {
+
+Mat3 loveWeberStress(const Scene& s) {
+  const Contacts& C = s.contacts;
+  const Mat3 sum = blockSum<Mat3>(C.size(), Mat3::Zero(), [&](int c, Mat3& acc) {
+    if (C.normalForce[c] > 0) acc.noalias() += C.force[c] * C.branch[c].transpose();
+  });
+  return sum / s.cell.volume();
+}
+
+Real unbalancedForce(const Scene& s) {
+  const Bodies& B = s.bodies;
+  const Contacts& C = s.contacts;
+  const Real bodySum = blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.force[b].norm(); });
+  struct Acc {
+    Real f = 0;
+    long n = 0;
+    Acc& operator+=(const Acc& o) { f += o.f; n += o.n; return *this; }
+  };
+  const Acc contact = blockSum<Acc>(C.size(), Acc{}, [&](int c, Acc& acc) {
+    if (C.normalForce[c] > 0) { acc.f += C.force[c].norm(); ++acc.n; }
+  });
+  if (contact.n == 0 || contact.f == 0) return std::numeric_limits<Real>::quiet_NaN();
+  return (bodySum / B.size()) / (contact.f / contact.n);
+}
+
+Vec3 affineAxialStiffness(const Scene& s) {
+  const Contacts& C = s.contacts;
+  const Real ratio = s.material.stiffnessRatio();
+  const Vec3 sum = blockSum<Vec3>(C.size(), Vec3::Zero(), [&](int c, Vec3& acc) {
+    const Real kn = C.kn[c];
+    if (kn <= 0) return;
+    const Vec3& n = C.normal[c];
+    const Vec3& L = C.branch[c];
+    for (int k = 0; k < 3; ++k) {
+      // K_kk = sum L_k^2 [k_s + (k_n - k_s) n_k^2], the kk kk component of Eq. (32).
+      acc[k] += L[k] * L[k] * (ratio * kn + (1.0 - ratio) * kn * n[k] * n[k]);
+    }
+  });
+  return sum / s.cell.volume();
+}
+
+}  // namespace trueaniso

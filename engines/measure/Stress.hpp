@@ -1,0 +1,20 @@
+#pragma once
+// Love-Weber average stress and YADE's unbalanced force.
+#include "core/Scene.hpp"
+
+namespace trueaniso {
+
+// sigma = (1/V) sum_c F_c (x) L_c over contacts, F_c the force on body 2, L_c the branch from
+// body 1 to body 2 (clumps: between clump centres). Compression is positive, so this is minus
+// YADE's utils.getStress(). Not symmetrised: the antisymmetric part measures imbalance.
+Mat3 loveWeberStress(const Scene& scene);
+
+// YADE's Shop::unbalancedForce(useMaxForce=False): mean |resultant force| over bodies divided by
+// the mean |contact force| over contacts.
+Real unbalancedForce(const Scene& scene);
+
+// d sigma_kk / d epsilon_kk of an affine strain of axis k, (1/V) sum_c k_n (n_k L_k)^2 (plus the
+// shear part); an upper bound of the true stiffness that servos use to scale their gain.
+Vec3 affineAxialStiffness(const Scene& scene);
+
+}  // namespace trueaniso

@@ -1,0 +1,34 @@
+"""trueaniso: DEM study of anisotropic elasticity of granular materials under true triaxial stress.
+
+The physics lives in the C++ engines (module ``_trueaniso``, built by CMake into ``build/python``);
+this package composes them: specimens, protocols, the YADE bridge, file formats.
+"""
+import os
+import sys
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+REPO_ROOT = os.path.dirname(os.path.dirname(_HERE))
+
+
+def _find_extension():
+    """Locate the compiled module: $TRUEANISO_BUILD/python, else <repo>/build/python."""
+    candidates = []
+    if os.environ.get("TRUEANISO_BUILD"):
+        candidates.append(os.path.join(os.environ["TRUEANISO_BUILD"], "python"))
+    candidates.append(os.path.join(REPO_ROOT, "build", "python"))
+    for path in candidates:
+        if os.path.isdir(path) and path not in sys.path:
+            sys.path.insert(0, path)
+    try:
+        import _trueaniso  # noqa: F401
+    except ImportError as exc:  # pragma: no cover - message for users, tested by hand
+        raise ImportError(
+            "trueaniso: the compiled module _trueaniso was not found in %s; build it first "
+            "(./main.sh or ./test.sh do, or: cmake -S . -B build && cmake --build build)" % candidates
+        ) from exc
+    return _trueaniso
+
+
+engines = _find_extension()
+__version__ = "0.1.0"
+FORMAT_VERSION = 1

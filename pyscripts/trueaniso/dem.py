@@ -1,0 +1,58 @@
+"""Composition of the standard engine chain, and the unit conversions its parameters need."""
+import math
+
+from . import engines as _e
+
+
+class Chain:
+    """A simulation with the usual order: detection, forces, [controllers], time step, integrator.
+
+    Attributes name the engines so protocols can switch them (e.g. ``chain.detection.dead = True``
+    during a probe, where nothing slides and the contact network cannot change).
+    """
+
+    def __init__(self, scene, damping=0.2, skin_factor=0.2, safety=0.5, max_dt=None, controllers=()):
+        self.scene = scene
+        self.detection = _e.ContactDetection()
+        self.detection.skin_factor = skin_factor
+        self.forces = _e.ContactForces()
+        self.timestep = _e.TimeStepper()
+        self.timestep.safety = safety
+        self.timestep.max_dt = max_dt if max_dt is not None else reference_time_step(scene)
+        self.integrator = _e.NewtonIntegrator()
+        self.integrator.damping = damping
+        self.controllers = list(controllers)
+        self.sim = _e.Simulation(scene)
+        for e in [self.detection, self.forces] + self.controllers + [self.timestep, self.integrator]:
+            self.sim.add(e)
+        if scene.dt <= 0:
+            scene.dt = self.timestep.max_dt
+
+    def run(self, n):
+        return self.sim.run(int(n))
+
+
+def reference_contact_force(scene, pressure):
+    """Mean contact force expected at a pressure: p = Nc <N l> / V with Nc l ~ 3 V_s Z / (2 pi r^2 ...).
+
+    A bound is enough here (it only caps the time step before contacts exist): for spheres of
+    mean diameter d at solid fraction ~0.6 and Z ~ 6, <N> ~ pi d^2 p / (0.6 Z) ~ 0.9 d^2 p;
+    we use 4 d^2 p so the cap is safe for the stiffest contacts of a well-formed network.
+    """
+    radii = scene.radii
+    d = 2.0 * float(radii.mean())
+    return 4.0 * d * d * pressure
+
+
+def reference_time_step(scene, pressure=100e3, safety=0.5, coordination=12):
+    """Time step for contacts carrying the reference force at `pressure` (k_n of Eq. 5)."""
+    radii = scene.radii
+    mmin = float(scene.masses.min())
+    force = reference_contact_force(scene, pressure)
+    kn = scene.Cn * (float(radii.max()) * force) ** (1.0 / 3.0)  # rbar <= r_max: an upper bound
+    return safety * math.sqrt(mmin / (coordination * kn))
+
+
+def strain_rate_for_inertial_number(inertial_number, d50, density, pressure):
+    """Strain rate with inertial number I = rate d sqrt(rho/p) (I < 1e-3: quasi-static)."""
+    return inertial_number / (d50 * math.sqrt(density / pressure))

@@ -1,0 +1,78 @@
+"""Particle size distributions given as cumulative mass fraction against diameter.
+
+The paper gives D50 and Cu only (sphere, clump1: D50 = 0.195 mm, Cu = 1.25; clump2: 0.216 mm,
+1.43). We take the simplest gradation that has both: cumulative mass linear in diameter
+between d_min and d_max. Then D50 = (d_min + d_max)/2 and Cu = D60/D10 fix d_min and d_max.
+Any other gradation can be given as a table (sizes, cumulative mass), as YADE's psdSizes/psdCumm.
+"""
+import numpy as np
+
+
+class SizeDistribution:
+    def __init__(self, diameters, cumulative_mass):
+        d = np.asarray(diameters, dtype=float)
+        c = np.asarray(cumulative_mass, dtype=float)
+        if d.ndim != 1 or d.shape != c.shape or d.size < 2:
+            raise ValueError("size distribution: diameters and cumulative mass need the same length >= 2")
+        if np.any(d <= 0) or np.any(np.diff(d) <= 0):
+            raise ValueError("size distribution: diameters must be > 0 and increasing")
+        if abs(c[0]) > 1e-12 or abs(c[-1] - 1) > 1e-12 or np.any(np.diff(c) < 0):
+            raise ValueError("size distribution: cumulative mass must rise from 0 to 1")
+        self.d, self.cum = d, c
+
+    @classmethod
+    def from_d50_cu(cls, d50, cu):
+        """Linear mass gradation with the given D50 and Cu = D60/D10."""
+        if d50 <= 0:
+            raise ValueError("size distribution: D50 must be > 0")
+        if not 1.0 < cu < 6.0:
+            raise ValueError("size distribution: Cu must lie in (1, 6) for a linear gradation")
+        # D60 = dmin + 0.6 w, D10 = dmin + 0.1 w, D60 = Cu D10  =>  w = dmin (Cu - 1)/(0.6 - 0.1 Cu)
+        ratio = (cu - 1.0) / (0.6 - 0.1 * cu)
+        dmin = d50 / (1.0 + 0.5 * ratio)
+        return cls([dmin, dmin * (1.0 + ratio)], [0.0, 1.0])
+
+    def diameter_at(self, mass_fraction):
+        return float(np.interp(mass_fraction, self.cum, self.d))
+
+    @property
+    def d50(self):
+        return self.diameter_at(0.5)
+
+    @property
+    def cu(self):
+        return self.diameter_at(0.6) / self.diameter_at(0.1)
+
+    def sample(self, n, rng):
+        """n diameters whose mass distribution follows the table.
+
+        Within a segment of constant mass density the number density goes as d^-3; its CDF
+        is inverted in closed form. Stratified uniforms (one per 1/n quantile, shuffled) keep
+        small specimens close to the target D50 and Cu.
+        """
+        if n < 1:
+            raise ValueError("size distribution: need at least one particle")
+        seg_mass = np.diff(self.cum)
+        a, b = self.d[:-1], self.d[1:]
+        # number of particles per unit mass-density in each segment: integral of d^-3 / (vol)
+        w = seg_mass / (b - a) * 0.5 * (a ** -2 - b ** -2)
+        w = w / w.sum()
+        u = (rng.permutation(n) + rng.random(n)) / n
+        seg = np.minimum(np.searchsorted(np.cumsum(w), u, side="right"), len(w) - 1)
+        start = np.concatenate(([0.0], np.cumsum(w)))[seg]
+        v = np.clip((u - start) / w[seg], 0.0, 1.0)
+        ia, ib = a[seg] ** -2, b[seg] ** -2
+        return (ia - v * (ia - ib)) ** -0.5
+
+
+def mass_d50_cu(diameters):
+    """D50 and Cu of a finite sample, by mass (for checking a specimen)."""
+    d = np.sort(np.asarray(diameters, dtype=float))
+    m = np.cumsum(d ** 3)
+    cum = (m - 0.5 * d ** 3) / m[-1]
+    at = lambda f: float(np.interp(f, cum, d))  # noqa: E731
+    return at(0.5), at(0.6) / at(0.1)
+
+
+PAPER_SPHERES = SizeDistribution.from_d50_cu(0.195e-3, 1.25)
+PAPER_CLUMP2 = SizeDistribution.from_d50_cu(0.216e-3, 1.43)

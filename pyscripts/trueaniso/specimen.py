@@ -1,0 +1,163 @@
+"""Sphere specimens: random loose packing, radius expansion to the target pressure, and the
+final equilibrium with the consolidation friction.
+
+Recipe (choices and reasons are in docs/specimens.md):
+ 1. random sequential addition at solid fraction 0.30 in a cubic periodic cell sized so that the
+    final radii would fill it to ``phi_cell``; particles ordered along the cell grid for locality;
+ 2. radius expansion at fixed cell with friction ``mu_prep``, the growth servoed on the mean
+    stress, until p = target and the unbalanced force is below ``prep_unbalanced``;
+ 3. a similarity rescale back to the exact size distribution (Hertz stresses do not change);
+ 4. friction set to ``mu_final`` (0.5), the cell servoed to the isotropic target stress until
+    every stress is within ``stress_tolerance`` and the unbalanced force below ``unbalanced``.
+"""
+import math
+import time
+
+import numpy as np
+
+from . import dem, engines, psd as _psd
+
+
+class PreparationError(RuntimeError):
+    pass
+
+
+def random_loose_packing(n, size_distribution, seed, phi_cell=0.60, phi_start=0.30):
+    """Positions and final radii of n spheres; the cell fits them at phi_cell.
+
+    Returns (positions, final_radii, start_scale, cell_size): the spheres are placed without
+    overlap with radii start_scale * final_radii.
+    """
+    if n < 1:
+        raise ValueError("number of spheres must be >= 1")
+    if not 0.05 <= phi_start < phi_cell < 0.74:
+        raise ValueError("solid fractions must satisfy 0.05 <= phi_start < phi_cell < 0.74")
+    rng = np.random.default_rng(seed)
+    radii = 0.5 * size_distribution.sample(n, rng)
+    volume = 4.0 / 3.0 * math.pi * np.sum(radii ** 3)
+    side = (volume / phi_cell) ** (1.0 / 3.0)
+    scale = (phi_start / phi_cell) ** (1.0 / 3.0)
+    r = scale * radii
+    # Random sequential addition, largest first, with a hash grid of cells >= the largest diameter.
+    order = np.argsort(-r, kind="stable")
+    ncell = max(1, int(side // (2.0 * r.max())))
+    cell = side / ncell
+    grid = {}
+    pos = np.empty((n, 3))
+    for k, i in enumerate(order):
+        for attempt in range(100000):
+            p = rng.random(3) * side
+            c = np.floor(p / cell).astype(int) % ncell
+            ok = True
+            for dx in (-1, 0, 1):
+                for dy in (-1, 0, 1):
+                    for dz in (-1, 0, 1):
+                        key = ((c[0] + dx) % ncell, (c[1] + dy) % ncell, (c[2] + dz) % ncell)
+                        for j in grid.get(key, ()):
+                            d = pos[j] - p
+                            d -= side * np.round(d / side)
+                            if d @ d < (r[i] + r[j]) ** 2:
+                                ok = False
+                                break
+                        if not ok:
+                            break
+                    if not ok:
+                        break
+                if not ok:
+                    break
+            if ok:
+                break
+        else:
+            raise ValueError("the size distribution cannot fit the box: random placement failed")
+        pos[i] = p
+        grid.setdefault(tuple(c), []).append(i)
+    # Memory order along the cell grid: neighbours in space are neighbours in the arrays.
+    key = np.floor(pos / cell).astype(int)
+    along = np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
+    return pos[along], radii[along], scale, np.full(3, side)
+
+
+def new_scene(positions, radii, cell_size, shear_modulus=18e9, poisson=0.15, density=2500.0, friction=0.5):
+    s = engines.Scene()
+    s.shear_modulus = shear_modulus
+    s.poisson = poisson
+    s.density = density
+    s.friction = friction
+    s.cell_size = cell_size
+    s.cell_ref_size = cell_size
+    s.add_spheres(positions, radii)
+    return s
+
+
+def _run_until(chain, engine, max_steps, chunk, label, progress):
+    done = 0
+    t0 = time.time()
+    while done < max_steps:
+        done += chain.run(min(chunk, max_steps - done))
+        if progress:
+            progress(label, chain.scene, engine, done)
+        if engine.reached:
+            return done
+    raise PreparationError("%s did not converge within %d steps (p or unbalanced force off target)"
+                           % (label, max_steps))
+
+
+def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=100e3,
+                    mu_prep=0.0, mu_final=0.5, phi_cell=0.60, damping=0.4, inertial_number=1e-3,
+                    prep_unbalanced=1e-2, unbalanced=1e-3, stress_tolerance=100.0, gain=0.002,
+                    max_steps=5_000_000, progress=None):
+    """A sphere specimen consolidated isotropically to `pressure`; returns (scene, log dict)."""
+    if pressure <= 0:
+        raise ValueError("pressure must be > 0")
+    if mu_prep < 0 or mu_final < 0:
+        raise ValueError("friction coefficients must be >= 0")
+    t0 = time.time()
+    pos, radii, scale, side = random_loose_packing(n, size_distribution, seed, phi_cell)
+    scene = new_scene(pos, scale * radii, side, friction=mu_prep)
+    d50 = size_distribution.d50
+    rate = dem.strain_rate_for_inertial_number(inertial_number, d50, scene.density, pressure)
+
+    grow = engines.RadiusExpansion()
+    grow.target_pressure = pressure
+    grow.gain = gain
+    grow.max_growth_rate = rate
+    grow.stress_tolerance = stress_tolerance
+    grow.unbalanced_tolerance = prep_unbalanced
+    chain = dem.Chain(scene, damping=damping, controllers=[grow],
+                      max_dt=dem.reference_time_step(new_scene(pos, radii, side), pressure))
+    steps_grow = _run_until(chain, grow, max_steps, 2000, "expansion", progress)
+
+    scene.rescale(1.0 / grow.scale)
+    scene.cell_ref_size = scene.cell_size
+    scene.friction = mu_final
+    servo = engines.StressServo()
+    servo.target = np.full(3, pressure)
+    servo.gain = gain
+    servo.max_strain_rate = rate
+    servo.stress_tolerance = stress_tolerance
+    servo.unbalanced_tolerance = unbalanced
+    chain = dem.Chain(scene, damping=damping, controllers=[servo])
+    steps_hold = _run_until(chain, servo, max_steps, 2000, "consolidation", progress)
+    scene.strain_rate = np.zeros(3)
+    scene.velocities = np.zeros((scene.num_bodies, 3))
+    scene.angular_velocities = np.zeros((scene.num_bodies, 3))
+
+    log = dict(n=n, seed=seed, pressure=pressure, mu_prep=mu_prep, mu_final=mu_final,
+               phi_cell=phi_cell, damping=damping, inertial_number=inertial_number,
+               prep_unbalanced=prep_unbalanced, unbalanced=unbalanced,
+               stress_tolerance=stress_tolerance, gain=gain, radius_scale=grow.scale,
+               steps_expansion=steps_grow, steps_consolidation=steps_hold,
+               wall_time=time.time() - t0,
+               d50=size_distribution.d50, cu=size_distribution.cu)
+    return scene, log
+
+
+def state(scene):
+    """The numbers a researcher checks on a specimen."""
+    sig = engines.stress(scene)
+    z = engines.coordination(scene)
+    return dict(n=scene.num_bodies, void_ratio=engines.void_ratio(scene), Zm=z["Zm"], Z=z["Z"],
+                Nc=z["Nc"], Np0=z["Np0"], Np1=z["Np1"],
+                sigma_x=sig[0, 0], sigma_y=sig[1, 1], sigma_z=sig[2, 2],
+                p=np.trace(sig) / 3.0, unbalanced=engines.unbalanced_force(scene),
+                friction=scene.friction, cell=list(map(float, scene.cell_size)))

@@ -1,0 +1,188 @@
+// Stepper: detection against brute force, momentum conservation, Love-Weber stress of a simple
+// cubic packing in closed form, YADE's unbalanced force, refusal of an unstable step.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "Drivers.hpp"
+#include "dynamics/NewtonIntegrator.hpp"
+#include "dynamics/Simulation.hpp"
+#include "dynamics/TimeStepper.hpp"
+#include "measure/Coordination.hpp"
+#include "measure/Stress.hpp"
+
+using namespace trueaniso;
+using namespace trueaniso::testing;
+
+namespace {
+
+// n random spheres (radii 0.8-1.2 r) at solid fraction phi in a cubic cell, overlaps allowed.
+std::shared_ptr<Scene> randomGas(int n, Real phi, unsigned seed, Real r = 1e-4) {
+  auto s = std::make_shared<Scene>();
+  s->material = paperMaterial();
+  std::mt19937_64 gen(seed);
+  std::uniform_real_distribution<Real> U(0, 1);
+  std::vector<Real> radii(n);
+  Real vol = 0;
+  for (Real& x : radii) { x = r * (0.8 + 0.4 * U(gen)); vol += 4.0 / 3.0 * M_PI * x * x * x; }
+  const Real side = std::cbrt(vol / phi);
+  s->cell.size = s->cell.refSize = Vec3::Constant(side);
+  for (int i = 0; i < n; ++i) s->addSphere(Vec3(U(gen), U(gen), U(gen)) * side, radii[i]);
+  return s;
+}
+
+struct Chain {
+  explicit Chain(std::shared_ptr<Scene> s, Real damping) : sim(s) {
+    sim.add(detection = std::make_shared<ContactDetection>());
+    sim.add(std::make_shared<ContactForces>());
+    auto newton = std::make_shared<NewtonIntegrator>();
+    newton->damping = damping;
+    sim.add(newton);
+  }
+  Simulation sim;
+  std::shared_ptr<ContactDetection> detection;
+};
+
+}  // namespace
+
+// Every overlapping pair (minimum image, brute force O(n^2)) is listed and active, and nothing else
+// is active. Exact comparison: both use the same distance formula on the same doubles.
+TEST(ContactDetection, FindsExactlyTheOverlappingPairs) {
+  auto s = randomGas(400, 0.55, 7);
+  Driver drv(s);
+  drv.evaluate();
+  const Vec3 h = s->cell.size;
+  long brute = 0;
+  for (int i = 0; i < s->bodies.size(); ++i)
+    for (int j = i + 1; j < s->bodies.size(); ++j) {
+      Vec3 d = s->bodies.pos[j] - s->bodies.pos[i];
+      for (int k = 0; k < 3; ++k) d[k] -= h[k] * std::round(d[k] / h[k]);
+      const Real rs = s->members.radius[i] + s->members.radius[j];
+      if (d.squaredNorm() < rs * rs) ++brute;
+    }
+  long active = 0;
+  for (int c = 0; c < s->contacts.size(); ++c) active += s->contacts.active(c);
+  ASSERT_GT(brute, 100);
+  EXPECT_EQ(active, brute);
+  EXPECT_EQ(coordination(*s).contacts, brute);
+}
+
+// Closed periodic box, no damping: contact forces are pairwise opposite, so the total momentum
+// is constant. Tolerance 1e-12 of sum |m v|: round-off of ~1e6 force additions. (The random gas
+// starts with overlaps, so kinetic energy grows; momentum must not.)
+TEST(NewtonIntegrator, ConservesMomentumWithoutDamping) {
+  auto s = randomGas(300, 0.45, 11);
+  std::mt19937_64 gen(3);
+  std::normal_distribution<Real> Nd(0, 1);
+  for (auto& v : s->bodies.vel) v = Vec3(Nd(gen), Nd(gen), Nd(gen)) * 0.05;
+  Chain chain(s, 0.0);
+  auto stepper = std::make_shared<TimeStepper>();
+  stepper->maxDt = 1e-7;
+  chain.sim.add(stepper);
+  Driver(s).evaluate();
+  stepper->apply(*s);
+  auto momentum = [&] {
+    Vec3 p = Vec3::Zero();
+    Real scale = 0;
+    for (int b = 0; b < s->bodies.size(); ++b) {
+      p += s->bodies.mass[b] * s->bodies.vel[b];
+      scale += s->bodies.mass[b] * s->bodies.vel[b].norm();
+    }
+    return std::make_pair(p, scale);
+  };
+  const auto [p0, scale] = momentum();
+  chain.sim.run(3000);
+  const Vec3 p1 = momentum().first;
+  EXPECT_GT(chain.detection->rebuilds, 2);
+  EXPECT_EQ(chain.detection->lostContacts, 0);
+  EXPECT_LT((p1 - p0).norm(), 1e-12 * scale);
+  EXPECT_TRUE(p1.allFinite());
+}
+
+// Simple cubic lattice, spacing a = 2r - delta: each sphere has one contact per axis direction, so
+// sigma_kk = N l / a^3 = N / a^2 with N the Hertz force, and no shear stress.
+TEST(Stress, SimpleCubicClosedForm) {
+  const Real r = 1e-4, delta = 5e-7, a = 2 * r - delta;
+  const int n = 4;
+  auto s = std::make_shared<Scene>();
+  s->material = paperMaterial();
+  s->cell.size = s->cell.refSize = Vec3::Constant(n * a);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) s->addSphere(Vec3(i + 0.5, j + 0.5, k + 0.5) * a, r);
+  Driver(s).evaluate();
+  const Real N = HertzMindlin(s->material).normalForce(delta, r);
+  const Mat3 sigma = loveWeberStress(*s);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(sigma(k, k) / (N / (a * a)), 1.0, 1e-12);
+  EXPECT_NEAR((sigma - Mat3(sigma.diagonal().asDiagonal())).norm(), 0.0, 1e-12 * sigma.norm());
+  const Coordination z = coordination(*s);
+  EXPECT_EQ(z.contacts, 3 * n * n * n);
+  EXPECT_DOUBLE_EQ(z.mechanical(), 6.0);
+  EXPECT_NEAR(unbalancedForce(*s), 0.0, 1e-12);  // every sphere is balanced by symmetry
+}
+
+// YADE's definition on a configuration worked by hand: three spheres in a row, only the middle
+// one balanced. Mean |F| over bodies = (N + 0 + N)/3, mean |contact force| = N.
+TEST(Stress, UnbalancedForceFollowsYadeDefinition) {
+  auto s = std::make_shared<Scene>();
+  s->material = paperMaterial();
+  const Real r = 1e-4, delta = 1e-6;
+  s->cell.size = s->cell.refSize = Vec3::Constant(20 * r);
+  s->addSphere(Vec3(5 * r, 10 * r, 10 * r), r);
+  s->addSphere(Vec3(7 * r - delta, 10 * r, 10 * r), r);
+  s->addSphere(Vec3(9 * r - 2 * delta, 10 * r, 10 * r), r);
+  Driver(s).evaluate();
+  EXPECT_NEAR(unbalancedForce(*s), 2.0 / 3.0, 1e-12);
+  const Coordination z = coordination(*s);
+  EXPECT_EQ(z.contacts, 2);
+  EXPECT_EQ(z.oneContact, 2);
+  EXPECT_EQ(z.noContact, 0);
+  EXPECT_DOUBLE_EQ(z.mechanical(), (2.0 * 2 - 2) / (3 - 0 - 2));  // Eq. (14): 2
+}
+
+// A step above the two-body limit of the stiffest contact is refused before it is taken.
+TEST(NewtonIntegrator, RefusesUnstableStep) {
+  auto s = twoSpheres(1e-4, 1e-4, 1e-6);
+  Chain chain(s, 0.0);
+  Driver(s).evaluate();
+  const Real limit = TimeStepper::criticalPairStep(*s);
+  s->dt = 1.01 * limit;
+  const Vec3 before = s->bodies.pos[1];
+  EXPECT_THROW(chain.sim.run(1), InputError);
+  EXPECT_EQ(s->bodies.pos[1], before);  // nothing moved
+  s->dt = 0.5 * limit;
+  EXPECT_NO_THROW(chain.sim.run(10));
+}
+
+// The time stepper's choice is stable: an undamped, loaded random packing keeps its energy
+// bounded over many steps (an unstable step grows it exponentially within tens of steps).
+TEST(TimeStepper, ChosenStepIsStable) {
+  auto s = randomGas(300, 0.62, 5);
+  Chain chain(s, 0.0);
+  auto stepper = std::make_shared<TimeStepper>();
+  stepper->maxDt = 1.0;  // no cap: the contacts alone decide
+  chain.sim.add(stepper);
+  Driver(s).evaluate();
+  stepper->apply(*s);
+  auto energy = [&] {
+    Real e = 0;
+    for (int b = 0; b < s->bodies.size(); ++b) e += 0.5 * s->bodies.mass[b] * s->bodies.vel[b].squaredNorm();
+    for (int c = 0; c < s->contacts.size(); ++c)
+      if (s->contacts.active(c)) e += 0.4 * s->contacts.normalForce[c] * s->contacts.overlap[c];
+    return e;
+  };
+  chain.sim.run(50);
+  const Real e0 = energy();
+  chain.sim.run(3000);
+  EXPECT_LT(energy(), 1.5 * e0);
+}
+
+TEST(Scene, RejectsBadInput) {
+  Scene s;
+  EXPECT_THROW(s.addSphere(Vec3::Zero(), 0.0), InputError);
+  EXPECT_THROW(s.addSphere(Vec3::Zero(), -1.0), InputError);
+  EXPECT_THROW(s.validate(), InputError);  // empty
+  s.cell.size = Vec3::Constant(1e-4);
+  s.addSphere(Vec3::Zero(), 1e-4);
+  EXPECT_THROW(s.validate(), InputError);  // solid volume exceeds the cell
+}
