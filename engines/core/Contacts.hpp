@@ -20,24 +20,23 @@ struct Contacts {
   std::vector<Vec3> branch;      // L between the two body centres (periodic image aware)
   std::vector<Real> overlap;     // delta, <= 0 when not touching
   std::vector<Real> normalForce; // N >= 0
-  std::vector<Real> kn;          // tangent normal stiffness, Eq. (5)
   std::vector<Vec3> shearForce;  // tangential force on sphere 2 (history variable)
-  std::vector<Vec3> force;       // total force on body 2 (= -force on body 1)
-  std::vector<Vec3> torque1, torque2;
 
-  // Incidence lists for gathering forces on bodies without write conflicts:
-  // contacts of body b are incidence[incBegin[b] .. incBegin[b+1]), an entry c >= 0 means b is
+  // Incidence lists (pairs of each body) for per-body measures and the time step:
+  // pairs of body b are incidence[incBegin[b] .. incBegin[b+1]), an entry c >= 0 means b is
   // side 2 of pair c, an entry ~c (< 0) means side 1.
   std::vector<int> incBegin, incidence;
 
   int size() const { return static_cast<int>(m1.size()); }
   bool active(int c) const { return normalForce[c] > 0; }
+  Vec3 force(int c) const { return normalForce[c] * normal[c] + shearForce[c]; }  // on body 2
+  // Tangent normal stiffness dN/d delta = 1.5 N / delta, Eq. (5).
+  Real kn(int c) const { return normalForce[c] > 0 ? 1.5 * normalForce[c] / overlap[c] : 0.0; }
 
   void resize(int n) {
     m1.resize(n); m2.resize(n); b1.resize(n); b2.resize(n); shift.resize(n); rbar.resize(n);
     normal.resize(n, Vec3::Zero()); branch.resize(n, Vec3::Zero()); overlap.resize(n, 0.0);
-    normalForce.resize(n, 0.0); kn.resize(n, 0.0); shearForce.resize(n, Vec3::Zero());
-    force.resize(n, Vec3::Zero()); torque1.resize(n, Vec3::Zero()); torque2.resize(n, Vec3::Zero());
+    normalForce.resize(n, 0.0); shearForce.resize(n, Vec3::Zero());
   }
 };
 

@@ -93,11 +93,15 @@ void Scene::rescale(Real f) {
     members.radius[m] *= f;
     members.pos[m] *= f;
   }
+  // Spheres: mass and inertia recomputed from the new radius (not scaled), so that a scene saved
+  // and loaded again from its radii has the very same masses, to the last bit.
+  for (int b = 0; b < bodies.size(); ++b)
+    if (bodies.memberCount(b) == 1 && members.offset[bodies.memberBegin[b]].isZero())
+      setSphereRadius(b, members.radius[bodies.memberBegin[b]]);
   Contacts& C = contacts;
   for (int c = 0; c < C.size(); ++c) {
-    C.rbar[c] *= f; C.branch[c] *= f; C.overlap[c] *= f; C.kn[c] *= f;
-    C.normalForce[c] *= f2; C.shearForce[c] *= f2; C.force[c] *= f2;
-    C.torque1[c] *= f3; C.torque2[c] *= f3;
+    C.rbar[c] *= f; C.branch[c] *= f; C.overlap[c] *= f;
+    C.normalForce[c] *= f2; C.shearForce[c] *= f2;
   }
   detectionInvalid = true;
 }

@@ -79,9 +79,10 @@ void ContactDetection::rebuild(Scene& s) {
   const Real range = 2.0 * rmax + skin_;
   CellGrid g;
   for (int k = 0; k < 3; ++k) g.n[k] = static_cast<int>(std::floor(h[k] / range));
-  require(g.n.minCoeff() >= 3,
-          "the periodic cell is too small for contact detection: each side must exceed 3 x (2 r_max + skin)"
-          "; use more particles");
+  // Fewer than three cells along an axis is fine: the neighbour scan then visits the same cell
+  // under different periodic images, each one once. Only a cell shorter than the range fails.
+  require(g.n.minCoeff() >= 1,
+          "the periodic cell is smaller than the interaction range 2 r_max + skin; use more particles");
   std::vector<Vec3i> image(nm);   // member m sits at wrapped position pos - image*h
   std::vector<Vec3> wrapped(nm);
   std::vector<Vec3i> cellOf(nm);
@@ -159,9 +160,7 @@ void ContactDetection::rebuild(Scene& s) {
       N.rbar[c] = 2.0 * M.radius[p.m1] * M.radius[p.m2] / (M.radius[p.m1] + M.radius[p.m2]);
       if (old < nold && C.m1[old] == p.m1 && C.m2[old] == p.m2 && C.shift[old] == p.shift) {
         N.normal[c] = C.normal[old]; N.branch[c] = C.branch[old]; N.overlap[c] = C.overlap[old];
-        N.normalForce[c] = C.normalForce[old]; N.kn[c] = C.kn[old];
-        N.shearForce[c] = C.shearForce[old]; N.force[c] = C.force[old];
-        N.torque1[c] = C.torque1[old]; N.torque2[c] = C.torque2[old];
+        N.normalForce[c] = C.normalForce[old]; N.shearForce[c] = C.shearForce[old];
         ++old;
       } else {
         const Vec3 d = M.pos[p.m2] + s.cell.shiftVector(p.shift) - M.pos[p.m1];

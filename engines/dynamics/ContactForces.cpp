@@ -2,92 +2,123 @@
 
 #include <cmath>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace trueaniso {
 
 template <bool Clumps, bool Rotations>
-void ContactForces::computePairs(Scene& s, const HertzMindlin& law) {
+void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   Contacts& C = s.contacts;
-  const Bodies& B = s.bodies;
+  Bodies& B = s.bodies;
   const Members& M = s.members;
   const Vec3 h = s.cell.size;
   const Vec3 rate = s.cell.strainRate;
   const Real dt = s.dt;
   const Real ratio = law.shearToNormal();
-  const int nc = C.size();
+  const Real hertz = law.hertzCoefficient(1.0);  // (4/3) E* sqrt(rbar/2) = hertz * sqrt(rbar)
+  const int nc = C.size(), nb = B.size();
+  int nthreads = 1;
+#ifdef _OPENMP
+  nthreads = omp_get_max_threads();
+#endif
+  forceBuffers_.resize(nthreads);
+  torqueBuffers_.resize(nthreads);
   long sliding = 0;
 
-#pragma omp parallel for schedule(static) reduction(+ : sliding)
-  for (int c = 0; c < nc; ++c) {
-    const int i = C.m1[c], j = C.m2[c], a = C.b1[c], b = C.b2[c];
-    const Vec3 sh = C.shift[c].cast<Real>().cwiseProduct(h);
-    const Vec3& pi = Clumps ? M.pos[i] : B.pos[a];
-    const Vec3 pj = (Clumps ? M.pos[j] : B.pos[b]) + sh;
-    const Vec3 d = pj - pi;
-    const Real ri = M.radius[i], rj = M.radius[j], rsum = ri + rj;
-    const Real dist2 = d.squaredNorm();
-    if (dist2 >= rsum * rsum) {  // not touching: a contact ends and forgets its history
-      C.normalForce[c] = 0; C.kn[c] = 0; C.overlap[c] = rsum - std::sqrt(dist2);
-      C.shearForce[c].setZero(); C.force[c].setZero();
-      if (Rotations) { C.torque1[c].setZero(); C.torque2[c].setZero(); }
-      continue;
+#pragma omp parallel reduction(+ : sliding)
+  {
+    int t = 0;
+#ifdef _OPENMP
+    t = omp_get_thread_num();
+#endif
+    Vec3* F;
+    Vec3* T;
+    if (t == 0) {
+      F = B.force.data();
+      T = B.torque.data();
+    } else {
+      forceBuffers_[t].resize(nb);
+      torqueBuffers_[t].resize(nb);
+      F = forceBuffers_[t].data();
+      T = torqueBuffers_[t].data();
     }
-    const Real dist = std::sqrt(dist2);
-    const Vec3 n = d / dist;
-    const Real delta = rsum - dist;
-    const Real N = law.normalForce(delta, C.rbar[c]);
-    const Real kn = HertzMindlin::tangentFromForce(N, delta);
-    const Vec3 branch = Clumps ? Vec3(B.pos[b] + sh - B.pos[a]) : d;
+    std::fill(F, F + nb, Vec3::Zero());
+    if (Rotations) std::fill(T, T + nb, Vec3::Zero());
 
-    // Lever arms from the body centres to the contact point, mid-overlap as in YADE's ScGeom.
-    const Vec3 arm1 = (Clumps ? Vec3(pi - B.pos[a]) : Vec3::Zero()) + (ri - 0.5 * delta) * n;
-    const Vec3 arm2 = (Clumps ? Vec3(pj - sh - B.pos[b]) : Vec3::Zero()) - (rj - 0.5 * delta) * n;
+#pragma omp for schedule(static) nowait
+    for (int c = 0; c < nc; ++c) {
+      const int i = C.m1[c], j = C.m2[c];
+      const int a = Clumps ? C.b1[c] : i, b = Clumps ? C.b2[c] : j;
+      const Vec3 sh = C.shift[c].cast<Real>().cwiseProduct(h);
+      const Vec3& pi = Clumps ? M.pos[i] : B.pos[a];
+      const Vec3 pj = (Clumps ? M.pos[j] : B.pos[b]) + sh;
+      const Vec3 d = pj - pi;
+      const Real ri = M.radius[i], rj = M.radius[j], rsum = ri + rj;
+      const Real dist2 = d.squaredNorm();
+      if (dist2 >= rsum * rsum) {  // not touching: a contact ends and forgets its history
+        if (C.normalForce[c] != 0) {
+          C.normalForce[c] = 0;
+          C.shearForce[c].setZero();
+        }
+        C.overlap[c] = rsum - std::sqrt(dist2);
+        continue;
+      }
+      const Real dist = std::sqrt(dist2);
+      const Vec3 n = d * (1.0 / dist);
+      const Real delta = rsum - dist;
+      // Hertz in closed form; its tangent 1.5 N/delta is Eq. (5), written without a division.
+      const Real sqrtDelta = std::sqrt(delta);
+      const Real coef = hertz * std::sqrt(C.rbar[c]);
+      const Real N = coef * delta * sqrtDelta;
+      const Real ks = ratio * 1.5 * coef * sqrtDelta;
+      const Vec3 branch = Clumps ? Vec3(B.pos[b] + sh - B.pos[a]) : d;
 
-    // Relative velocity of the contact point: fluctuations, rigid rotations and the cell's
-    // affine field acting on the branch between body centres.
-    Vec3 vrel = B.vel[b] - B.vel[a] + rate.cwiseProduct(branch);
-    Real twist = 0;
-    if (Rotations) {
-      vrel += B.angVel[b].cross(arm2) - B.angVel[a].cross(arm1);
-      twist = 0.5 * dt * n.dot(B.angVel[a] + B.angVel[b]);
-    }
-    Vec3 Fs = C.shearForce[c];
-    if (C.normalForce[c] > 0) Fs = HertzMindlin::rotateWithContact(Fs, C.normal[c], n, twist);
-    else Fs.setZero();  // a contact that starts now has no tangential history
-    const Vec3 dus = (vrel - n.dot(vrel) * n) * dt;
-    if (law.updateShear(Fs, dus, ratio * kn, N)) ++sliding;
+      // Lever arms from the body centres to the contact point, mid-overlap as in YADE's ScGeom.
+      const Real arm1len = ri - 0.5 * delta, arm2len = rj - 0.5 * delta;
+      Vec3 vrel = B.vel[b] - B.vel[a] + rate.cwiseProduct(branch);
+      Vec3 arm1, arm2;
+      Real twist = 0;
+      if (Rotations) {
+        arm1 = (Clumps ? Vec3(pi - B.pos[a]) : Vec3::Zero()) + arm1len * n;
+        arm2 = (Clumps ? Vec3(pj - sh - B.pos[b]) : Vec3::Zero()) - arm2len * n;
+        vrel += B.angVel[b].cross(arm2) - B.angVel[a].cross(arm1);
+        twist = 0.5 * dt * n.dot(B.angVel[a] + B.angVel[b]);
+      }
+      Vec3 Fs;
+      if (C.normalForce[c] > 0) Fs = HertzMindlin::rotateWithContact(C.shearForce[c], C.normal[c], n, twist);
+      else Fs.setZero();  // a contact that starts now has no tangential history
+      const Vec3 dus = (vrel - n.dot(vrel) * n) * dt;
+      if (law.updateShear(Fs, dus, ks, N)) ++sliding;
 
-    const Vec3 F = N * n + Fs;  // force on body b; body a receives -F
-    C.normal[c] = n; C.branch[c] = branch; C.overlap[c] = delta;
-    C.normalForce[c] = N; C.kn[c] = kn; C.shearForce[c] = Fs; C.force[c] = F;
-    if (Rotations) {
-      C.torque1[c] = -arm1.cross(F);
-      C.torque2[c] = arm2.cross(F);
+      C.normal[c] = n;
+      C.branch[c] = branch;
+      C.overlap[c] = delta;
+      C.normalForce[c] = N;
+      C.shearForce[c] = Fs;
+      const Vec3 Fc = N * n + Fs;  // force on body b; body a receives -Fc
+      F[a] -= Fc;
+      F[b] += Fc;
+      if (Rotations) {
+        T[a] -= arm1.cross(Fc);
+        T[b] += arm2.cross(Fc);
+      }
     }
   }
   slidingContacts = sliding;
-}
-
-void ContactForces::gather(Scene& s) const {
-  Bodies& B = s.bodies;
-  const Contacts& C = s.contacts;
-  const int nb = B.size();
-  const bool rot = !s.blockRotations;
+  // Thread buffers into the bodies' arrays, in thread order.
+  for (int t = 1; t < nthreads; ++t) {
+    const std::vector<Vec3>& Ft = forceBuffers_[t];
+    const std::vector<Vec3>& Tt = torqueBuffers_[t];
+    if (Ft.size() != static_cast<size_t>(nb)) continue;
 #pragma omp parallel for schedule(static)
-  for (int b = 0; b < nb; ++b) {
-    Vec3 F = Vec3::Zero(), T = Vec3::Zero();
-    for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
-      const int e = C.incidence[q];
-      if (e >= 0) {
-        F += C.force[e];
-        if (rot) T += C.torque2[e];
-      } else {
-        F -= C.force[~e];
-        if (rot) T += C.torque1[~e];
-      }
+    for (int q = 0; q < nb; ++q) {
+      B.force[q] += Ft[q];
+      if (Rotations) B.torque[q] += Tt[q];
     }
-    B.force[b] = F;
-    B.torque[b] = T;
   }
+  if (!Rotations) std::fill(B.torque.begin(), B.torque.end(), Vec3::Zero());
 }
 
 void ContactForces::apply(Scene& s) {
@@ -95,11 +126,10 @@ void ContactForces::apply(Scene& s) {
   const HertzMindlin law(s.material);
   const bool clumps = s.hasClumps(), rot = !s.blockRotations;
   if (clumps) {
-    if (rot) computePairs<true, true>(s, law); else computePairs<true, false>(s, law);
+    if (rot) compute<true, true>(s, law); else compute<true, false>(s, law);
   } else {
-    if (rot) computePairs<false, true>(s, law); else computePairs<false, false>(s, law);
+    if (rot) compute<false, true>(s, law); else compute<false, false>(s, law);
   }
-  gather(s);
 }
 
 }  // namespace trueaniso

@@ -1,7 +1,10 @@
 #pragma once
-// Contact forces of the simplified Hertz-Mindlin law on every listed pair, then gathered per
-// body. Two passes (pairs, then bodies through the incidence lists) avoid write conflicts and
-// atomics, and make the result independent of the number of threads.
+// Contact forces of the simplified Hertz-Mindlin law on every listed pair, added to the two
+// bodies as they are computed. Threads accumulate into their own body buffers (thread 0 into the
+// bodies' arrays), summed in thread order afterwards: no atomics, no write conflicts, and a
+// result that is bit-identical from run to run for a given number of threads.
+#include <vector>
+
 #include "contact/HertzMindlin.hpp"
 #include "dynamics/Engine.hpp"
 
@@ -15,8 +18,8 @@ class ContactForces : public Engine {
 
  private:
   template <bool Clumps, bool Rotations>
-  void computePairs(Scene& scene, const HertzMindlin& law);
-  void gather(Scene& scene) const;
+  void compute(Scene& scene, const HertzMindlin& law);
+  std::vector<std::vector<Vec3>> forceBuffers_, torqueBuffers_;  // threads 1..n-1
 };
 
 }  // namespace trueaniso

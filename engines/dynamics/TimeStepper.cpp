@@ -19,7 +19,7 @@ Real TimeStepper::stiffnessBound(const Scene& s) {
     for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
       const int e = C.incidence[q];
       const int c = e >= 0 ? e : ~e;
-      const Real kn = C.kn[c];
+      const Real kn = C.kn(c);
       if (kn <= 0) continue;
       kt += kn;
       if (rot) {
@@ -43,7 +43,7 @@ Real TimeStepper::criticalPairStep(const Scene& s) {
   const int nc = C.size();
 #pragma omp parallel for schedule(static) reduction(min : best)
   for (int c = 0; c < nc; ++c) {
-    const Real kn = C.kn[c];
+    const Real kn = C.kn(c);
     if (kn <= 0) continue;
     const int a = C.b1[c], b = C.b2[c];
     Real inv = 1.0 / B.mass[a] + 1.0 / B.mass[b];

@@ -9,7 +9,7 @@ namespace trueaniso {
 Mat3 loveWeberStress(const Scene& s) {
   const Contacts& C = s.contacts;
   const Mat3 sum = blockSum<Mat3>(C.size(), Mat3::Zero(), [&](int c, Mat3& acc) {
-    if (C.normalForce[c] > 0) acc.noalias() += C.force[c] * C.branch[c].transpose();
+    if (C.normalForce[c] > 0) acc.noalias() += C.force(c) * C.branch[c].transpose();
   });
   return sum / s.cell.volume();
 }
@@ -24,7 +24,7 @@ Real unbalancedForce(const Scene& s) {
     Acc& operator+=(const Acc& o) { f += o.f; n += o.n; return *this; }
   };
   const Acc contact = blockSum<Acc>(C.size(), Acc{}, [&](int c, Acc& acc) {
-    if (C.normalForce[c] > 0) { acc.f += C.force[c].norm(); ++acc.n; }
+    if (C.normalForce[c] > 0) { acc.f += C.force(c).norm(); ++acc.n; }
   });
   if (contact.n == 0 || contact.f == 0) return std::numeric_limits<Real>::quiet_NaN();
   return (bodySum / B.size()) / (contact.f / contact.n);
@@ -34,7 +34,7 @@ Vec3 affineAxialStiffness(const Scene& s) {
   const Contacts& C = s.contacts;
   const Real ratio = s.material.stiffnessRatio();
   const Vec3 sum = blockSum<Vec3>(C.size(), Vec3::Zero(), [&](int c, Vec3& acc) {
-    const Real kn = C.kn[c];
+    const Real kn = C.kn(c);
     if (kn <= 0) return;
     const Vec3& n = C.normal[c];
     const Vec3& L = C.branch[c];

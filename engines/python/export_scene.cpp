@@ -109,7 +109,10 @@ bp::dict contactArrays(const Scene& s) {
   d["shift"] = toNumpy(C.shift); d["rbar"] = toNumpy(C.rbar);
   d["normal"] = toNumpy(C.normal); d["branch"] = toNumpy(C.branch);
   d["overlap"] = toNumpy(C.overlap); d["normal_force"] = toNumpy(C.normalForce);
-  d["kn"] = toNumpy(C.kn); d["shear_force"] = toNumpy(C.shearForce); d["force"] = toNumpy(C.force);
+  std::vector<Real> kn(C.size());
+  std::vector<Vec3> force(C.size());
+  for (int c = 0; c < C.size(); ++c) { kn[c] = C.kn(c); force[c] = C.force(c); }
+  d["kn"] = toNumpy(kn); d["shear_force"] = toNumpy(C.shearForce); d["force"] = toNumpy(force);
   return d;
 }
 

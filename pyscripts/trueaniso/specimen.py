@@ -103,7 +103,7 @@ def _run_until(chain, engine, max_steps, chunk, label, progress):
 
 
 def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=100e3,
-                    mu_prep=0.0, mu_final=0.5, phi_cell=0.60, damping=0.4, inertial_number=1e-3,
+                    mu_prep=0.015, mu_final=0.5, phi_cell=0.60, damping=0.4, inertial_number=1e-2,
                     prep_unbalanced=1e-2, unbalanced=1e-3, stress_tolerance=100.0, gain=0.002,
                     max_steps=5_000_000, progress=None):
     """A sphere specimen consolidated isotropically to `pressure`; returns (scene, log dict)."""
@@ -127,7 +127,8 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
                       max_dt=dem.reference_time_step(new_scene(pos, radii, side), pressure))
     steps_grow = _run_until(chain, grow, max_steps, 2000, "expansion", progress)
 
-    scene.rescale(1.0 / grow.scale)
+    # Back to the sampled radii exactly: they were placed at `scale` and grew by grow.scale.
+    scene.rescale(1.0 / (scale * grow.scale))
     scene.cell_ref_size = scene.cell_size
     scene.friction = mu_final
     servo = engines.StressServo()
@@ -145,7 +146,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
     log = dict(n=n, seed=seed, pressure=pressure, mu_prep=mu_prep, mu_final=mu_final,
                phi_cell=phi_cell, damping=damping, inertial_number=inertial_number,
                prep_unbalanced=prep_unbalanced, unbalanced=unbalanced,
-               stress_tolerance=stress_tolerance, gain=gain, radius_scale=grow.scale,
+               stress_tolerance=stress_tolerance, gain=gain, radius_scale=scale * grow.scale,
                steps_expansion=steps_grow, steps_consolidation=steps_hold,
                wall_time=time.time() - t0,
                d50=size_distribution.d50, cu=size_distribution.cu)

@@ -88,7 +88,7 @@ TEST(HertzMindlin, CyclicTangentialLoadingHitsCoulombCap) {
   Driver drv(s);
   drv.evaluate();
   const Real N = s->contacts.normalForce[0];
-  const Real ks = s->material.stiffnessRatio() * s->contacts.kn[0];
+  const Real ks = s->material.stiffnessRatio() * s->contacts.kn(0);
   const Real uSlip = mu * N / ks;
   const Real du = uSlip / 50.0;                   // 50 steps to the cap
   const Real arm = r - 0.5 * delta;

@@ -1,0 +1,132 @@
+"""Prepare a specimen consolidated isotropically to 100 kPa and save it (versioned .npz + .json).
+
+    yade-double -n -x pyscripts/prepare_specimen.py --n 4000 --seed 1 --out specimens/spheres-4000.npz
+    /usr/bin/python3 pyscripts/prepare_specimen.py --n 1000 --out specimens/spheres-1000.npz
+
+The recipe and the reasons for its parameters are in docs/specimens.md. An existing valid output
+is kept and reported (runs are resumable); use --force to prepare it again. Inside yade-double the
+result is also written into O (cell and spheres) for viewing or export.
+"""
+import json
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+from trueaniso import cli, engines, psd, specimen, specimen_file  # noqa: E402
+
+ASSEMBLIES = ("spheres",)  # clump1 and clump2 arrive with the clump issue
+
+
+def options(argv=None):
+    p = cli.Parser(description=__doc__.splitlines()[0])
+    p.add_argument("--assembly", default="spheres", help="particle type: %s" % ", ".join(ASSEMBLIES))
+    p.add_argument("--n", type=int, default=1000, help="number of particles")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--pressure", type=float, default=100e3, help="isotropic stress (Pa)")
+    p.add_argument("--d50", type=float, default=0.195e-3, help="median diameter by mass (m)")
+    p.add_argument("--cu", type=float, default=1.25, help="uniformity coefficient D60/D10")
+    p.add_argument("--mu-prep", type=float, default=0.015, help="friction while radii grow")
+    p.add_argument("--mu", type=float, default=0.5, help="friction of the consolidated state")
+    p.add_argument("--phi-cell", type=float, default=0.60,
+                   help="solid fraction at which the final radii would fill the cell")
+    p.add_argument("--inertial-number", type=float, default=1e-2,
+                   help="cap of the expansion/compression rate as an inertial number")
+    p.add_argument("--unbalanced", type=float, default=1e-3, help="unbalanced force of the final state")
+    p.add_argument("--threads", type=int, default=0, help="OpenMP threads (0: all cores)")
+    p.add_argument("--out", required=True, help="specimen file (.npz); a .json summary is written beside it")
+    p.add_argument("--force", action="store_true", help="prepare again even if --out is a valid specimen")
+    p.add_argument("--quiet", action="store_true")
+    return cli.parse(p, argv)
+
+
+def validate(o):
+    if o.assembly not in ASSEMBLIES:
+        raise cli.InputError("unknown assembly %r (available: %s)" % (o.assembly, ", ".join(ASSEMBLIES)))
+    if o.n < 1:
+        raise cli.InputError("--n must be >= 1 (an empty cell cannot be consolidated)")
+    if o.d50 <= 0:
+        raise cli.InputError("--d50 must be > 0 (a radius <= 0 is not a particle)")
+    if o.pressure <= 0:
+        raise cli.InputError("--pressure must be > 0")
+    if o.mu_prep < 0 or o.mu < 0:
+        raise cli.InputError("friction coefficients must be >= 0")
+    if not 0.3 < o.phi_cell < 0.74:
+        raise cli.InputError("--phi-cell %.3g: the size distribution cannot fit the box "
+                             "(spheres fill at most 0.74 of space; use 0.3 < phi < 0.74)" % o.phi_cell)
+    if not (0 < o.unbalanced < 1 and 0 < o.inertial_number < 1):
+        raise cli.InputError("--unbalanced and --inertial-number must lie in (0, 1)")
+    if o.threads < 0:
+        raise cli.InputError("--threads must be >= 0")
+    if not o.out.endswith(".npz"):
+        raise cli.InputError("--out must name a .npz file")
+    try:
+        dist = psd.SizeDistribution.from_d50_cu(o.d50, o.cu)
+    except ValueError as exc:
+        raise cli.InputError(str(exc)) from None
+    # The cell must be longer than the interaction range of the largest pair.
+    side = (o.n * 3.14159265 / 6 * dist.d50 ** 3 / o.phi_cell) ** (1 / 3)
+    if side < 1.2 * 2 * dist.d[-1]:
+        raise cli.InputError("%d particles of D50 %.3g m make a cell of %.3g m, shorter than the contact "
+                             "range of the largest spheres: the size distribution cannot fit the box"
+                             % (o.n, o.d50, side, ))
+    out_dir = os.path.dirname(os.path.abspath(o.out))
+    if os.path.exists(out_dir) and not os.access(out_dir, os.W_OK):
+        raise cli.InputError("cannot write to %s" % out_dir)
+    return dist
+
+
+def main():
+    o = options()
+    dist = validate(o)
+    if o.threads:
+        os.environ["OMP_NUM_THREADS"] = str(o.threads)
+    if os.path.exists(o.out) and not o.force:
+        try:
+            scene, meta = specimen_file.load(o.out)
+        except specimen_file.SpecimenFileError as exc:
+            raise cli.InputError("%s exists but is not usable (%s); remove it or use --force" % (o.out, exc))
+        print("kept existing specimen %s (use --force to prepare again)" % o.out)
+        report(scene, meta.get("parameters", {}), o)
+        return
+
+    def progress(label, scene, engine, steps):
+        if not o.quiet and steps % 20000 == 0:
+            st = specimen.state(scene)
+            print("  %-13s step %8d  p = %9.1f Pa  unbalanced = %.2e  e = %.4f  Zm = %.3f"
+                  % (label, steps, st["p"], engine.unbalanced, st["void_ratio"], st["Zm"]), flush=True)
+
+    if not o.quiet:
+        print("preparing %d %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa"
+              % (o.n, o.assembly, o.seed, o.d50, o.cu, o.pressure / 1e3), flush=True)
+    t0 = time.time()
+    try:
+        scene, log = specimen.prepare_spheres(
+            o.n, seed=o.seed, size_distribution=dist, pressure=o.pressure, mu_prep=o.mu_prep,
+            mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
+            unbalanced=o.unbalanced, progress=progress)
+    except (ValueError, specimen.PreparationError) as exc:
+        cli.fail(str(exc), 1)
+    log["threads"] = o.threads
+    summary = specimen.state(scene)
+    meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)
+    from trueaniso import atomic
+    atomic.write_json(o.out[:-4] + ".json", dict(summary=summary, parameters=log, versions=meta["versions"],
+                                                 sha256=meta["sha256"]))
+    if not o.quiet:
+        print("saved %s in %.1f s" % (o.out, time.time() - t0))
+    report(scene, log, o)
+
+
+def report(scene, log, o):
+    st = specimen.state(scene)
+    print(json.dumps(dict(n=st["n"], void_ratio=round(st["void_ratio"], 4), Zm=round(st["Zm"], 3),
+                          sigma_kPa=[round(st[k] / 1e3, 3) for k in ("sigma_x", "sigma_y", "sigma_z")],
+                          unbalanced=float("%.3g" % st["unbalanced"]), friction=st["friction"])))
+    if cli.in_yade():
+        from trueaniso import yade_bridge
+        yade_bridge.yade_scene_from(scene, import_contacts=False)
+
+
+if __name__ == "__main__" or cli.in_yade():
+    cli.guarded(main)

@@ -1,0 +1,135 @@
+"""Versioned specimen files: one .npz holding the whole mechanical state and its provenance.
+
+Layout (format "trueaniso-specimen", version 1): arrays for bodies, member spheres, cell and
+contact history (the tangential forces matter: a probe starts from them), plus a JSON string
+``meta`` with material, seed, preparation parameters, the state summary, software versions
+and a SHA-256 of the arrays. Loading checks format, version, shapes and checksum before
+building anything, and refuses a file that fails any check with one clear message.
+"""
+import hashlib
+import json
+import os
+import platform
+import time
+import zipfile
+
+import numpy as np
+
+from . import FORMAT_VERSION, __version__, atomic, engines
+
+FORMAT = "trueaniso-specimen"
+_ARRAYS = ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia",
+           "member_begin", "member_body", "member_offsets", "radii", "cell_size", "cell_ref_size",
+           "strain_rate", "c_member1", "c_member2", "c_shift", "c_normal", "c_normal_force",
+           "c_shear_force")
+
+
+class SpecimenFileError(ValueError):
+    pass
+
+
+def _checksum(arrays):
+    h = hashlib.sha256()
+    for name in _ARRAYS:
+        a = np.ascontiguousarray(arrays[name])
+        h.update(name.encode())
+        h.update(str(a.dtype).encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def scene_arrays(scene):
+    c = scene.contact_arrays()
+    active = c["normal_force"] > 0
+    return dict(
+        positions=scene.positions, velocities=scene.velocities,
+        angular_velocities=scene.angular_velocities, orientations=scene.orientations,
+        masses=scene.masses, inertia=scene.inertia, member_begin=scene.member_begin,
+        member_body=scene.member_body, member_offsets=scene.member_offsets, radii=scene.radii,
+        cell_size=scene.cell_size, cell_ref_size=scene.cell_ref_size, strain_rate=scene.strain_rate,
+        c_member1=c["member1"][active], c_member2=c["member2"][active], c_shift=c["shift"][active],
+        c_normal=c["normal"][active], c_normal_force=c["normal_force"][active],
+        c_shear_force=c["shear_force"][active])
+
+
+def versions():
+    return dict(trueaniso=__version__, python=platform.python_version(), numpy=np.__version__,
+                machine=platform.machine())
+
+
+def save(path, scene, seed=None, parameters=None, summary=None):
+    """Write a specimen atomically (an existing file is replaced only by a complete new one)."""
+    arrays = scene_arrays(scene)
+    meta = dict(format=FORMAT, format_version=FORMAT_VERSION, created=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+                seed=seed, parameters=parameters or {}, summary=summary or {}, versions=versions(),
+                material=dict(shear_modulus=scene.shear_modulus, poisson=scene.poisson,
+                              density=scene.density, friction=scene.friction),
+                dt=scene.dt, time=scene.time, step=scene.step, block_rotations=scene.block_rotations,
+                sha256=_checksum(arrays))
+    with atomic.atomic_open(path, "wb") as f:
+        np.savez(f, meta=np.array(json.dumps(meta, default=atomic._jsonable)), **arrays)
+    return meta
+
+
+def read(path):
+    """(arrays, meta) after every check; raises SpecimenFileError."""
+    if not os.path.isfile(path):
+        raise SpecimenFileError("specimen file not found: %s" % path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as exc:
+        raise SpecimenFileError("corrupt specimen file %s (%s)" % (path, exc)) from None
+    except Exception as exc:  # zlib and other decoder errors of a damaged member
+        raise SpecimenFileError("corrupt specimen file %s (%s)" % (path, exc)) from None
+    if "meta" not in data:
+        raise SpecimenFileError("%s is not a trueaniso specimen (no metadata)" % path)
+    try:
+        meta = json.loads(str(data.pop("meta")))
+    except json.JSONDecodeError:
+        raise SpecimenFileError("corrupt specimen file %s (metadata unreadable)" % path) from None
+    if meta.get("format") != FORMAT:
+        raise SpecimenFileError("%s is not a trueaniso specimen (format %r)" % (path, meta.get("format")))
+    if meta.get("format_version") != FORMAT_VERSION:
+        raise SpecimenFileError("%s has specimen format version %r; this trueaniso reads version %d"
+                                % (path, meta.get("format_version"), FORMAT_VERSION))
+    missing = [k for k in _ARRAYS if k not in data]
+    if missing:
+        raise SpecimenFileError("corrupt specimen file %s (missing arrays: %s)" % (path, ", ".join(missing)))
+    if _checksum(data) != meta.get("sha256"):
+        raise SpecimenFileError("corrupt specimen file %s (checksum mismatch)" % path)
+    return data, meta
+
+
+def load(path):
+    """A Scene with the saved state (contact history included) and the metadata."""
+    a, meta = read(path)
+    nb = a["positions"].shape[0]
+    mb = a["member_begin"]
+    if mb.shape != (nb + 1,) or a["radii"].shape[0] != mb[-1]:
+        raise SpecimenFileError("corrupt specimen file %s (inconsistent body/member arrays)" % path)
+    s = engines.Scene()
+    m = meta["material"]
+    s.shear_modulus, s.poisson, s.friction = m["shear_modulus"], m["poisson"], m["friction"]
+    s.density = m["density"]
+    s.cell_size = a["cell_size"]
+    s.cell_ref_size = a["cell_ref_size"]
+    if np.all(np.diff(mb) == 1):
+        s.add_spheres(a["positions"], a["radii"])
+    else:
+        for b in range(nb):
+            k = slice(mb[b], mb[b + 1])
+            s.add_clump(a["positions"][b], a["orientations"][b], a["member_offsets"][k], a["radii"][k],
+                        float(a["masses"][b]), a["inertia"][b])
+    s.orientations = a["orientations"]
+    s.velocities = a["velocities"]
+    s.angular_velocities = a["angular_velocities"]
+    s.strain_rate = a["strain_rate"]
+    s.set_contact_history(a["c_member1"], a["c_member2"], a["c_shift"], a["c_normal"],
+                          a["c_normal_force"], a["c_shear_force"])
+    s.dt, s.time, s.step = meta["dt"], meta["time"], meta["step"]
+    s.block_rotations = meta["block_rotations"]
+    if not np.allclose(s.masses, a["masses"], rtol=1e-12):
+        raise SpecimenFileError("corrupt specimen file %s (masses disagree with radii and density)" % path)
+    return s, meta

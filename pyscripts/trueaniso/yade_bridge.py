@@ -1,0 +1,184 @@
+"""Bridge between YADE's ``O`` and our Scene (runs only inside yade-double).
+
+Conventions that differ and are converted here:
+ - YADE's state.vel is the total velocity; ours is the fluctuation about the cell's affine field
+   (v_total = v_fluct + velGrad x).
+ - YADE's getStress() is tension positive; ours is compression positive.
+ - Material: YADE's FrictMat has (young, poisson, frictionAngle); ours (G, nu, mu) with
+   G = E/(2(1+nu)), mu = tan(frictionAngle).
+ - Contacts: YADE's normal points from id1 to id2 and phys.shearForce is the force on id2, as ours;
+   id2's image is pos2 + hSize cellDist, as our shift.
+"""
+import math
+
+import numpy as np
+
+from . import engines
+
+
+class BridgeError(ValueError):
+    pass
+
+
+def _yade():
+    try:
+        import yade  # noqa: F401
+        from yade import O
+    except ImportError:
+        raise BridgeError("the YADE bridge runs inside yade-double (yade-double -n -x script.py)") from None
+    return O
+
+
+def _diag_cell(O):
+    if not O.periodic:
+        raise BridgeError("the YADE scene is not periodic (O.periodic = False)")
+    h = np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)])
+    off = h - np.diag(np.diag(h))
+    if np.abs(off).max() > 1e-12 * np.abs(np.diag(h)).max():
+        raise BridgeError("the YADE cell is not orthorhombic (hSize has off-diagonal terms)")
+    return np.diag(h).copy()
+
+
+def scene_from_yade(O=None, import_contacts=True):
+    """Our Scene from YADE's spheres, periodic cell, material and (optionally) contact history.
+
+    Returns (scene, ids): ids[k] is the YADE body id of our body k.
+    """
+    O = O or _yade()
+    from yade import Sphere
+    size = _diag_cell(O)
+    bodies = [b for b in O.bodies if b is not None]
+    spheres = [b for b in bodies if isinstance(b.shape, Sphere) and not b.isClumpMember and not b.isClump]
+    if len(spheres) != len(bodies):
+        raise BridgeError("the bridge imports free spheres only; this scene has %d other bodies"
+                          % (len(bodies) - len(spheres)))
+    if not spheres:
+        raise BridgeError("the YADE scene has no spheres")
+    mats = {id(b.material): b.material for b in spheres}
+    if len(mats) != 1:
+        raise BridgeError("all spheres must share one material")
+    mat = next(iter(mats.values()))
+    s = engines.Scene()
+    s.shear_modulus = mat.young / (2.0 * (1.0 + mat.poisson))
+    s.poisson = mat.poisson
+    s.density = mat.density
+    s.friction = math.tan(mat.frictionAngle)
+    s.cell_size = size
+    ref = np.array([O.cell.refSize[k] for k in range(3)])
+    s.cell_ref_size = ref if np.all(ref > 0) else size
+    pos = np.array([[b.state.pos[k] for k in range(3)] for b in spheres])
+    s.add_spheres(pos, np.array([b.shape.radius for b in spheres]))
+    grad = np.array([[O.cell.velGrad[i][j] for j in range(3)] for i in range(3)])
+    vel = np.array([[b.state.vel[k] for k in range(3)] for b in spheres])
+    s.velocities = vel - pos @ grad.T
+    s.strain_rate = np.diag(grad).copy()
+    s.angular_velocities = np.array([[b.state.angVel[k] for k in range(3)] for b in spheres])
+    s.dt = O.dt
+    ids = [b.id for b in spheres]
+    if import_contacts:
+        index = {i: k for k, i in enumerate(ids)}
+        rows = []
+        for I in O.interactions:
+            if not I.isReal:
+                continue
+            n = I.geom.normal
+            rows.append((index[I.id1], index[I.id2], [I.cellDist[k] for k in range(3)],
+                         [n[k] for k in range(3)], I.phys.normalForce.norm(),
+                         [I.phys.shearForce[k] for k in range(3)]))
+        if rows:
+            m1, m2, sh, nrm, fn, fs = zip(*rows)
+            s.set_contact_history(np.array(m1), np.array(m2), np.array(sh, dtype=np.int32),
+                                  np.array(nrm), np.array(fn), np.array(fs))
+    return s, ids
+
+
+def write_to_yade(scene, O=None, ids=None):
+    """Positions, velocities, radii and cell of our scene into YADE's O (for viewing, export)."""
+    O = O or _yade()
+    from yade import Matrix3, Vector3
+    h = scene.cell_size
+    O.cell.hSize = Matrix3(h[0], 0, 0, 0, h[1], 0, 0, 0, h[2])
+    rate = scene.strain_rate
+    O.cell.velGrad = Matrix3(rate[0], 0, 0, 0, rate[1], 0, 0, 0, rate[2])
+    pos, vel, ang, rad = scene.positions, scene.velocities, scene.angular_velocities, scene.radii
+    ids = ids if ids is not None else list(range(scene.num_bodies))
+    if len(ids) != scene.num_bodies:
+        raise BridgeError("ids must list one YADE body per scene body")
+    for k, i in enumerate(ids):
+        b = O.bodies[i]
+        b.state.pos = Vector3(*pos[k])
+        b.state.vel = Vector3(*(vel[k] + rate * pos[k]))
+        b.state.angVel = Vector3(*ang[k])
+        b.shape.radius = float(rad[k])
+
+
+def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False):
+    """Rebuild YADE's O from our scene, with YADE's own Hertz-Mindlin law: the peer we compare to.
+
+    YADE's sphere-sphere geometry scales tangential displacements by (r1+r2)/(r1+r2-delta) to
+    "avoid granular ratcheting" (its default; the law's own flag of that name is unused in
+    2023.02a); our law does not, so it is switched off unless asked (docs/yade-peer.md).
+    Returns the YADE ids of our bodies.
+    """
+    O = O or _yade()
+    import yade
+    from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
+                      InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
+                      Law2_ScGeom_MindlinPhys_Mindlin, Matrix3, NewtonIntegrator, Vector3, utils)
+    if scene.has_clumps:
+        raise BridgeError("yade_scene_from handles sphere scenes only")
+    O.reset()
+    O.periodic = True
+    h = scene.cell_size
+    O.cell.hSize = Matrix3(h[0], 0, 0, 0, h[1], 0, 0, 0, h[2])
+    G, nu = scene.shear_modulus, scene.poisson
+    mat = O.materials.append(FrictMat(young=2.0 * G * (1.0 + nu), poisson=nu, density=scene.density,
+                                      frictionAngle=math.atan(scene.friction)))
+    ids = []
+    pos, vel, ang, rad = scene.positions, scene.velocities, scene.angular_velocities, scene.radii
+    for k in range(scene.num_bodies):
+        b = utils.sphere(Vector3(*pos[k]), float(rad[k]), material=mat)
+        b.state.vel = Vector3(*vel[k])
+        b.state.angVel = Vector3(*ang[k])
+        ids.append(O.bodies.append(b))
+    O.engines = [
+        ForceResetter(),
+        InsertionSortCollider([Bo1_Sphere_Aabb()], label="collider"),
+        InteractionLoop([Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=mindlin_ratcheting)],
+                        [Ip2_FrictMat_FrictMat_MindlinPhys()],
+                        [Law2_ScGeom_MindlinPhys_Mindlin(label="mindlin")]),
+        NewtonIntegrator(damping=damping, label="newton"),
+    ]
+    O.dt = scene.dt if scene.dt > 0 else 1e-8
+    if import_contacts:
+        _copy_contacts_to_yade(scene, O, ids)
+    return ids
+
+
+def _copy_contacts_to_yade(scene, O, ids):
+    """Create YADE interactions for our contacts and give them our tangential forces."""
+    from yade import Vector3
+    c = scene.contact_arrays()
+    active = np.nonzero(c["normal_force"] > 0)[0]
+    if active.size == 0:
+        return
+    # One step without motion creates the interactions (geometry and physics) at rest.
+    newton = [e for e in O.engines if type(e).__name__ == "NewtonIntegrator"][0]
+    newton.dead = True
+    saved = [(b.state.vel, b.state.angVel) for b in O.bodies]
+    for b in O.bodies:
+        b.state.vel = Vector3(0, 0, 0)
+        b.state.angVel = Vector3(0, 0, 0)
+    O.step()
+    for k in active:
+        i1, i2 = ids[c["body1"][k]], ids[c["body2"][k]]
+        I = O.interactions[i1, i2]
+        if I is None or not I.isReal:
+            raise BridgeError("contact %d-%d not found by YADE's collider" % (i1, i2))
+        sign = 1.0 if I.id1 == i1 else -1.0
+        fs = sign * c["shear_force"][k]
+        I.phys.shearForce = Vector3(*fs)
+        I.phys.shearElastic = Vector3(*fs)
+    for b, (v, w) in zip(O.bodies, saved):
+        b.state.vel, b.state.angVel = v, w
+    newton.dead = False

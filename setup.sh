@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs what is missing (Debian 12 packages, with apt-get) and builds trueaniso into build/.
+# Used by main.sh and test.sh; safe to run again (it only installs and rebuilds what is needed).
+set -euo pipefail
+cd "$(dirname "$0")"
+
+PACKAGES=(g++ cmake make yade libeigen3-dev libboost-python-dev libboost-numpy-dev libgtest-dev
+          libsuitesparse-dev python3-numpy python3-scipy python3-matplotlib python3-pytest)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "setup: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; }
+    SUDO=sudo
+  fi
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# Debian's interpreter: the one yade-double embeds and the one with numpy/scipy.
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
+cmake --build build -j"$(nproc)" 2>&1 | grep -E "error|warning|Error" || true
+test -f build/python/_trueaniso*.so || { echo "setup: build failed" >&2; cmake --build build; exit 1; }

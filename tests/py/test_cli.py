@@ -1,0 +1,55 @@
+"""Scripts refuse bad input with one clear line and a non-zero exit, before any work, and leave
+no file behind."""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+PREPARE = os.path.join(REPO, "pyscripts", "prepare_specimen.py")
+
+
+def run(*args, timeout=120):
+    return subprocess.run([sys.executable, PREPARE, *args], capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--bogus", "1"], "unrecognized arguments"),
+    (["--n", "0"], "empty cell"),
+    (["--d50=-1e-4"], "radius <= 0"),
+    (["--d50", "0"], "radius <= 0"),
+    (["--phi-cell", "0.8"], "cannot fit the box"),
+    (["--n", "3"], "cannot fit the box"),
+    (["--cu", "0.9"], "Cu must lie"),
+    (["--pressure=-5"], "pressure must be > 0"),
+    (["--assembly", "clump9"], "unknown assembly"),
+    (["--out", "x.txt"], ".npz"),
+])
+def test_bad_input_one_line_and_nothing_written(tmp_path, args, message):
+    out = tmp_path / "s.npz"
+    argv = args if "--out" in args else args + ["--out", str(out)]
+    proc = run(*argv)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and message in lines[0], proc.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_corrupt_existing_output_is_reported_not_overwritten(tmp_path):
+    out = tmp_path / "s.npz"
+    out.write_bytes(b"not a zip file")
+    proc = run("--n", "100", "--out", str(out))
+    assert proc.returncode == 2
+    assert "not usable" in proc.stderr and "corrupt" in proc.stderr
+    assert out.read_bytes() == b"not a zip file"
+
+
+def test_table_line_supplies_parameters(tmp_path):
+    table = tmp_path / "params.table"
+    table.write_text("n seed phi_cell\n100 3 0.9\n")
+    proc = run("--table", str(table), "--line", "1", "--out", str(tmp_path / "s.npz"))
+    assert proc.returncode == 2 and "--phi-cell 0.9" in proc.stderr  # the table's value was used
+    proc = run("--table", str(table), "--line", "2", "--out", str(tmp_path / "s.npz"))
+    assert proc.returncode == 2 and "no data line 2" in proc.stderr

@@ -1,0 +1,83 @@
+"""Specimen files that must be refused: corrupt, wrong version, not a specimen."""
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from trueaniso import specimen, specimen_file
+
+
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory):
+    scene, log = specimen.prepare_spheres(100, seed=2, unbalanced=1e-2)
+    path = tmp_path_factory.mktemp("spec") / "s.npz"
+    specimen_file.save(str(path), scene, seed=2, parameters=log)
+    return path
+
+
+def test_truncated_file_is_refused(saved, tmp_path):
+    bad = tmp_path / "bad.npz"
+    data = saved.read_bytes()
+    bad.write_bytes(data[: len(data) // 2])
+    with pytest.raises(specimen_file.SpecimenFileError, match="corrupt"):
+        specimen_file.load(str(bad))
+
+
+def test_flipped_bytes_are_refused(saved, tmp_path):
+    bad = tmp_path / "bad.npz"
+    data = bytearray(saved.read_bytes())
+    for k in range(2000, 2010):
+        data[k] ^= 0xFF
+    bad.write_bytes(bytes(data))
+    with pytest.raises(specimen_file.SpecimenFileError, match="corrupt"):
+        specimen_file.load(str(bad))
+
+
+def _rewrite(src, dst, edit_meta=None, edit_arrays=None):
+    with np.load(src) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays.pop("meta")))
+    if edit_meta:
+        edit_meta(meta)
+    if edit_arrays:
+        edit_arrays(arrays)
+    np.savez(dst, meta=np.array(json.dumps(meta)), **arrays)
+
+
+def test_wrong_version_is_refused(saved, tmp_path):
+    bad = tmp_path / "v9.npz"
+    _rewrite(saved, bad, edit_meta=lambda m: m.update(format_version=9))
+    with pytest.raises(specimen_file.SpecimenFileError, match="version 9"):
+        specimen_file.load(str(bad))
+
+
+def test_edited_array_fails_checksum(saved, tmp_path):
+    bad = tmp_path / "edited.npz"
+
+    def edit(a):
+        a["radii"] = a["radii"] * 1.01
+    _rewrite(saved, bad, edit_arrays=edit)
+    with pytest.raises(specimen_file.SpecimenFileError, match="checksum"):
+        specimen_file.load(str(bad))
+
+
+def test_other_npz_is_refused(tmp_path):
+    other = tmp_path / "other.npz"
+    np.savez(other, x=np.zeros(3))
+    with pytest.raises(specimen_file.SpecimenFileError, match="not a trueaniso specimen"):
+        specimen_file.load(str(other))
+
+
+def test_missing_file_is_refused(tmp_path):
+    with pytest.raises(specimen_file.SpecimenFileError, match="not found"):
+        specimen_file.load(str(tmp_path / "none.npz"))
+
+
+def test_save_replaces_atomically(saved, tmp_path):
+    target = tmp_path / "t.npz"
+    shutil.copy(saved, target)
+    scene, _ = specimen_file.load(str(target))
+    specimen_file.save(str(target), scene, seed=2)
+    specimen_file.load(str(target))
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".tmp-")] == []

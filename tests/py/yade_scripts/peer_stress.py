@@ -1,0 +1,77 @@
+"""A packing made in YADE (makeCloud, then the cell squeezed through O.cell.velGrad until the mean
+stress from utils.getStress() reaches 50 kPa, Hertz-Mindlin law) imported through
+the bridge: our Love-Weber stress against YADE's utils.getStress() on the same configuration.
+Usage: yade-double -n -x peer_stress.py N OUT.json
+"""
+import json
+import math
+import os
+import sys
+
+# under yade-double __file__ names yade itself; the script path is argv[0]
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(sys.argv[0])), "..", "..", "..", "pyscripts"))
+import numpy as np  # noqa: E402
+from yade import (O, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,  # noqa: E402
+                  InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
+                  Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator,
+                  GlobalStiffnessTimeStepper, Vector3, Matrix3, pack, utils)
+
+from trueaniso import engines as E, yade_bridge  # noqa: E402
+
+n = int(sys.argv[1])
+out = sys.argv[-1]
+G, nu = 18e9, 0.15
+O.periodic = True
+mat = O.materials.append(FrictMat(young=2 * G * (1 + nu), poisson=nu, density=2500,
+                                  frictionAngle=math.atan(0.5)))
+r = 0.0975e-3
+side = (n * 4.0 / 3.0 * math.pi * r ** 3 / 0.35) ** (1.0 / 3.0)
+O.cell.hSize = Matrix3(side, 0, 0, 0, side, 0, 0, 0, side)
+sp = pack.SpherePack()
+sp.makeCloud((0, 0, 0), (side, side, side), rMean=r, rRelFuzz=0.2, periodic=True, seed=1, num=n)
+sp.toSimulation(material=mat)
+O.engines = [
+    ForceResetter(),
+    InsertionSortCollider([Bo1_Sphere_Aabb()]),
+    InteractionLoop([Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=False)],
+                    [Ip2_FrictMat_FrictMat_MindlinPhys()], [Law2_ScGeom_MindlinPhys_Mindlin()]),
+    GlobalStiffnessTimeStepper(timestepSafetyCoefficient=0.5),
+    NewtonIntegrator(damping=0.4, label="newton"),
+]
+O.dt = 1e-8
+rate = 30.0  # 1/s: inertial number ~1e-3 at 50 kPa for these grains
+O.cell.velGrad = Matrix3(-rate, 0, 0, 0, -rate, 0, 0, 0, -rate)
+while -np.trace(np.array(utils.getStress())) / 3 < 50e3 and O.iter < 400000:
+    O.run(500, True)
+
+# Forces at the current positions, at rest. YADE applies a new velGrad at the end of the next
+# step, so: zero velGrad, take one step; then zero the velocities and take one step without
+# integration, where no tangential increment can arise.
+O.cell.velGrad = Matrix3.Zero
+O.step()
+for b in O.bodies:
+    b.state.vel = Vector3(0, 0, 0)
+    b.state.angVel = Vector3(0, 0, 0)
+newton.dead = True  # noqa: F821
+O.step()
+assert np.abs(np.array(O.cell.velGrad)).max() == 0
+yade_stress = np.array(utils.getStress())
+
+scene, ids = yade_bridge.scene_from_yade(O)
+sim = E.Simulation(scene)
+sim.add(E.ContactDetection())
+sim.add(E.ContactForces())
+sim.run(1)
+ours = E.stress(scene)
+ours_N = np.sort(scene.contact_arrays()["normal_force"])
+ours_N = ours_N[ours_N > 0]
+yade_N = np.sort([I.phys.normalForce.norm() for I in O.interactions if I.isReal])
+rel = np.linalg.norm(ours + yade_stress) / np.linalg.norm(yade_stress)
+with open(out, "w") as f:
+    json.dump(dict(n=len(ids), yade_iter=O.iter, yade_stress=yade_stress.tolist(), ours_stress=ours.tolist(),
+                   rel_stress=float(rel), contacts_yade=len(yade_N), contacts_ours=len(ours_N),
+                   max_rel_normal_force=float(np.max(np.abs(ours_N - yade_N) / yade_N)) if len(ours_N) == len(yade_N) else None,
+                   shear_share=float(np.mean([I.phys.shearForce.norm() / I.phys.normalForce.norm()
+                                              for I in O.interactions if I.isReal])),
+                   yade_avg_num_interactions=utils.avgNumInteractions(skipFree=True),
+                   ours_Zm=E.coordination(scene)["Zm"]), f, indent=1)
