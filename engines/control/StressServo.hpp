@@ -1,8 +1,6 @@
 #pragma once
-// Servo on the cell's diagonal stresses: each axis' strain rate is set from its stress error,
-// scaled by the affine stiffness estimate so the gain is dimensionless (the fraction of the
-// estimated strain gap closed per step), and capped by a maximum strain rate.
-// Used for isotropic consolidation; the true-triaxial servo moves its targets along a path.
+// Servo on the cell's diagonal stresses to fixed goals (isotropic consolidation, holding a state).
+#include "control/CellServoLaw.hpp"
 #include "dynamics/Engine.hpp"
 
 namespace trueaniso {
@@ -10,8 +8,7 @@ namespace trueaniso {
 class StressServo : public Engine {
  public:
   Vec3 target = Vec3::Constant(100e3);  // sigma_x, sigma_y, sigma_z goals (Pa, compression > 0)
-  Real gain = 0.01;
-  Real maxStrainRate = 1.0;     // 1/s; set from an inertial number by the caller
+  CellServoLaw law;
   Real stressTolerance = 100.0; // Pa: |sigma_k - goal| below it counts as reached
   Real unbalancedTolerance = 1e-3;
   bool stopWhenReached = false;

@@ -2,8 +2,6 @@
 // themselves when they run and by the Python layer before a run starts.
 #include <memory>
 
-#include "control/RadiusExpansion.hpp"
-#include "control/StressServo.hpp"
 #include "dynamics/ContactDetection.hpp"
 #include "dynamics/ContactForces.hpp"
 #include "dynamics/NewtonIntegrator.hpp"
@@ -14,11 +12,6 @@
 namespace trueaniso::py {
 
 namespace {
-
-template <class E, Vec3 E::*F>
-np::ndarray getVec(const E& e) { return toNumpy(e.*F); }
-template <class E, Vec3 E::*F>
-void setVec(E& e, const bp::object& o) { e.*F = toVec3(o, "vector parameter"); }
 
 bp::list engines(const Simulation& sim) {
   bp::list l;
@@ -68,29 +61,6 @@ void exportEngines() {
       .def_readwrite("max_dt", &TimeStepper::maxDt)
       .def("stiffness_bound", &TimeStepper::stiffnessBound).staticmethod("stiffness_bound")
       .def("critical_pair_step", &TimeStepper::criticalPairStep).staticmethod("critical_pair_step");
-
-  bp::class_<StressServo, bp::bases<Engine>, std::shared_ptr<StressServo>>("StressServo")
-      .add_property("target", &getVec<StressServo, &StressServo::target>, &setVec<StressServo, &StressServo::target>)
-      .def_readwrite("gain", &StressServo::gain)
-      .def_readwrite("max_strain_rate", &StressServo::maxStrainRate)
-      .def_readwrite("stress_tolerance", &StressServo::stressTolerance)
-      .def_readwrite("unbalanced_tolerance", &StressServo::unbalancedTolerance)
-      .def_readwrite("stop_when_reached", &StressServo::stopWhenReached)
-      .add_property("stress", &getVec<StressServo, &StressServo::stress>)
-      .def_readonly("unbalanced", &StressServo::unbalanced)
-      .def_readonly("reached", &StressServo::reached);
-
-  bp::class_<RadiusExpansion, bp::bases<Engine>, std::shared_ptr<RadiusExpansion>>("RadiusExpansion")
-      .def_readwrite("target_pressure", &RadiusExpansion::targetPressure)
-      .def_readwrite("gain", &RadiusExpansion::gain)
-      .def_readwrite("max_growth_rate", &RadiusExpansion::maxGrowthRate)
-      .def_readwrite("stress_tolerance", &RadiusExpansion::stressTolerance)
-      .def_readwrite("unbalanced_tolerance", &RadiusExpansion::unbalancedTolerance)
-      .def_readwrite("stop_when_reached", &RadiusExpansion::stopWhenReached)
-      .def_readonly("scale", &RadiusExpansion::scale)
-      .def_readonly("pressure", &RadiusExpansion::pressure)
-      .def_readonly("unbalanced", &RadiusExpansion::unbalanced)
-      .def_readonly("reached", &RadiusExpansion::reached);
 
   bp::class_<Simulation, std::shared_ptr<Simulation>>("Simulation", bp::init<std::shared_ptr<Scene>>())
       .def("add", &Simulation::add)

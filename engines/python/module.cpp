@@ -9,6 +9,9 @@ namespace trueaniso::py {
 void exportScene();
 void exportEngines();
 void exportMeasures();
+void exportStatics();
+void exportFabric();
+void exportControl();
 
 np::ndarray toNumpy(const std::vector<Vec3>& v) {
   np::ndarray a = np::zeros(bp::make_tuple(v.size(), 3), np::dtype::get_builtin<double>());
@@ -97,4 +100,7 @@ BOOST_PYTHON_MODULE(_trueaniso) {
   exportScene();
   exportEngines();
   exportMeasures();
+  exportStatics();
+  exportFabric();
+  exportControl();
 }

@@ -16,8 +16,11 @@ def _find_extension():
     if os.environ.get("TRUEANISO_BUILD"):
         candidates.append(os.path.join(os.environ["TRUEANISO_BUILD"], "python"))
     candidates.append(os.path.join(REPO_ROOT, "build", "python"))
-    for path in candidates:
-        if os.path.isdir(path) and path not in sys.path:
+    # Insert in reverse so the first candidate ($TRUEANISO_BUILD) ends up first on sys.path.
+    for path in reversed(candidates):
+        if os.path.isdir(path):
+            if path in sys.path:
+                sys.path.remove(path)
             sys.path.insert(0, path)
     try:
         import _trueaniso  # noqa: F401

@@ -32,6 +32,18 @@ class Chain:
         return self.sim.run(int(n))
 
 
+def refresh(scene):
+    """Recompute every contact quantity (forces, normals, branches) for the current positions
+    without any tangential increment: what a loaded or edited scene needs before it is measured."""
+    dt = scene.dt
+    scene.dt = 0.0  # zero time: the shear increment v dt vanishes, history is only carried
+    try:
+        _e.ContactDetection().apply(scene)
+        _e.ContactForces().apply(scene)
+    finally:
+        scene.dt = dt
+
+
 def reference_contact_force(scene, pressure):
     """Mean contact force expected at a pressure: p = Nc <N l> / V with Nc l ~ 3 V_s Z / (2 pi r^2 ...).
 

@@ -132,4 +132,6 @@ def load(path):
     s.block_rotations = meta["block_rotations"]
     if not np.allclose(s.masses, a["masses"], rtol=1e-12):
         raise SpecimenFileError("corrupt specimen file %s (masses disagree with radii and density)" % path)
+    from . import dem
+    dem.refresh(s)  # contact forces, normals and branches for the loaded positions
     return s, meta

@@ -1,0 +1,65 @@
+#pragma once
+// b-controlled true-triaxial servo at constant mean stress (paper section 2.2, Eqs. 8-9).
+//
+// From the stresses it finds when it starts, the servo moves its goal along the straight stress
+// path to the state's (sigma_x, sigma_y, sigma_z) of Eq. (9) — a line of constant b and p when it
+// starts on one, as from the isotropic state or from an earlier state of the same path. The goal
+// advances only while the specimen follows it (every stress within `followTolerance`), so the
+// loading is as fast as the specimen allows and never outruns it. At the end it holds the state
+// until every stress is within `stressTolerance` and the unbalanced force is below its tolerance.
+// A specimen that cannot carry the state (strain beyond `maxStrain`, or no convergence within
+// `maxSteps`) ends the run with status Failed and a message; it never loops forever.
+#include <string>
+
+#include "control/CellMeasurement.hpp"
+#include "control/CellServoLaw.hpp"
+#include "control/TrueTriaxialPath.hpp"
+#include "dynamics/Engine.hpp"
+
+namespace trueaniso {
+
+class TrueTriaxialServo : public Engine {
+ public:
+  enum class Status { Idle, Loading, Holding, Reached, Failed };
+
+  TrueTriaxialState goal;
+  CellServoLaw law;
+  Real pathRate = 2.0;             // Pa per step: the fastest the goal moves along the path
+  Real followTolerance = 1000.0;   // Pa
+  Real stressTolerance = 500.0;    // Pa: the 0.5 kPa
+  Real unbalancedTolerance = 1e-3;
+  long settleSteps = 200;          // the hold criterion must be met this many steps in a row
+  Real maxStrain = 0.05;           // failure: |cell strain since start| on any axis beyond it
+  long maxSteps = 3000000;
+  // Failure: while loading, the specimen has not followed the goal (no progress) for this many
+  // steps: it creeps at a stress ratio it cannot exceed.
+  long stallSteps = 100000;
+
+  // State, readable from Python.
+  Status status = Status::Idle;
+  std::string message;
+  Real progress = 0;               // 0 at the start stresses, 1 at the state
+  Vec3 start = Vec3::Zero(), target = Vec3::Zero(), stress = Vec3::Zero();
+  Vec3 startStrain = Vec3::Zero();
+  // Largest excursion of each stress beyond its final value in the direction of loading (Pa);
+  // <= 0 means it never passed its goal.
+  Vec3 overshoot = Vec3::Constant(-1e300);
+  Real unbalanced = 0;
+  long steps = 0, settled = 0, stalled = 0;
+
+  void reset() {
+    status = Status::Idle;
+    message.clear();
+    progress = 0;
+    steps = settled = stalled = 0;
+    overshoot = Vec3::Constant(-1e300);
+    done = false;
+  }
+  void apply(Scene& scene) override;
+  // The control logic alone: cell strain rates from a measurement (used by apply and by the
+  // YADE adapter). Sets `done` when the state is reached or has failed.
+  Vec3 update(const CellMeasurement& m, Real dt);
+  std::string name() const override { return "TrueTriaxialServo"; }
+};
+
+}  // namespace trueaniso

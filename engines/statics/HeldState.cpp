@@ -1,0 +1,91 @@
+#include "statics/HeldState.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "dynamics/ContactDetection.hpp"
+#include "dynamics/ContactForces.hpp"
+#include "measure/Reduce.hpp"
+#include "measure/Stress.hpp"
+
+namespace trueaniso {
+
+Scene heldState(const Scene& scene) {
+  scene.validate();
+  Scene held = scene;
+  held.material.friction = 1e23;  // the probes' value: nothing slides
+  held.blockRotations = false;    // torques are wanted for the balance check; dt = 0 moves nothing
+  held.dt = 0;
+  held.refreshMembers();
+  ContactDetection detection;
+  detection.rebuild(held);  // keeps the history of every listed pair
+  held.detectionInvalid = false;
+  ContactForces forces;
+  forces.apply(held);
+  return held;
+}
+
+Balance balance(const Scene& held) {
+  const Bodies& B = held.bodies;
+  const Contacts& C = held.contacts;
+  struct Acc {
+    Real f = 0, arm = 0;
+    long n = 0;
+    Acc& operator+=(const Acc& o) { f += o.f; arm += o.arm; n += o.n; return *this; }
+  };
+  const Acc contact = blockSum<Acc>(C.size(), Acc{}, [&](int c, Acc& acc) {
+    if (C.normalForce[c] <= 0) return;
+    acc.f += C.force(c).norm();
+    acc.arm += held.members.radius[C.m1[c]] + held.members.radius[C.m2[c]] - C.overlap[c];
+    ++acc.n;
+  });
+  Balance b;
+  b.forces = unbalancedForce(held);
+  if (contact.n == 0) {
+    b.torques = std::numeric_limits<Real>::quiet_NaN();
+    return b;
+  }
+  const Real torqueSum = blockSum<Real>(B.size(), 0.0, [&](int k, Real& acc) { acc += B.torque[k].norm(); });
+  // Mean lever arm: half the mean member-centre distance.
+  b.torques = (torqueSum / B.size()) / ((contact.f / contact.n) * 0.5 * (contact.arm / contact.n));
+  return b;
+}
+
+void requireBalance(const Scene& held, Real limit, bool rotations) {
+  const Balance b = balance(held);
+  require(std::isfinite(b.forces), "no contact carries a force: a static stiffness needs a loaded network");
+  std::ostringstream msg;
+  if (!(b.forces <= limit)) {
+    msg << "the state is out of force balance (unbalanced force " << b.forces << " > " << limit
+        << "): relax it first; its tangent is not what a probe from it converges to";
+    throw InputError(msg.str());
+  }
+  if (rotations && !(b.torques <= limit)) {
+    msg << "the state is out of moment balance (unbalanced torque " << b.torques << " > " << limit
+        << "): relax it first, or take the stiffness with rotations blocked";
+    throw InputError(msg.str());
+  }
+}
+
+HeldContact heldContact(const Scene& held, int c) {
+  const Contacts& C = held.contacts;
+  const Members& M = held.members;
+  const Bodies& B = held.bodies;
+  const int i = C.m1[c], j = C.m2[c];
+  HeldContact h;
+  h.normal = C.normal[c];
+  h.shearForce = C.shearForce[c];
+  h.branch = C.branch[c];
+  h.offset1 = M.pos[i] - B.pos[C.b1[c]];
+  h.offset2 = M.pos[j] - B.pos[C.b2[c]];
+  h.normalForce = C.normalForce[c];
+  h.kn = C.kn(c);
+  h.ks = held.material.stiffnessRatio() * h.kn;
+  const Real delta = C.overlap[c];
+  h.distance = M.radius[i] + M.radius[j] - delta;
+  h.arm1 = M.radius[i] - 0.5 * delta;
+  h.arm2 = M.radius[j] - 0.5 * delta;
+  return h;
+}
+
+}  // namespace trueaniso

@@ -1,0 +1,108 @@
+"""Benchmark of the static stiffness solve (not a test): wall time against N, rotations free and
+blocked, and the moduli against the kinematic (affine) estimate; writes both tables into
+docs/statics.md between their markers.
+
+    /usr/bin/python3 pyscripts/bench_statics.py /tmp/statics/s1000.npz /tmp/statics/s4000.npz \\
+        /tmp/statics/s16000.npz --doc docs/statics.md
+
+Specimens from: pyscripts/prepare_specimen.py --n N --seed 1 --out /tmp/statics/sN.npz
+"""
+import os
+import platform
+import re
+import resource
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+import numpy as np  # noqa: E402
+
+from trueaniso import atomic, cli, engines, specimen_file, statics  # noqa: E402
+
+
+def options(argv=None):
+    p = cli.Parser(description=__doc__.splitlines()[0])
+    p.add_argument("specimens", nargs="+", help="specimen files (.npz)")
+    p.add_argument("--doc", default=None, help="markdown file whose benchmark/results blocks are replaced")
+    p.add_argument("--repeat", type=int, default=1, help="solves per case; the fastest is reported")
+    return cli.parse(p, argv)
+
+
+def machine():
+    cpu = "unknown CPU"
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(l.split(":", 1)[1].strip() for l in f if l.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    return "%s, %d cores, %s, Python %s" % (cpu, os.cpu_count(), platform.platform(), platform.python_version())
+
+
+def solve(scene, rotations, repeat):
+    best = None
+    for _ in range(repeat):
+        load = os.getloadavg()[0]
+        c0 = resource.getrusage(resource.RUSAGE_SELF).ru_utime
+        t0 = time.time()
+        r = statics.static_stiffness(scene, rotations=rotations)
+        r["wall"] = time.time() - t0
+        r["cpu"] = resource.getrusage(resource.RUSAGE_SELF).ru_utime - c0
+        r["load"] = load
+        if best is None or r["wall"] < best["wall"]:
+            best = r
+    return best
+
+
+def replace_block(text, name, body):
+    begin, end = "<!-- %s -->" % name, "<!-- /%s -->" % name
+    block = "%s\n%s\n%s" % (begin, body.rstrip(), end)
+    if begin in text:
+        return re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: block, text, flags=re.S)
+    return text + "\n" + block + "\n"
+
+
+def main(o):
+    bench = ["Machine: %s. Command: `%s`. Wall time of `static_stiffness` (held state, assembly and "
+             "zero modes, METIS analysis, numeric factorisation, solves) and its CPU time (all threads); "
+             "`load` is the 1-minute load average when the solve started (other jobs share the 2 cores)."
+             % (machine(), " ".join(["/usr/bin/python3"] + sys.argv)), "",
+             "| N | rotations | DOFs | contacts | nnz(L) | GFlop | analysis s | factor s | solve s | **total s** "
+             "| CPU s | load | residual |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    res = ["| N | Zm | rattlers | E_kin (MPa) | E_free / E_kin | E_blocked / E_kin | E_free (MPa) | mean nu_free "
+           "| zeta (x, y, z) "
+           "| zeta_h, zeta_v | zeta_rotation (x, y, z) |",
+           "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for path in o.specimens:
+        scene, _ = specimen_file.load(path)
+        n = scene.num_bodies
+        r = {rot: solve(scene, rot, o.repeat) for rot in (True, False)}
+        for rot in (False, True):
+            x, t = r[rot], r[rot]["time"]
+            bench.append("| %d | %s | %d | %d | %.3g M | %.0f | %.2f | %.2f | %.2f | **%.2f** | %.2f | %.1f | %.1e |" % (
+                n, "free" if rot else "blocked", x["dofs"], x["contacts"], x["factor_nonzeros"] / 1e6,
+                x["factor_flops"] / 1e9, t["analysis"], t["factorization"], t["solve"], x["wall"], x["cpu"],
+                x["load"], x["residual"]))
+            print(bench[-1], flush=True)
+        z = statics.rotation_factor(scene, free=r[True], blocked=r[False])
+        E_aff = z["E_kinematic"]  # Eq. (32) = Eq. (37) with zeta = 1, through Eq. (40)
+        nu = r[True]["nu"]
+        res.append("| %d | %.3f | %d | %s | %s | %s | %s | %.3f | %s | %.3f, %.3f | %s |" % (
+            n, engines.coordination(scene)["Zm"], len(r[True]["rattlers"]),
+            ", ".join("%.1f" % v for v in E_aff / 1e6),
+            ", ".join("%.3f" % v for v in r[True]["E"] / E_aff), ", ".join("%.3f" % v for v in r[False]["E"] / E_aff),
+            ", ".join("%.1f" % v for v in r[True]["E"] / 1e6), np.nanmean(nu),
+            ", ".join("%.3f" % v for v in z["zeta"]), z["zeta_h"], z["zeta_v"],
+            ", ".join("%.3f" % v for v in z["zeta_rotation"])))
+        print(res[-1], flush=True)
+    if o.doc:
+        with open(o.doc) as f:
+            text = f.read()
+        text = replace_block(text, "benchmark", "\n".join(bench))
+        text = replace_block(text, "results", "\n".join(res))
+        with atomic.atomic_open(o.doc, "w") as f:
+            f.write(text)
+
+
+if __name__ == "__main__":
+    cli.guarded(lambda: main(options()))

@@ -1,0 +1,184 @@
+"""Micro-structure of the contact network and its micromechanical elastic prediction.
+
+The numbers come from the C++ engines (measure/Fabric, theory/Micromechanics); this module names
+them for the study's tables:
+
+ - ``fabric(scene)``: Zm (Eq. 14), R (15), H (16), B (33), M (34, 3x3x3x3), Nc/V by Eq. (36)
+   and by count, void ratio, mean normal force, Nc, Np, Np0, Np1;
+ - ``prediction(scene, zeta, density)``: C_ijkl (Eq. 37), its orthotropic Voigt matrix
+   (Appendix A) and E_i, nu_ij, G_ij (Eqs. 39-42);
+ - ``fabric_row(scene, zeta)``: one flat dict of CSV columns;
+ - ``recorder(every)`` / ``history(recorder)``: the engine that records every N steps;
+ - ``fabric_from_interactions(O)``: the same measures in plain Python over YADE's
+   ``O.interactions`` (no trueaniso scene needed); slow, kept as the peer and the benchmark.
+
+The scene's contacts must come from a force evaluation at its current configuration (a step of
+the engine chain); a freshly loaded or imported scene needs one first.
+"""
+import math
+
+import numpy as np
+
+from . import engines
+
+AXES = "xyz"
+DENSITIES = ("eq36", "count")
+# The M components that enter Appendix A (A1-A9).
+M_COLUMNS = ((0, 0, 0, 0), (1, 1, 1, 1), (2, 2, 2, 2),
+             (0, 0, 1, 1), (1, 1, 0, 0), (0, 0, 2, 2), (2, 2, 0, 0), (1, 1, 2, 2), (2, 2, 1, 1),
+             (1, 2, 1, 2), (2, 1, 2, 1), (0, 2, 0, 2), (2, 0, 2, 0), (0, 1, 0, 1), (1, 0, 1, 0))
+_SYM = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+_SHEAR = ("yz", "xz", "xy")
+
+
+def _check_zeta(zeta):
+    zeta = float(zeta)
+    if not 0.0 <= zeta <= 1.0:
+        raise ValueError("zeta must lie in [0, 1] (k_s* = zeta k_s, section 4.2), got %g" % zeta)
+    return zeta
+
+
+def _check_density(density):
+    if density not in DENSITIES:
+        raise ValueError("density must be one of %s (Nc/V by Eq. 36 or counted), got %r" % (DENSITIES, density))
+    return density
+
+
+def fabric(scene):
+    """Dict of the fabric measures of the scene's last force evaluation (see module doc)."""
+    return engines.fabric(scene)
+
+
+def prediction(scene, zeta=1.0, density="eq36"):
+    """Micromechanical C (Eq. 37), Voigt matrix (Appendix A), E, nu[i, j] = nu_ij, G (yz, xz, xy)."""
+    return engines.micromechanical_prediction(scene, _check_zeta(zeta), _check_density(density))
+
+
+def prediction_from(f, shear_modulus, poisson, zeta=1.0, density="eq36"):
+    """The same prediction from a fabric dict (or a history row) and the particle material."""
+    m = _material(shear_modulus, poisson)
+    ncv = f["NcV_eq36"] if _check_density(density) == "eq36" else f["NcV_count"]
+    return engines.micromechanics(np.asarray(f["B"]), np.asarray(f["M"]), float(ncv), m.Cn, m.Cs,
+                                  _check_zeta(zeta))
+
+
+def _material(shear_modulus, poisson):
+    s = engines.Scene()
+    s.shear_modulus = shear_modulus
+    s.poisson = poisson
+    return s
+
+
+def fabric_row(scene, zeta=1.0, density="eq36"):
+    """Flat dict of CSV columns: counts, R_/H_/B_ (6 independent components each), the M
+    components of Appendix A, NcV_eq36, NcV_count, e, mean_N, and the micromechanical moduli
+    mic_E_i, mic_nu_ij, mic_G_ij for the given zeta (prefixed so they cannot be mistaken for
+    the probe's measured E_i, nu_ij)."""
+    f = fabric(scene)
+    p = engines.micromechanics(f["B"], f["M"], float(f["NcV_eq36"] if _check_density(density) == "eq36"
+                                                     else f["NcV_count"]),
+                               scene.Cn, scene.Cs, _check_zeta(zeta))
+    return row(f, p, zeta, density)
+
+
+def row(f, p, zeta, density):
+    """The columns of fabric_row from a fabric dict and a prediction dict."""
+    out = dict(Zm=float(f["Zm"]), Nc=int(f["Nc"]), Np=int(f["Np"]), Np0=int(f["Np0"]), Np1=int(f["Np1"]))
+    for name in ("R", "H", "B"):
+        t = np.asarray(f[name])
+        for i, j in _SYM:
+            out["%s_%s%s" % (name, AXES[i], AXES[j])] = float(t[i, j])
+    M = np.asarray(f["M"])
+    for idx in M_COLUMNS:
+        out["M_" + "".join(AXES[k] for k in idx)] = float(M[idx])
+    out.update(NcV_eq36=float(f["NcV_eq36"]), NcV_count=float(f["NcV_count"]), e=float(f["e"]),
+               mean_N=float(f["mean_N"]), mic_zeta=float(zeta), mic_density=density)
+    for i in range(3):
+        out["mic_E_" + AXES[i]] = float(p["E"][i])
+    for i in range(3):
+        for j in range(3):
+            if i != j:
+                out["mic_nu_" + AXES[i] + AXES[j]] = float(p["nu"][i, j])
+    for k, name in enumerate(_SHEAR):
+        out["mic_G_" + name] = float(p["G"][k])
+    return out
+
+
+def recorder(every=100):
+    """A FabricRecorder engine; add it after ContactForces (e.g. ``dem.Chain(controllers=[rec])``)."""
+    every = int(every)
+    if every < 1:
+        raise ValueError("every must be >= 1 step")
+    r = engines.FabricRecorder()
+    r.every = every
+    return r
+
+
+def history(rec):
+    """All records of a FabricRecorder: dict of numpy arrays (tensors (n,3,3) and (n,3,3,3,3))."""
+    return rec.history()
+
+
+def history_rows(rec, shear_modulus, poisson, zeta=1.0, density="eq36"):
+    """One fabric_row-like dict per record, with step and time."""
+    h = history(rec)
+    rows = []
+    for k in range(len(h["step"])):
+        f = {key: v[k] for key, v in h.items()}
+        r = row(f, prediction_from(f, shear_modulus, poisson, zeta, density), zeta, density)
+        r.update(step=int(h["step"][k]), time=float(h["time"][k]))
+        rows.append(r)
+    return rows
+
+
+def fabric_from_interactions(O, material=None):
+    """Zm, R, H, B, M, Nc/V (Eq. 36 and count), e and mean_N in plain Python over YADE's
+    O.interactions, for a periodic scene of spheres: branch L = pos2 + hSize cellDist - pos1,
+    n = geom.normal, N = |phys.normalForce|, rbar from the two radii (Eq. 7); e from the sphere
+    volumes. The definitions are those of fabric(scene); only the code differs."""
+    from yade import Sphere  # noqa: F401 - fails clearly outside yade-double
+    h = np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)])
+    radius, pos = {}, {}
+    for b in O.bodies:
+        if b is None:
+            continue
+        radius[b.id] = b.shape.radius
+        pos[b.id] = np.array([b.state.pos[0], b.state.pos[1], b.state.pos[2]])
+    count = dict.fromkeys(radius, 0)
+    n_list, L_list, w_list, N_list = [], [], [], []
+    for I in O.interactions:
+        if not I.isReal:
+            continue
+        N = I.phys.normalForce.norm()
+        if not N > 0:
+            continue
+        i, j = I.id1, I.id2
+        nrm = I.geom.normal
+        cd = I.cellDist
+        L = pos[j] + h @ np.array([cd[0], cd[1], cd[2]], dtype=float) - pos[i]
+        r1, r2 = radius[i], radius[j]
+        rbar = 2.0 * r1 * r2 / (r1 + r2)
+        n_list.append((nrm[0], nrm[1], nrm[2]))
+        L_list.append(L)
+        w_list.append((rbar * N) ** (1.0 / 3.0))
+        N_list.append(N)
+        count[i] += 1
+        count[j] += 1
+    n = np.array(n_list)
+    L = np.array(L_list)
+    w = np.array(w_list)
+    nc = len(w)
+    per = np.array(list(count.values()))
+    np0, np1 = int(np.sum(per == 0)), int(np.sum(per == 1))
+    zm = (2.0 * nc - np1) / (len(per) - np0 - np1)
+    V = abs(np.linalg.det(h))
+    r = np.array(list(radius.values()))
+    vs = 4.0 / 3.0 * math.pi * np.sum(r ** 3)
+    e = (V - vs) / vs
+    return dict(Zm=zm, Nc=nc, Np=len(per), Np0=np0, Np1=np1,
+                R=np.einsum("ci,cj->ij", n, n) / nc,
+                H=np.einsum("ci,cj->ij", L, L) / nc,
+                B=np.einsum("c,ci,cj->ij", w, L, L) / nc,
+                M=np.einsum("c,ci,cj,ck,cl->ijkl", w, L, n, L, n, optimize=True) / nc,
+                NcV_eq36=3.0 * zm / (8.0 * math.pi * (1.0 + e) * np.mean(r ** 3)),
+                NcV_count=nc / V, e=e, mean_N=float(np.mean(N_list)), volume=V)

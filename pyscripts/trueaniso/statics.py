@@ -1,0 +1,74 @@
+"""Exact static stiffness of the contact network (issue 5): Python face of engines/statics.
+
+The C++ engine linearises the dynamic contact law at the scene's state with every contact
+sticking, relaxes the bodies (translations, and rotations unless blocked) under the six unit
+strains of the periodic cell with a sparse Cholesky solve, and returns the 6x6 tangent of the
+Love-Weber stress against the cell's log strain (both compression positive; Voigt order xx, yy,
+zz, yz, xz, xy; engineering shear strains). docs/statics.md has the definitions and derivations.
+"""
+import numpy as np
+
+from . import engines as _e
+
+VOIGT = ("xx", "yy", "zz", "yz", "xz", "xy")
+
+
+def static_stiffness(scene, rotations=True, max_unbalanced=1e-2, max_residual=1e-8, **solver):
+    """The relaxed static stiffness at the scene's state.
+
+    Returns a dict: C (6x6 stiffness, Pa), S (its inverse), E (E_x, E_y, E_z of Eq. 40, the
+    probe's moduli), nu (3x3, nu[i, j] = nu_ij, i loading, j lateral, NaN on the diagonal), G
+    (G_yz, G_xz, G_xy of Eq. 39), affine (kinematic stiffness, no relaxation) with its parts
+    affine_normal + affine_shear (= Eq. 32) and affine_geometric (initial-force terms), stress,
+    residual (max ||K u - f|| / ||f|| over the six strains and the equations solved),
+    pinned_reaction (the same over pinned DOFs: 0 for exact zero modes), rattlers (body ids),
+    pinned (list of dicts: body, translation, rotation, reason, ratio), time (s, by phase) and
+    solver counts (dofs, contacts, factor_nonzeros, factor_flops, factorizations, iterations,
+    gmres_iterations).
+
+    Raises ValueError for a state out of balance beyond `max_unbalanced` (the engine's check) and
+    RuntimeError when the solver's residual exceeds `max_residual`.
+    """
+    if not 0 < max_unbalanced:
+        raise ValueError("max_unbalanced must be > 0")
+    r = _e.static_stiffness(scene, rotations=bool(rotations), max_unbalanced=float(max_unbalanced), **solver)
+    if not r["residual"] <= max_residual:
+        raise RuntimeError("static stiffness: residual %.3g > %.3g; pinned DOFs %s"
+                           % (r["residual"], max_residual, [(p["body"], p["reason"]) for p in r["pinned"]]))
+    return r
+
+
+def rotation_factor(scene, free=None, blocked=None, **kw):
+    """zeta of Eq. (37) derived from static solves (docs/statics.md, "Rotation factor").
+
+    `free` and `blocked` are static_stiffness results with rotations free and blocked; they are
+    computed when not given. Returns dict(zeta (per axis), zeta_h, zeta_v, zeta_rotation,
+    zeta_rotation_h, zeta_rotation_v, E_free, E_blocked, E_kinematic (zeta = 1)).
+    """
+    free = free if free is not None else static_stiffness(scene, rotations=True, **kw)
+    blocked = blocked if blocked is not None else static_stiffness(scene, rotations=False, **kw)
+    z = _e.rotation_factor(free["affine_normal"], free["affine_shear"], free["E"], blocked["E"])
+    z.update(E_free=free["E"], E_blocked=blocked["E"],
+             E_kinematic=_e.kinematic_moduli(free["affine_normal"], free["affine_shear"], 1.0))
+    return z
+
+
+def summary(result):
+    """One line per modulus, for logs."""
+    E, nu, G = result["E"], result["nu"], result["G"]
+    lines = ["E_%s = %.4g MPa" % (a, E[i] / 1e6) for i, a in enumerate("xyz")]
+    lines += ["nu_%s%s = %.4f" % (a, b, nu[i, j]) for i, a in enumerate("xyz") for j, b in enumerate("xyz") if i != j]
+    lines += ["G_%s = %.4g MPa" % (VOIGT[3 + i], G[i] / 1e6) for i in range(3)]
+    lines.append("residual %.2e, %d rattlers, %d pinned, %.2f s" % (
+        result["residual"], len(result["rattlers"]), len(result["pinned"]), result["time"]["total"]))
+    return "\n".join(lines)
+
+
+def probe_moduli(C):
+    """E_i and nu_ij of a probe on axis i with the two other normal stresses held and no shear
+    strain (the orthorhombic cell), from any 6x6 stiffness: the normal 3x3 block inverted."""
+    S = np.linalg.inv(np.asarray(C)[:3, :3])
+    E = 1.0 / np.diag(S)
+    nu = -S.T / np.diag(S)[:, None]
+    np.fill_diagonal(nu, np.nan)
+    return E, nu

@@ -1,0 +1,158 @@
+"""True-triaxial states (paper Table C1) and directional stress probes, composed from the C++
+engines TrueTriaxialServo and StressProbe.
+
+A state is (b, sigma_z) at p = 100 kPa; Eq. (9) gives sigma_x, sigma_y. The 39 states of Table C1
+lie on eight paths from the isotropic state (b = 0, 0.25, 0.5, 0.75, 1; compression and
+extension of z), which the study follows one path at a time, probing each state on the way.
+"""
+import time
+
+import numpy as np
+
+from . import dem, engines
+
+# Table C1: (ID, sigma_x, sigma_y, sigma_z, q) in kPa, as printed (rounded to 0.1 kPa).
+TABLE_C1 = [
+    (1, 100, 100, 100, 0), (2, 95, 95, 110, 15), (3, 90, 90, 120, 30), (4, 85, 85, 130, 45),
+    (5, 80, 80, 140, 60), (6, 105, 105, 90, -15), (7, 110, 110, 80, -30), (8, 115, 115, 70, -45),
+    (9, 120, 120, 60, -60), (10, 97.1, 92.9, 110, 15.5), (11, 94.3, 85.7, 120, 30.9),
+    (12, 91.4, 78.6, 130, 46.4), (13, 88.6, 71.4, 140, 61.8), (14, 102.9, 107.1, 90, -15.5),
+    (15, 105.7, 114.3, 80, -30.9), (16, 108.6, 121.4, 70, -46.4), (17, 111.4, 128.6, 60, -61.8),
+    (18, 100, 90, 110, 17.3), (19, 100, 80, 120, 34.6), (20, 100, 70, 130, 52.0),
+    (21, 100, 60, 140, 69.3), (22, 100, 110, 90, -17.3), (23, 100, 120, 80, -34.6),
+    (24, 100, 130, 70, -52.0), (25, 100, 140, 60, -69.3), (26, 104, 86, 110, 21.6),
+    (27, 108, 72, 120, 43.3), (28, 112, 58, 130, 64.9), (29, 96, 114, 90, -21.6),
+    (30, 92, 128, 80, -43.3), (31, 88, 142, 70, -64.9), (32, 105, 90, 105, 15),
+    (33, 110, 80, 110, 30), (34, 115, 70, 115, 45), (35, 120, 60, 120, 60),
+    (36, 95, 110, 95, -15), (37, 90, 120, 90, -30), (38, 85, 130, 85, -45), (39, 80, 140, 80, -60),
+]
+
+
+def b_of(sx, sy, sz):
+    """Eq. (8); the isotropic state has no b (0 is used: every b passes through it)."""
+    return 0.0 if abs(sz - sy) < 1e-12 else (sx - sy) / (sz - sy)
+
+
+def table_c1_states():
+    """[(id, b, sigma_z in Pa)] with b rounded to the paper's five values."""
+    out = []
+    for i, sx, sy, sz, _ in TABLE_C1:
+        b = min((0.0, 0.25, 0.5, 0.75, 1.0), key=lambda v: abs(v - b_of(sx, sy, sz)))
+        out.append((i, b, sz * 1e3))
+    return out
+
+
+def paths(states):
+    """Group states into paths from the isotropic state: {(b, +1 or -1): [states by distance]}.
+
+    The isotropic state (sigma_z = p) is its own path (b, 0)."""
+    groups = {}
+    for st in states:
+        i, b, sz = st
+        side = 0 if abs(sz - 100e3) < 1e-9 else (1 if sz > 100e3 else -1)
+        groups.setdefault((b, side), []).append(st)
+    for key in groups:
+        groups[key].sort(key=lambda s: abs(s[2] - 100e3))
+    return groups
+
+
+class StateNotReached(RuntimeError):
+    pass
+
+
+def validate_state(b, sigma_z, p=100e3):
+    """Raises ValueError with the reason for b outside [0, 1] or a principal stress <= 0."""
+    return engines.true_triaxial_stresses(b, sigma_z, p)
+
+
+def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0,
+                unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
+                stall_steps=100_000, chunk=5000, progress=None):
+    """Drive the scene (friction as it is, 0.5 after consolidation) to the state and hold it.
+
+    Holds until every principal stress is within `tolerance` Pa of Eq. (9) and the unbalanced
+    force is below `unbalanced`. Raises StateNotReached if the specimen cannot get there.
+    """
+    validate_state(b, sigma_z, p)
+    servo = engines.TrueTriaxialServo()
+    servo.set_goal(b, sigma_z, p)
+    servo.path_rate = path_rate
+    servo.stress_tolerance = tolerance
+    servo.unbalanced_tolerance = unbalanced
+    servo.max_strain = max_strain
+    servo.max_steps = max_steps
+    servo.stall_steps = stall_steps
+    d50 = 2.0 * float(np.median(scene.radii))
+    servo.max_strain_rate = dem.strain_rate_for_inertial_number(inertial_number, d50, scene.density, p)
+    chain = dem.Chain(scene, damping=damping, controllers=[servo])
+    t0 = time.time()
+    while servo.status not in ("reached", "failed"):
+        chain.run(chunk)
+        if progress:
+            progress(servo)
+    scene.strain_rate = np.zeros(3)
+    info = dict(status=servo.status, steps=int(servo.steps), wall_time=time.time() - t0,
+                stress=servo.stress.tolist(), unbalanced=float(servo.unbalanced), message=servo.message,
+                overshoot=servo.overshoot.tolist(), goal=servo.goal_stresses.tolist())
+    if servo.status == "failed":
+        raise StateNotReached(servo.message)
+    return info
+
+
+AXES = "xyz"
+
+
+def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
+          skip_detection=False, damping=0.4, gain=0.01, relative_tolerance=2e-3, unbalanced=1e-5,
+          settle_steps=200, ramp_steps=2000, max_steps=2_000_000, chunk=2000):
+    """One directional probe at a held state; the scene is restored afterwards.
+
+    hold: the state's stresses (Pa) held during the probe on the two other axes.
+    Returns a dict with increments, E_i (Eq. 10), nu_ij (Eq. 11), gamma (Eq. 12), steps, time.
+    """
+    if axis not in (0, 1, 2):
+        if axis in ("x", "y", "z"):
+            axis = AXES.index(axis)
+        else:
+            raise ValueError("probe axis must be x, y or z, not %r" % (axis,))
+    if gamma <= 0:
+        raise ValueError("probe gamma must be > 0")
+    p = engines.StressProbe()
+    p.axis, p.sign, p.gamma_target, p.increment = axis, sign, gamma, increment
+    p.restrain_rotations = restrain_rotations
+    p.gain, p.relative_tolerance, p.unbalanced_tolerance = gain, relative_tolerance, unbalanced
+    p.settle_steps, p.ramp_steps, p.max_steps = settle_steps, ramp_steps, max_steps
+    # The cap only matters in the relax stage; probes move strains of ~1e-6.
+    p.max_strain_rate = 10.0
+    chain = dem.Chain(scene, damping=damping, controllers=[p])
+    dem.refresh(scene)
+    t0 = time.time()
+    p.start(scene, np.asarray(hold, dtype=float))
+    if skip_detection:
+        # Nothing slides and nothing moves beyond ~1e-6 strain: the contact network is that of
+        # the start, so the list is kept (it was rebuilt by refresh) and detection is switched off.
+        chain.detection.dead = True
+    try:
+        while p.stage not in ("done", "failed"):
+            chain.run(chunk)
+    finally:
+        p.restore(scene)
+        dem.refresh(scene)
+    if p.stage == "failed":
+        raise StateNotReached(p.message)
+    de = p.d_strain
+    out = dict(axis=AXES[axis], sign=sign, E=float(p.young_modulus),
+               d_stress=p.d_stress.tolist(), d_strain=de.tolist(), gamma=float(p.gamma),
+               steps=int(p.steps), relax_steps=int(p.relax_steps), ramp_steps=int(p.ramp_steps_done),
+               hold_steps=int(p.hold_steps), wall_time=time.time() - t0,
+               rotations="restrained" if restrain_rotations else "free",
+               detection="off" if skip_detection else "on", damping=damping)
+    for j in range(3):
+        if j != axis:
+            out["nu_%s%s" % (AXES[axis], AXES[j])] = float(p.poisson_ratio(j))
+    return out
+
+
+def probe_state(scene, hold, axes=(2, 0, 1), **kw):
+    """x, y and z probes from the same state (the probe restores it after each)."""
+    return [probe(scene, hold, a, **kw) for a in axes]

@@ -1,0 +1,124 @@
+"""True-triaxial servo and stress probe: Table C1, the simple cubic closed form, linearity,
+the hardest states, failure, and bad input."""
+import math
+import re
+
+import numpy as np
+import pytest
+
+from trueaniso import dem, engines, specimen, triaxial
+
+
+def test_equation_9_reproduces_table_c1():
+    states = triaxial.table_c1_states()
+    assert len(states) == 39
+    for (i, sx, sy, sz, q), (_, b, szp) in zip(triaxial.TABLE_C1, states):
+        s = engines.true_triaxial_stresses(b, szp)
+        # Table C1 prints 0.1 kPa; b = 0.75 rows are rounded to 1 kPa (e.g. 58 for 58.0).
+        assert s / 1e3 == pytest.approx([sx, sy, sz], abs=0.051), i
+        assert np.mean(s) == pytest.approx(100e3, rel=1e-12)
+        assert engines.deviatoric_q(b, szp) / 1e3 == pytest.approx(q, abs=0.051), i
+
+
+def test_paths_cover_all_states_once():
+    groups = triaxial.paths(triaxial.table_c1_states())
+    ids = sorted(i for g in groups.values() for i, _, _ in g)
+    assert ids == list(range(1, 40))
+    assert len(groups) == 11  # isotropic, then b = 0..1 in compression (5) and extension (5)
+
+
+@pytest.mark.parametrize("b,sz,msg", [(-0.1, 110e3, "outside [0, 1]"), (1.2, 110e3, "outside [0, 1]"),
+                                      (0.0, 310e3, "must be > 0"), (1.0, 160e3, "must be > 0")])
+def test_bad_states_are_refused(b, sz, msg):
+    with pytest.raises(ValueError, match=re.escape(msg)):
+        triaxial.validate_state(b, sz)
+    servo = engines.TrueTriaxialServo()
+    with pytest.raises(ValueError, match=re.escape(msg)):
+        servo.set_goal(b, sz)
+
+
+def simple_cubic(n=4, r=1e-4, sigma=100e3):
+    """n^3 equal spheres on a cubic lattice whose contacts carry sigma a^2 (Hertz)."""
+    s = engines.Scene()
+    s.shear_modulus, s.poisson, s.density, s.friction = 18e9, 0.15, 2500.0, 0.5
+    estar = s.shear_modulus / (1 - s.poisson)
+    delta = 0.0
+    for _ in range(50):  # a = 2r - delta and N(delta) = sigma a^2, by fixed point
+        a = 2 * r - delta
+        delta = (sigma * a * a / (4.0 / 3.0 * estar * math.sqrt(r / 2))) ** (2.0 / 3.0)
+    a = 2 * r - delta
+    g = (np.indices((n, n, n)).reshape(3, -1).T + 0.5) * a
+    s.cell_size = s.cell_ref_size = [n * a] * 3
+    s.add_spheres(g, np.full(len(g), r))
+    s.dt = 0.0
+    dem.refresh(s)
+    s.dt = 0.5 * engines.TimeStepper.stiffness_bound(s)
+    return s, estar
+
+
+def test_simple_cubic_probe_gives_closed_form():
+    """E = (12 E*^2 sigma)^(1/3)/2 (406.7 MPa) within 0.5 %, nu_ij = 0 within 1e-3 (issue 3)."""
+    s, estar = simple_cubic()
+    sigma = engines.stress(s)
+    assert np.diag(sigma) == pytest.approx([100e3] * 3, rel=1e-9)
+    expected = (12 * estar ** 2 * 100e3) ** (1.0 / 3.0) / 2
+    assert expected / 1e6 == pytest.approx(406.7, abs=0.05)
+    for axis in (0, 1, 2):
+        r = triaxial.probe(s, [100e3] * 3, axis, restrain_rotations=True)
+        # 0.5 %: a = 2r - delta instead of 2r (3e-4) and the secant over the increment (1e-3)
+        assert r["E"] == pytest.approx(expected, rel=5e-3)
+        for k, v in r.items():
+            if k.startswith("nu_"):
+                assert abs(v) < 1e-3
+
+
+@pytest.fixture(scope="module")
+def specimen300():
+    scene, _ = specimen.prepare_spheres(300, seed=3)
+    return scene
+
+
+def test_probe_is_linear(specimen300):
+    s = specimen300
+    hold = [100e3] * 3
+    up = triaxial.probe(s, hold, "z", sign=1)
+    down = triaxial.probe(s, hold, "z", sign=-1)
+    half = triaxial.probe(s, hold, "z", gamma=0.5e-6)
+    assert up["gamma"] >= 1e-6 and half["gamma"] >= 0.5e-6
+    assert down["E"] == pytest.approx(up["E"], rel=1e-2)
+    assert half["E"] == pytest.approx(up["E"], rel=1e-2)
+    # the other two stresses were held: their increments are tiny against the probe's
+    ds = np.abs(up["d_stress"])
+    assert ds[0] < 5e-3 * ds[2] and ds[1] < 5e-3 * ds[2]
+    # the state is restored: same stress as before the probes
+    np.testing.assert_allclose(np.diag(engines.stress(s)), hold, atol=200.0)
+
+
+def test_probe_without_detection_matches(specimen300):
+    hold = [100e3] * 3
+    on = triaxial.probe(specimen300, hold, "x")
+    off = triaxial.probe(specimen300, hold, "x", skip_detection=True)
+    assert off["E"] == pytest.approx(on["E"], rel=1e-3)
+
+
+def test_probe_bad_input(specimen300):
+    with pytest.raises(ValueError, match="axis"):
+        triaxial.probe(specimen300, [100e3] * 3, "w")
+    with pytest.raises(ValueError, match="gamma"):
+        triaxial.probe(specimen300, [100e3] * 3, "z", gamma=0.0)
+
+
+def test_hardest_state_reached_without_overshoot(specimen300):
+    s = specimen300.copy()
+    info = triaxial.reach_state(s, 0.5, 140e3)  # state 21, q = 69.3 kPa
+    goal = engines.true_triaxial_stresses(0.5, 140e3)
+    np.testing.assert_allclose(np.diag(engines.stress(s)), goal, atol=500.0)
+    assert max(info["overshoot"]) < 500.0  # never past the goal by more than the tolerance
+    assert info["unbalanced"] < 1e-4
+
+
+def test_unreachable_state_fails_cleanly(specimen300):
+    s = specimen300.copy()
+    # sigma_x = sigma_y = 15 kPa against sigma_z = 270 kPa: far beyond the friction's capacity
+    with pytest.raises(triaxial.StateNotReached, match="not reached"):
+        triaxial.reach_state(s, 0.0, 270e3, stall_steps=20000)
