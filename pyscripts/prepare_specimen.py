@@ -80,7 +80,7 @@ def main():
     o = options()
     dist = validate(o)
     if o.threads:
-        os.environ["OMP_NUM_THREADS"] = str(o.threads)
+        engines.set_threads(o.threads)
     if os.path.exists(o.out) and not o.force:
         try:
             scene, meta = specimen_file.load(o.out)

@@ -11,7 +11,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import cli, study, triaxial  # noqa: E402
+from trueaniso import cli, engines, study, triaxial  # noqa: E402
 
 
 def options():
@@ -33,7 +33,7 @@ def options():
 def main():
     o = options()
     if o.threads:
-        os.environ["OMP_NUM_THREADS"] = str(o.threads)
+        engines.set_threads(o.threads)
     chosen = sum(bool(x) for x in (o.states, o.table_c1, o.ids))
     if chosen != 1:
         raise cli.InputError("give exactly one of --states, --table-c1, --ids")

@@ -1,23 +1,35 @@
 """The default study, run by ./main.sh:
 
-    yade-double -n -x pyscripts/run_study.py [--n 1000] [--seed 1] [--out results/default]
+    yade-double -n -x pyscripts/run_study.py [--n 1000] [--seed 1] [--ids 1,5,9,13,17,21,25,35,39]
+                                             [--out results/default]
 
-Today: prepare a sphere specimen consolidated isotropically to 100 kPa (docs/specimens.md) and
-write its state. Every stage writes its results atomically and is skipped when its output is
-already there, so an interrupted study resumes where it stopped.
+1. a sphere specimen consolidated isotropically to 100 kPa (docs/specimens.md);
+2. a selection of the paper's Table C1 states, each reached by the b-controlled servo and probed
+   on z, x and y (docs/triaxial.md), with the micro-structure of each state (docs/fabric.md);
+3. the exact static stiffness at the isotropic state and the rotation factor zeta it implies
+   (docs/statics.md);
+4. figures (E_i against sigma_i, K and G against Zm) and a summary.
+Every stage writes its results atomically and is skipped when its output is already there, so an
+interrupted study resumes where it stopped.
 """
+import json
 import os
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import atomic, cli, specimen, specimen_file  # noqa: E402
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
+from analysis import figures  # noqa: E402
+from trueaniso import atomic, cli, specimen, specimen_file, study  # noqa: E402
+
+DEFAULT_IDS = "1,5,9,13,17,21,25,35,39"
 
 
 def options():
     p = cli.Parser(description="trueaniso default study")
     p.add_argument("--n", type=int, default=1000, help="spheres in the specimen")
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--ids", default=DEFAULT_IDS, help="Table C1 states to run")
     p.add_argument("--out", default="results/default", help="results directory")
     return cli.parse(p)
 
@@ -26,6 +38,11 @@ def main():
     o = options()
     if o.n < 100:
         raise cli.InputError("--n must be >= 100 for a study specimen")
+    try:
+        ids = [int(v) for v in o.ids.split(",") if v.strip()]
+        states = study.table_states(ids)
+    except ValueError as exc:
+        raise cli.InputError("--ids: %s" % exc) from None
     os.makedirs(o.out, exist_ok=True)
     t0 = time.time()
     path = os.path.join(o.out, "specimen.npz")
@@ -42,13 +59,40 @@ def main():
         print("specimen: saved %s (%.1f s)" % (path, time.time() - t0))
     st = specimen.state(scene)
     atomic.write_json(os.path.join(o.out, "specimen_state.json"), st)
-    print("state: e = %.4f, Zm = %.3f, sigma = (%.2f, %.2f, %.2f) kPa, unbalanced = %.2e"
+    print("specimen: e = %.4f, Zm = %.3f, sigma = (%.2f, %.2f, %.2f) kPa, unbalanced = %.2e"
           % (st["void_ratio"], st["Zm"], st["sigma_x"] / 1e3, st["sigma_y"] / 1e3, st["sigma_z"] / 1e3,
-             st["unbalanced"]))
+             st["unbalanced"]), flush=True)
+
+    rows = study.run_states(path, states, o.out, log=lambda m: print(m, flush=True))
+
+    statics_path = os.path.join(o.out, "statics_isotropic.json")
+    if not os.path.exists(statics_path):
+        from trueaniso import statics
+        free = statics.static_stiffness(scene, rotations=True)
+        blocked = statics.static_stiffness(scene, rotations=False)
+        zeta = statics.rotation_factor(scene, free=free, blocked=blocked)
+        atomic.write_json(statics_path, dict(
+            E_free=free["E"], E_blocked=blocked["E"], E_kinematic=zeta["E_kinematic"], nu_free=free["nu"],
+            zeta_h=zeta["zeta_h"], zeta_v=zeta["zeta_v"], residual=free["residual"],
+            rattlers=len(free["rattlers"]), time=free["time"]["total"] + blocked["time"]["total"]))
+    sres = json.load(open(statics_path))
+    print("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, zeta_h = %.3f, zeta_v = %.3f"
+          % ([round(e / 1e6, 1) for e in sres["E_free"]], [round(e / 1e6, 1) for e in sres["E_blocked"]],
+             sres["zeta_h"], sres["zeta_v"]))
+
+    fig_dir = os.path.join(o.out, "figures")
+    os.makedirs(fig_dir, exist_ok=True)
+    rows = study.read_rows(os.path.join(o.out, "probes.csv"))
+    figures.modulus_vs_stress(rows, os.path.join(fig_dir, "E_vs_sigma.png"))
+    fits = figures.scalar_moduli_vs_zm(rows, os.path.join(fig_dir, "K_G_vs_Zm.png"))
+    atomic.write_json(os.path.join(o.out, "summary.json"), dict(
+        specimen=st, states=len({r["state"] for r in rows}), probes=len(rows), statics=sres, K_G_fits=fits,
+        wall_time=time.time() - t0))
+    print("results: %s (probes.csv, figures/, summary.json) in %.0f s" % (o.out, time.time() - t0))
     if cli.in_yade():
         from trueaniso import yade_bridge
         yade_bridge.yade_scene_from(scene, import_contacts=False)
-        print("state written into YADE's O (%d spheres) for viewing/export" % scene.num_bodies)
+        print("specimen written into YADE's O (%d spheres) for viewing/export" % scene.num_bodies)
 
 
 if __name__ == "__main__" or cli.in_yade():

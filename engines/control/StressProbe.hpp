@@ -29,11 +29,11 @@ class StressProbe : public Engine {
   Real increment = 0;              // Pa; > 0 replaces the gamma criterion by a fixed increment
   Real probeFriction = 1e23;       // the paper's "sliding suppressed"
   bool restrainRotations = false;
-  CellServoLaw law;
-  long rampSteps = 2000;           // the ramp's expected length, sets its rate
+  CellServoLaw law{0.03, 1.0};     // gain 0.03: docs/speed-vs-error.md
+  long rampSteps = 300;            // the ramp's expected length, sets its rate
   Real relativeTolerance = 2e-3;   // stress error allowed, as a fraction of the increment
   Real unbalancedTolerance = 1e-5;
-  long settleSteps = 200;          // criteria must hold this many steps in a row
+  long settleSteps = 100;          // criteria must hold this many steps in a row
   long maxSteps = 2000000;
 
   // Results, readable from Python.

@@ -16,7 +16,12 @@ std::vector<int> contactsPerBody(const Scene& s) {
   const Contacts& C = s.contacts;
   const int nb = s.bodies.size();
   std::vector<int> count(nb, 0);
-  if (C.incBegin.size() != static_cast<size_t>(nb) + 1) return count;
+  if (C.incBegin.size() != static_cast<size_t>(nb) + 1) {
+    // No incidence lists yet (contacts set from a file, no detection run): count from the pairs.
+    for (int c = 0; c < C.size(); ++c)
+      if (C.normalForce[c] > 0) { ++count[C.b1[c]]; ++count[C.b2[c]]; }
+    return count;
+  }
 #pragma omp parallel for schedule(static)
   for (int b = 0; b < nb; ++b) {
     int k = 0;

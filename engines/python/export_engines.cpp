@@ -2,6 +2,10 @@
 // themselves when they run and by the Python layer before a run starts.
 #include <memory>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "dynamics/ContactDetection.hpp"
 #include "dynamics/ContactForces.hpp"
 #include "dynamics/NewtonIntegrator.hpp"
@@ -34,7 +38,23 @@ long runSteps(Simulation& sim, long n) {
 
 }  // namespace
 
+int maxThreads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+void setThreads(int n) {
+  require(n >= 1, "number of threads must be >= 1");
+#ifdef _OPENMP
+  omp_set_num_threads(n);
+#endif
+}
+
 void exportEngines() {
+  bp::def("threads", &maxThreads, "OpenMP threads the engines use.");
+  bp::def("set_threads", &setThreads, "Set the OpenMP threads of the engines (OMP_NUM_THREADS is read only at start).");
   bp::class_<Engine, std::shared_ptr<Engine>, boost::noncopyable>("Engine", bp::no_init)
       .def("apply", &Engine::apply)
       .add_property("name", &Engine::name)

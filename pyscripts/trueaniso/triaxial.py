@@ -103,8 +103,8 @@ AXES = "xyz"
 
 
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
-          skip_detection=False, damping=0.4, gain=0.01, relative_tolerance=2e-3, unbalanced=1e-5,
-          settle_steps=200, ramp_steps=2000, max_steps=2_000_000, chunk=2000):
+          skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
+          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500):
     """One directional probe at a held state; the scene is restored afterwards.
 
     hold: the state's stresses (Pa) held during the probe on the two other axes.

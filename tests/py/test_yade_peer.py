@@ -1,4 +1,15 @@
 """Side by side with YADE 2023.02a (Law2_ScGeom_MindlinPhys_Mindlin) in yade-double."""
+import pytest
+
+from trueaniso import specimen, specimen_file
+
+
+@pytest.fixture(scope="module")
+def specimen_path(tmp_path_factory):
+    scene, log = specimen.prepare_spheres(300, seed=3)
+    path = tmp_path_factory.mktemp("peer") / "s300.npz"
+    specimen_file.save(str(path), scene, seed=3, parameters=log)
+    return str(path)
 
 
 def test_two_sphere_path_matches_yade_step_by_step(yade_json):
@@ -21,3 +32,22 @@ def test_stress_of_yade_packing_matches_get_stress(yade_json):
     assert r["shear_share"] > 0.05  # tangential forces take part
     # Zm of Eq. (14) and YADE's avgNumInteractions(skipFree=True) count the same here
     assert abs(r["ours_Zm"] - r["yade_avg_num_interactions"]) < 1e-12
+
+
+def test_probe_matches_yade_user_probe_and_adapter(yade_json, specimen_path):
+    r = yade_json("peer_probe", specimen_path)
+    # issue 3: a probe done the YADE way (PeriTriaxController, Mindlin law) within 2 % of ours
+    assert r["yade"]["E"] == pytest.approx(r["ours"]["E"], rel=0.02)
+    assert r["yade"]["nu_zx"] == pytest.approx(r["ours"]["nu_zx"], abs=0.01)
+    # our StressProbe driving YADE's dynamics: same controller, same law (to 7e-9), same answer
+    assert r["adapter"]["stage"] == "done"
+    assert r["adapter"]["E"] == pytest.approx(r["ours"]["E"], rel=1e-3)
+
+
+def test_servo_drives_yade_through_adapter(yade_json, specimen_path):
+    r = yade_json("adapter_servo", specimen_path)
+    assert r["status"] == "reached"
+    for got, want in zip(r["yade_stress"], r["goal"]):
+        assert abs(got - want) < 500.0  # the issue's 0.5 kPa, measured by YADE's getStress()
+    assert max(r["overshoot"]) < 500.0
+    assert r["unbalanced"] < 1e-3

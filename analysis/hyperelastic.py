@@ -1,0 +1,71 @@
+"""Orthotropic hyperelastic model of the paper, section 4.1 (Eqs. 21-25).
+
+E_i = 9KG/(3K+G) a_i^4 (21), nu_ij = (3K-2G)/(2(3K+G)) a_i^2/a_j^2 (22), G_ij = G a_i^2 a_j^2 (23),
+with det(a) = 1, so a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (25). The scalar part
+E0 = 9KG/(3K+G) and nu0 = (3K-2G)/(2(3K+G)) are an isotropic Young modulus and Poisson ratio,
+hence K = E0/(3(1-2 nu0)) and G = E0/(2(1+nu0)).
+"""
+import numpy as np
+
+
+def fabric_a2(E):
+    """Eq. (25): a_i^2 from the three directional Young moduli (array-like (..., 3))."""
+    E = np.asarray(E, dtype=float)
+    if np.any(E <= 0):
+        raise ValueError("Young moduli must be > 0")
+    out = np.empty_like(E)
+    for i in range(3):
+        j, k = [m for m in range(3) if m != i]
+        out[..., i] = E[..., i] ** (1 / 3) / (E[..., j] * E[..., k]) ** (1 / 6)
+    return out
+
+
+def scalar_moduli(E, nu):
+    """K and G from E_i (3,) and nu (3x3, nu[i, j] = nu_ij, diagonal ignored).
+
+    E0 is the mean of E_i / a_i^4 (all equal when Eq. 21 holds); nu0 the mean of the six
+    nu_ij a_j^2 / a_i^2 (Eq. 22). Returns dict(K, G, E0, nu0, a2)."""
+    E = np.asarray(E, dtype=float)
+    nu = np.asarray(nu, dtype=float)
+    a2 = fabric_a2(E)
+    E0 = float(np.mean(E / a2 ** 2))
+    vals = [nu[i, j] * a2[j] / a2[i] for i in range(3) for j in range(3) if i != j]
+    nu0 = float(np.mean(vals))
+    if not -1 < nu0 < 0.5:
+        raise ValueError("the Poisson ratios give nu0 = %.3f outside (-1, 0.5)" % nu0)
+    return dict(K=E0 / (3 * (1 - 2 * nu0)), G=E0 / (2 * (1 + nu0)), E0=E0, nu0=nu0, a2=a2)
+
+
+def predicted(K, G, a2):
+    """Eqs. (21)-(23) forward: E (3,), nu (3x3), G_ij (yz, xz, xy)."""
+    a2 = np.asarray(a2, dtype=float)
+    E0 = 9 * K * G / (3 * K + G)
+    nu0 = (3 * K - 2 * G) / (2 * (3 * K + G))
+    E = E0 * a2 ** 2
+    nu = nu0 * a2[:, None] / a2[None, :]
+    np.fill_diagonal(nu, np.nan)
+    Gij = G * np.array([a2[1] * a2[2], a2[0] * a2[2], a2[0] * a2[1]])
+    return E, nu, Gij
+
+
+def quadratic_fit(x, y):
+    """K or G = c1 Zm^2 + c2 Zm + c3 (section 4.1, Table 2): coefficients and R^2."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    c = np.polyfit(x, y, 2)
+    r2 = 1 - np.sum((np.polyval(c, x) - y) ** 2) / np.sum((y - y.mean()) ** 2)
+    return c, float(r2)
+
+
+def states_from_rows(rows):
+    """Group probe rows (dicts from probes.csv) by state: {state: dict(E (3,), nu (3x3), Zm, sigma)}."""
+    out = {}
+    ax = "xyz"
+    for r in rows:
+        st = out.setdefault(r["state"], dict(E=np.full(3, np.nan), nu=np.full((3, 3), np.nan), Zm=float(r["Zm"]),
+                                             sigma=np.array([float(r["sigma_x"]), float(r["sigma_y"]), float(r["sigma_z"])]),
+                                             b=float(r["b"]), q=float(r["q"])))
+        i = ax.index(r["probe"])
+        st["E"][i] = float(r["E"])
+        for name, val in ((r["nu_1_name"], r["nu_1"]), (r["nu_2_name"], r["nu_2"])):
+            st["nu"][ax.index(name[3]), ax.index(name[4])] = float(val)
+    return out
