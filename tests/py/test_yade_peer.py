@@ -51,3 +51,12 @@ def test_servo_drives_yade_through_adapter(yade_json, specimen_path):
         assert abs(got - want) < 500.0  # the 0.5 kPa, measured by YADE's getStress()
     assert max(r["overshoot"]) < 500.0
     assert r["unbalanced"] < 1e-3
+
+
+def test_bridge_round_trip(yade_json, specimen_path):
+    r = yade_json("bridge_roundtrip", specimen_path)
+    assert r["positions"] == 0 and r["radii"] == 0 and r["cell"] == 0  # doubles copied, not converted
+    assert r["contacts"][0] == r["contacts"][1]
+    assert r["stress_rel"] < 1e-9          # tangential forces carried through YADE's interactions
+    assert r["yade_stress_rel"] < 1e-6     # YADE's getStress right after import agrees
+    assert r["written_positions"] == 0 and r["written_cell"] == 0

@@ -10,39 +10,24 @@ import os
 import sys
 
 # under yade-double __file__ names yade itself; the script path is argv[0]
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(sys.argv[0])), "..", "..", "..", "pyscripts"))
+HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
+sys.path[:0] = [HERE, os.path.join(HERE, "..", "..", "..", "pyscripts")]
 import numpy as np  # noqa: E402
-from yade import (O, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,  # noqa: E402
-                  InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
-                  Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator, Matrix3, pack, utils)
+from yade import O, utils  # noqa: E402
 
 from trueaniso import engines as E, fabric, yade_bridge  # noqa: E402
+from yade_scenes import mindlin_cloud  # noqa: E402
 
 n = int(sys.argv[1])
 out = sys.argv[-1]
-G, nu = 18e9, 0.15
-O.periodic = True
-mat = O.materials.append(FrictMat(young=2 * G * (1 + nu), poisson=nu, density=2500,
-                                  frictionAngle=math.atan(0.5)))
-r = 0.0975e-3
-side = (n * 4.0 / 3.0 * math.pi * r ** 3 / 0.30) ** (1.0 / 3.0)
-O.cell.hSize = Matrix3(side, 0, 0, 0, side, 0, 0, 0, side)
-sp = pack.SpherePack()
-sp.makeCloud((0, 0, 0), (side, side, side), rMean=r, rRelFuzz=0.2, periodic=True, seed=4, num=n)
-sp.toSimulation(material=mat)
+side = mindlin_cloud(n, seed=4, solid_fraction=0.30)
 # Grow every radius by the same factor to a solid fraction of 0.63: a dense overlapping network
 # (Zm ~ 5-6) with rattlers and particles of one contact, in one collider pass.
 solid = sum(4.0 / 3.0 * math.pi * b.shape.radius ** 3 for b in O.bodies)
 grow = (0.63 * side ** 3 / solid) ** (1.0 / 3.0)
 for b in O.bodies:
     b.shape.radius *= grow
-O.engines = [
-    ForceResetter(),
-    InsertionSortCollider([Bo1_Sphere_Aabb()]),
-    InteractionLoop([Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=False)],
-                    [Ip2_FrictMat_FrictMat_MindlinPhys()], [Law2_ScGeom_MindlinPhys_Mindlin()]),
-    NewtonIntegrator(damping=0.4, dead=True),  # forces at the given positions only
-]
+O.engines[-1].dead = True  # forces at the given positions only
 O.dt = 1e-9
 O.step()
 

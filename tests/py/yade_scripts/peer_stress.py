@@ -4,40 +4,22 @@ the bridge: our Love-Weber stress against YADE's utils.getStress() on the same c
 Usage: yade-double -n -x peer_stress.py N OUT.json
 """
 import json
-import math
 import os
 import sys
 
 # under yade-double __file__ names yade itself; the script path is argv[0]
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(sys.argv[0])), "..", "..", "..", "pyscripts"))
+HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
+sys.path[:0] = [HERE, os.path.join(HERE, "..", "..", "..", "pyscripts")]
 import numpy as np  # noqa: E402
-from yade import (O, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,  # noqa: E402
-                  InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
-                  Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator,
-                  GlobalStiffnessTimeStepper, Vector3, Matrix3, pack, utils)
+from yade import O, GlobalStiffnessTimeStepper, Vector3, Matrix3, utils  # noqa: E402
 
 from trueaniso import engines as E, yade_bridge  # noqa: E402
+from yade_scenes import mindlin_cloud  # noqa: E402
 
 n = int(sys.argv[1])
 out = sys.argv[-1]
-G, nu = 18e9, 0.15
-O.periodic = True
-mat = O.materials.append(FrictMat(young=2 * G * (1 + nu), poisson=nu, density=2500,
-                                  frictionAngle=math.atan(0.5)))
-r = 0.0975e-3
-side = (n * 4.0 / 3.0 * math.pi * r ** 3 / 0.35) ** (1.0 / 3.0)
-O.cell.hSize = Matrix3(side, 0, 0, 0, side, 0, 0, 0, side)
-sp = pack.SpherePack()
-sp.makeCloud((0, 0, 0), (side, side, side), rMean=r, rRelFuzz=0.2, periodic=True, seed=1, num=n)
-sp.toSimulation(material=mat)
-O.engines = [
-    ForceResetter(),
-    InsertionSortCollider([Bo1_Sphere_Aabb()]),
-    InteractionLoop([Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=False)],
-                    [Ip2_FrictMat_FrictMat_MindlinPhys()], [Law2_ScGeom_MindlinPhys_Mindlin()]),
-    GlobalStiffnessTimeStepper(timestepSafetyCoefficient=0.5),
-    NewtonIntegrator(damping=0.4, label="newton"),
-]
+mindlin_cloud(n, seed=1, solid_fraction=0.35, extra_engines=[GlobalStiffnessTimeStepper(timestepSafetyCoefficient=0.5)])
+newton = O.engines[-1]
 O.dt = 1e-8
 rate = 30.0  # 1/s: inertial number ~1e-3 at 50 kPa for these grains
 O.cell.velGrad = Matrix3(-rate, 0, 0, 0, -rate, 0, 0, 0, -rate)
@@ -52,7 +34,7 @@ O.step()
 for b in O.bodies:
     b.state.vel = Vector3(0, 0, 0)
     b.state.angVel = Vector3(0, 0, 0)
-newton.dead = True  # noqa: F821
+newton.dead = True
 O.step()
 assert np.abs(np.array(O.cell.velGrad)).max() == 0
 yade_stress = np.array(utils.getStress())

@@ -1,0 +1,37 @@
+"""The bridge both ways: our specimen -> YADE's O -> our scene, and our state written back into O.
+Usage: yade-double -n -x bridge_roundtrip.py SPECIMEN.npz OUT.json
+"""
+import json
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
+sys.path[:0] = [HERE, os.path.join(HERE, "..", "..", "..", "pyscripts")]
+import numpy as np  # noqa: E402
+from yade import O, utils  # noqa: E402
+
+from trueaniso import dem, engines, specimen_file, yade_bridge  # noqa: E402
+
+path, out = sys.argv[1], sys.argv[-1]
+ours, _ = specimen_file.load(path)
+ids = yade_bridge.yade_scene_from(ours, O)            # with our tangential forces
+back, ids2 = yade_bridge.scene_from_yade(O)           # and back again, with YADE's
+dem.refresh(back)
+res = dict(
+    positions=float(np.abs(back.positions - ours.positions).max()),
+    radii=float(np.abs(back.radii - ours.radii).max()),
+    cell=float(np.abs(back.cell_size - ours.cell_size).max()),
+    stress_rel=float(np.linalg.norm(engines.stress(back) - engines.stress(ours)) / np.linalg.norm(engines.stress(ours))),
+    yade_stress_rel=float(np.linalg.norm(-np.array(utils.getStress()) - engines.stress(ours))
+                          / np.linalg.norm(engines.stress(ours))),
+    contacts=[engines.coordination(ours)["Nc"], engines.coordination(back)["Nc"]])
+# Move our scene (a few hundred steps of our dynamics at 0.99 of the cell) and show it in YADE.
+c = dem.Chain(ours)
+ours.strain_rate = [-20.0, 0.0, 0.0]
+c.run(200)
+yade_bridge.write_to_yade(ours, O, ids)
+res["written_positions"] = float(np.abs(np.array([list(O.bodies[i].state.pos) for i in ids]) - ours.positions).max())
+res["written_cell"] = float(abs(O.cell.hSize[0][0] - ours.cell_size[0]))
+res["scale"] = float(ours.radii.max())
+with open(out, "w") as f:
+    json.dump(res, f, indent=1)
