@@ -22,6 +22,14 @@ if ((${#missing[@]})); then
 fi
 
 # Debian's interpreter: the one yade-double embeds and the one with numpy/scipy.
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
-cmake --build build -j"$(nproc)" 2>&1 | grep -E "error|warning|Error" || true
-test -f build/python/_trueaniso*.so || { echo "setup: build failed" >&2; cmake --build build; exit 1; }
+# The build log goes to build/build.log; on failure its tail is shown and setup exits non-zero
+# (a stale module from an earlier build must never pass for a fresh one).
+mkdir -p build
+log=build/build.log
+if ! { cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 &&
+       cmake --build build -j"$(nproc)"; } >"$log" 2>&1; then
+  tail -n 40 "$log" >&2
+  echo "setup: build failed (full log: $log)" >&2
+  exit 1
+fi
+grep -E "warning:" "$log" || true
