@@ -107,7 +107,7 @@ def main():
             unbalanced=o.unbalanced, progress=progress)
     except (ValueError, specimen.PreparationError) as exc:
         cli.fail(str(exc), 1)
-    log["threads"] = o.threads
+    log["threads"] = engines.threads()  # the count used, not the option (0 means all cores)
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)
     from trueaniso import atomic

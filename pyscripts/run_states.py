@@ -7,6 +7,7 @@
 Writes probes.csv (one row per state and probe direction), metadata.json, and a checkpoint per
 state; an interrupted run resumes (see trueaniso/study.py).
 """
+import math
 import os
 import sys
 
@@ -39,10 +40,10 @@ def main():
         raise cli.InputError("give exactly one of --states, --table-c1, --ids")
     if not os.path.isfile(o.specimen):
         raise cli.InputError("specimen file not found: %s" % o.specimen)
-    if o.gamma <= 0:
-        raise cli.InputError("--gamma must be > 0")
-    if not o.probes or any(c not in "xyz" for c in o.probes):
-        raise cli.InputError("--probes must be made of the axes x, y, z (got %r)" % o.probes)
+    if not (math.isfinite(o.gamma) and o.gamma > 0):
+        raise cli.InputError("--gamma must be a finite number > 0 (got %r)" % o.gamma)
+    if not o.probes or any(c not in "xyz" for c in o.probes) or len(set(o.probes)) != len(o.probes):
+        raise cli.InputError("--probes must name each of the axes x, y, z at most once (got %r)" % o.probes)
     if not 0 <= o.damping < 1:
         raise cli.InputError("--damping must lie in [0, 1)")
     try:

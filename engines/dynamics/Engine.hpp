@@ -14,6 +14,9 @@ class Engine {
   virtual std::string name() const = 0;
   long every = 1;  // run at steps where step % every == 0
   bool dead = false;  // skipped when true (for example contact detection during a probe)
+  // Times the simulation applied this engine: lets a protocol show that a switched-off engine
+  // really did not run (a dead detection costs nothing, not even its rebuild check).
+  long applied = 0;
   // Set by an engine that reached its goal (a servo at its target, a probe at gamma): the
   // simulation finishes the current step and returns. Cleared by the next run().
   bool done = false;

@@ -16,6 +16,7 @@ long Simulation::run(long n) {
     for (auto& e : engines_) {
       if (e->dead || (e->every > 1 && scene_->step % e->every != 0)) continue;
       e->apply(*scene_);
+      ++e->applied;
       stop = stop || e->done;
     }
     scene_->time += scene_->dt;

@@ -60,6 +60,7 @@ void exportEngines() {
       .add_property("name", &Engine::name)
       .def_readwrite("every", &Engine::every)
       .def_readwrite("dead", &Engine::dead)
+      .def_readonly("applied", &Engine::applied)
       .def_readwrite("done", &Engine::done);
 
   bp::class_<ContactDetection, bp::bases<Engine>, std::shared_ptr<ContactDetection>>("ContactDetection")

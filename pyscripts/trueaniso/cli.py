@@ -87,7 +87,9 @@ def guarded(main):
     """Run main(); InputError and ValueError from validation become one line and exit 2."""
     try:
         main()
-    except InputError as exc:
+    except (InputError, ValueError) as exc:
+        # ValueError: validation inside the library (bad specimen contents, bad arguments to an
+        # engine); a traceback would hide the one line the user needs.
         fail(str(exc))
     except KeyboardInterrupt:
         fail("interrupted", 130)

@@ -53,14 +53,39 @@ def scene_arrays(scene):
         c_shear_force=c["shear_force"][active])
 
 
+def _git_commit():
+    """The source commit (with '+dirty' for local edits), or None outside a git checkout."""
+    import subprocess
+    top = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    try:
+        head = subprocess.run(["git", "-C", top, "rev-parse", "HEAD"], capture_output=True, text=True,
+                              timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "-C", top, "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return (head + ("+dirty" if dirty else "")) if head else None
+
+
 def versions():
-    return dict(trueaniso=__version__, python=platform.python_version(), numpy=np.__version__,
-                machine=platform.machine())
+    """What produced a result: code, interpreter, libraries, machine and engine threads."""
+    import sys
+    out = dict(trueaniso=__version__, git=_git_commit(), python=platform.python_version(),
+               numpy=np.__version__, machine=platform.machine(), threads=engines.threads())
+    if "yade" in sys.modules:
+        try:
+            out["yade"] = sys.modules["yade"].config.version
+        except AttributeError:
+            out["yade"] = "unknown"
+    return out
 
 
 def save(path, scene, seed=None, parameters=None, summary=None):
     """Write a specimen atomically (an existing file is replaced only by a complete new one)."""
     arrays = scene_arrays(scene)
+    problem = contents_problem(arrays)
+    if problem:
+        raise SpecimenFileError("refusing to save %s: %s" % (path, problem))
     meta = dict(format=FORMAT, format_version=FORMAT_VERSION, created=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
                 seed=seed, parameters=parameters or {}, summary=summary or {}, versions=versions(),
                 material=dict(shear_modulus=scene.shear_modulus, poisson=scene.poisson,
@@ -99,7 +124,40 @@ def read(path):
         raise SpecimenFileError("corrupt specimen file %s (missing arrays: %s)" % (path, ", ".join(missing)))
     if _checksum(data) != meta.get("sha256"):
         raise SpecimenFileError("corrupt specimen file %s (checksum mismatch)" % path)
+    problem = contents_problem(data)
+    if problem:
+        raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     return data, meta
+
+
+def contents_problem(a):
+    """What makes the arrays unusable as a scene, or None. The checksum only proves the file is
+    the one written; this proves what was written can be simulated (save() runs it too)."""
+    nb = a["positions"].shape[0]
+    if nb == 0:
+        return "no bodies"
+    mb = np.asarray(a["member_begin"])
+    if a["positions"].shape != (nb, 3) or mb.shape != (nb + 1,) or mb[0] != 0 or np.any(np.diff(mb) < 1):
+        return "inconsistent body/member arrays"
+    nm = int(mb[-1])
+    if a["radii"].shape != (nm,) or a["member_body"].shape != (nm,) or a["member_offsets"].shape != (nm, 3):
+        return "inconsistent body/member arrays"
+    for name in ("positions", "velocities", "angular_velocities", "masses", "radii", "cell_size",
+                 "member_offsets", "c_normal_force", "c_shear_force"):
+        if not np.all(np.isfinite(a[name])):
+            return "non-finite values in %s" % name
+    if np.any(a["radii"] <= 0):
+        return "radius <= 0"
+    if np.any(a["masses"] <= 0):
+        return "mass <= 0"
+    if a["cell_size"].shape != (3,) or np.any(a["cell_size"] <= 0):
+        return "cell size <= 0"
+    nc = a["c_member1"].shape[0]
+    for name in ("c_member1", "c_member2"):
+        m = a[name]
+        if m.shape != (nc,) or (nc and (m.min() < 0 or m.max() >= nm)):
+            return "contact member index out of range"
+    return None
 
 
 def load(path):

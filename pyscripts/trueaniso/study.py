@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from . import atomic, engines, specimen, specimen_file, triaxial
+from . import atomic, engines, fabric, specimen, specimen_file, triaxial
 from .triaxial import AXES
 
 COLUMNS = ["state", "b", "sigma_z_goal", "sigma_x", "sigma_y", "sigma_z", "q", "probe", "sign",
@@ -30,11 +30,7 @@ def read_rows(path):
 
 
 def _extra_columns(scene):
-    """Micro-structure columns when the fabric engines are available (issue 4)."""
-    try:
-        from . import fabric
-    except ImportError:
-        return {}
+    """Micro-structure columns (Zm, R, H, B, Nc/V, ...) of the held state."""
     return fabric.fabric_row(scene)
 
 
@@ -43,11 +39,9 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
     """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering or any)."""
     for i, b, sz in states:
         triaxial.validate_state(b, sz)  # every state checked before any work
-    if gamma <= 0:
-        raise ValueError("probe gamma must be > 0")
-    for a in probes:
-        if a not in (0, 1, 2):
-            raise ValueError("probe axis must be x, y or z")
+    probes = [triaxial.validate_probe(a, gamma) for a in probes]
+    if len(set(probes)) != len(probes):
+        raise ValueError("each probe axis may be given once")
     base, meta = specimen_file.load(specimen_path)
     os.makedirs(os.path.join(out, "states"), exist_ok=True)
     csv_path = os.path.join(out, "probes.csv")
@@ -59,7 +53,8 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         specimen_summary=meta.get("summary"), versions=specimen_file.versions(),
         parameters=dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
                         damping=damping, probes="".join(AXES[a] for a in probes),
-                        state_options=state_options or {}, probe_options=probe_options or {}),
+                        state_options=_effective(triaxial.reach_state, state_options),
+                        probe_options=_effective(triaxial.probe, probe_options)),
         states=[dict(id=i, b=b, sigma_z=sz) for i, b, sz in states]))
 
     for (b, side), path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0])):
@@ -110,6 +105,18 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                 atomic.write_csv(csv_path, rows, columns)
             log("state %s: done (%.1f s)" % (sid, time.time() - t0))
     return rows
+
+
+def _effective(function, options):
+    """The keyword values a protocol really runs with: its defaults, overridden by options, so
+    the metadata states the tolerances (stress, unbalanced force, steps) behind every row."""
+    import inspect
+    skip = {"scene", "hold", "axis", "sign", "gamma", "b", "sigma_z", "progress", "restrain_rotations",
+            "skip_detection", "damping"}
+    out = {k: p.default for k, p in inspect.signature(function).parameters.items()
+           if p.default is not inspect.Parameter.empty and k not in skip}
+    out.update(options or {})
+    return out
 
 
 def _start_of_path(base, path, sid, out):

@@ -5,6 +5,7 @@ A state is (b, sigma_z) at p = 100 kPa; Eq. (9) gives sigma_x, sigma_y. The 39 s
 lie on eight paths from the isotropic state (b = 0, 0.25, 0.5, 0.75, 1; compression and
 extension of z), which the study follows one path at a time, probing each state on the way.
 """
+import math
 import time
 
 import numpy as np
@@ -102,6 +103,18 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
 AXES = "xyz"
 
 
+def validate_probe(axis, gamma):
+    """The axis as 0, 1, 2 (from 0-2 or "x", "y", "z"); ValueError for any other axis (True
+    included: a bool is not an axis) and for a gamma that is not a finite positive number."""
+    if isinstance(axis, str) and axis in ("x", "y", "z"):
+        axis = AXES.index(axis)
+    elif isinstance(axis, bool) or not isinstance(axis, (int, np.integer)) or axis not in (0, 1, 2):
+        raise ValueError("probe axis must be x, y or z, not %r" % (axis,))
+    if not (isinstance(gamma, (int, float, np.floating)) and math.isfinite(gamma) and gamma > 0):
+        raise ValueError("probe gamma must be a finite number > 0, not %r" % (gamma,))
+    return int(axis)
+
+
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
           settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500):
@@ -110,13 +123,7 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     hold: the state's stresses (Pa) held during the probe on the two other axes.
     Returns a dict with increments, E_i (Eq. 10), nu_ij (Eq. 11), gamma (Eq. 12), steps, time.
     """
-    if axis not in (0, 1, 2):
-        if axis in ("x", "y", "z"):
-            axis = AXES.index(axis)
-        else:
-            raise ValueError("probe axis must be x, y or z, not %r" % (axis,))
-    if gamma <= 0:
-        raise ValueError("probe gamma must be > 0")
+    axis = validate_probe(axis, gamma)
     p = engines.StressProbe()
     p.axis, p.sign, p.gamma_target, p.increment = axis, sign, gamma, increment
     p.restrain_rotations = restrain_rotations
@@ -146,7 +153,8 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
                steps=int(p.steps), relax_steps=int(p.relax_steps), ramp_steps=int(p.ramp_steps_done),
                hold_steps=int(p.hold_steps), wall_time=time.time() - t0,
                rotations="restrained" if restrain_rotations else "free",
-               detection="off" if skip_detection else "on", damping=damping)
+               detection="off" if skip_detection else "on", damping=damping,
+               detection_calls=int(chain.detection.applied))
     for j in range(3):
         if j != axis:
             out["nu_%s%s" % (AXES[axis], AXES[j])] = float(p.poisson_ratio(j))

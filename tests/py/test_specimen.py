@@ -27,9 +27,10 @@ def test_consolidated_state(small):
     assert st["unbalanced"] < log["unbalanced"]
     assert st["friction"] == 0.5
     # The orthorhombic cell servoes normal stresses only; the shear stresses left are the
-    # packing's finite-size fluctuation, a few percent at 150 spheres (~1/sqrt(N)).
+    # packing's finite-size fluctuation. At 150 spheres, seeds 1-6 on 1 and 2 threads leave
+    # 2.8-10.3 % of p, so the bound is 15 %; the N = 4000 test below holds it to 2 %.
     sig = engines.stress(scene)
-    assert np.abs(sig - np.diag(np.diag(sig))).max() < 5e-2 * 100e3
+    assert np.abs(sig - np.diag(np.diag(sig))).max() < 0.15 * 100e3
 
 
 def test_similarity_rescale_restores_exact_radii(small):
@@ -89,3 +90,6 @@ def test_paper_void_ratio_and_coordination_at_4000():
     st = specimen.state(scene)
     assert st["void_ratio"] == pytest.approx(0.584, rel=0.02)
     assert st["Zm"] == pytest.approx(5.965, rel=0.02)
+    # Finite-size shear stress shrinks as ~1/sqrt(N): 0.96 % of p measured at 4000 spheres.
+    sig = engines.stress(scene)
+    assert np.abs(sig - np.diag(np.diag(sig))).max() < 0.02 * 100e3

@@ -81,3 +81,44 @@ def test_save_replaces_atomically(saved, tmp_path):
     specimen_file.save(str(target), scene, seed=2)
     specimen_file.load(str(target))
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".tmp-")] == []
+
+
+def _resealed(src, dst, edit_arrays):
+    """A file whose contents are bad but whose checksum is right: only the contents check can
+    refuse it."""
+    with np.load(src) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays.pop("meta")))
+    edit_arrays(arrays)
+    meta["sha256"] = specimen_file._checksum(arrays)
+    np.savez(dst, meta=np.array(json.dumps(meta)), **arrays)
+
+
+@pytest.mark.parametrize("edit,message", [
+    (lambda a: a.update(radii=np.where(np.arange(a["radii"].size) == 3, 0.0, a["radii"])), "radius <= 0"),
+    (lambda a: a.update(positions=a["positions"][:0], member_begin=a["member_begin"][:1]), "no bodies"),
+    (lambda a: a.update(cell_size=np.array([1e-3, 0.0, 1e-3])), "cell size <= 0"),
+    (lambda a: a.update(positions=np.where(a["positions"] > 0, np.nan, a["positions"])), "non-finite"),
+    (lambda a: a.update(c_member2=a["c_member2"] + 10**6), "out of range"),
+])
+def test_sealed_but_invalid_contents_are_refused(saved, tmp_path, edit, message):
+    bad = tmp_path / "sealed.npz"
+    _resealed(saved, bad, edit)
+    with pytest.raises(specimen_file.SpecimenFileError, match=message):
+        specimen_file.load(str(bad))
+
+
+def test_script_refuses_invalid_specimen_in_one_line(saved, tmp_path):
+    import os
+    import subprocess
+    import sys
+    bad = tmp_path / "sealed.npz"
+    _resealed(saved, bad, lambda a: a.update(radii=a["radii"] * 0.0))
+    script = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                          "pyscripts", "run_states.py")
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, script, "--specimen", str(bad), "--ids", "1", "--out", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and "radius <= 0" in lines[0], proc.stderr
+    assert not out.exists()

@@ -1,0 +1,110 @@
+"""The study script run_states.py: one CSV row per state and probe with the documented columns,
+metadata that says what produced the rows, a resumed run that redoes nothing, and bad input
+refused before any work."""
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from trueaniso import specimen, specimen_file, study
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCRIPT = os.path.join(REPO, "pyscripts", "run_states.py")
+
+
+def run(*args, timeout=600):
+    env = dict(os.environ, OMP_NUM_THREADS=os.environ.get("OMP_NUM_THREADS", "2"))
+    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True, timeout=timeout, env=env)
+
+
+@pytest.fixture(scope="module")
+def small_specimen(tmp_path_factory):
+    scene, log = specimen.prepare_spheres(150, seed=6)
+    path = tmp_path_factory.mktemp("spec") / "s.npz"
+    specimen_file.save(str(path), scene, seed=6, parameters=log, summary=specimen.state(scene))
+    return path
+
+
+@pytest.fixture(scope="module")
+def finished(small_specimen, tmp_path_factory):
+    out = tmp_path_factory.mktemp("study") / "out"
+    proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
+def rows(out):
+    with open(out / "probes.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_one_row_per_state_and_probe(finished):
+    r = rows(finished)
+    assert sorted((x["state"], x["probe"]) for x in r) == [("1", "x"), ("1", "z"), ("2", "x"), ("2", "z")]
+    assert list(r[0].keys())[:len(study.COLUMNS)] == study.COLUMNS
+    for name in ("Zm", "R_xx", "H_zz", "NcV_count", "mic_E_z"):  # fabric columns are always there
+        assert name in r[0], name
+    for x in r:
+        assert float(x["E"]) > 1e8 and float(x["gamma"]) >= 1e-6
+        goal = {"1": (100e3, 100e3, 100e3), "2": (95e3, 95e3, 110e3)}[x["state"]]
+        for k, g in zip(("sigma_x", "sigma_y", "sigma_z"), goal):
+            assert abs(float(x[k]) - g) <= 500.0  # the issue's 0.5 kPa, measured before the probe
+
+
+def test_metadata_says_what_produced_the_rows(finished, small_specimen):
+    meta = json.loads((finished / "metadata.json").read_text())
+    assert meta["specimen_seed"] == 6
+    assert meta["specimen_sha256"] == specimen_file.read(str(small_specimen))[1]["sha256"]
+    assert meta["versions"]["threads"] >= 1 and "git" in meta["versions"]
+    p = meta["parameters"]
+    assert p["gamma"] == 1e-6 and p["probes"] == "zx"
+    assert p["state_options"]["tolerance"] == 100.0 and p["state_options"]["unbalanced"] == 1e-4
+    assert "relative_tolerance" in p["probe_options"]
+    assert [s["id"] for s in meta["states"]] == [1, 2]
+
+
+def test_resumed_run_redoes_nothing(finished, small_specimen):
+    before = (finished / "probes.csv").read_bytes()
+    proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(finished))
+    assert proc.returncode == 0, proc.stderr
+    assert "probe" not in proc.stdout  # no probe ran again
+    assert (finished / "probes.csv").read_bytes() == before
+
+
+def test_resume_adds_only_the_missing_probe(finished, small_specimen, tmp_path):
+    import shutil
+    out = tmp_path / "partial"
+    shutil.copytree(finished, out)
+    kept = [x for x in rows(out) if not (x["state"] == "2" and x["probe"] == "x")]
+    with open(out / "probes.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(kept[0].keys()))
+        w.writeheader()
+        w.writerows(kept)
+    proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.count("probe x") == 1 and "probe z" not in proc.stdout
+    assert "checkpoint" in proc.stdout  # state 2 came from its checkpoint, not a new path
+    assert len(rows(out)) == 4
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--ids", "1", "--gamma", "nan"], "--gamma"),
+    (["--ids", "1", "--gamma", "inf"], "--gamma"),
+    (["--ids", "1", "--gamma", "0"], "--gamma"),
+    (["--ids", "1", "--probes", "xx"], "--probes"),
+    (["--ids", "1", "--probes", "w"], "--probes"),
+    (["--states", "1.5:100e3"], "outside [0, 1]"),
+    (["--states", "0:310e3"], "must be > 0"),
+    (["--states=-0.1:100e3"], "outside [0, 1]"),
+    (["--ids", "40"], "40"),
+    (["--ids", "1", "--bogus"], "unrecognized"),
+])
+def test_bad_input_refused_before_any_work(small_specimen, tmp_path, args, message):
+    out = tmp_path / "out"
+    proc = run("--specimen", str(small_specimen), "--out", str(out), *args, timeout=60)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and message in lines[0], proc.stderr
+    assert not out.exists()
