@@ -2,7 +2,8 @@
 
 Conventions that differ and are converted here:
  - YADE's state.vel is the total velocity; ours is the fluctuation about the cell's affine field
-   (v_total = v_fluct + velGrad x).
+   (v_total = v_fluct + velGrad x). A velGrad set in YADE takes effect at its next step (see
+   write_to_yade); the bridge reads the scheduled one as our strain rate.
  - YADE's getStress() is tension positive; ours is compression positive.
  - Material: YADE's FrictMat has (young, poisson, frictionAngle); ours (G, nu, mu) with
    G = E/(2(1+nu)), mu = tan(frictionAngle).
@@ -68,10 +69,11 @@ def scene_from_yade(O=None, import_contacts=True):
     s.cell_ref_size = ref if np.all(ref > 0) else size
     pos = np.array([[b.state.pos[k] for k in range(3)] for b in spheres])
     s.add_spheres(pos, np.array([b.shape.radius for b in spheres]))
-    grad = np.array([[O.cell.velGrad[i][j] for j in range(3)] for i in range(3)])
+    _check_homo_deform(O)
+    grad = _current_velocity_gradient(O)
     vel = np.array([[b.state.vel[k] for k in range(3)] for b in spheres])
-    s.velocities = vel - pos @ grad.T
-    s.strain_rate = np.diag(grad).copy()
+    s.velocities = vel - pos @ grad.T  # fluctuations about the field the bodies move with now
+    s.strain_rate = _scheduled_strain_rate(O)  # the rate YADE's next step would use
     s.angular_velocities = np.array([[b.state.angVel[k] for k in range(3)] for b in spheres])
     s.dt = O.dt
     ids = [b.id for b in spheres]
@@ -92,22 +94,51 @@ def scene_from_yade(O=None, import_contacts=True):
     return s, ids
 
 
+def _check_homo_deform(O):
+    if O.cell.homoDeform != 2:
+        raise BridgeError("the bridge converts velocities for YADE's default O.cell.homoDeform = 2 "
+                          "(total velocities); this scene has %d" % O.cell.homoDeform)
+
+
+def _current_velocity_gradient(O):
+    """The velGrad YADE's bodies move with now (O.cell.velGrad), not a pending one."""
+    return np.array([[O.cell.velGrad[i][j] for j in range(3)] for i in range(3)])
+
+
+def _scheduled_strain_rate(O):
+    """The diagonal velGrad YADE's next step uses: setting O.cell.velGrad only schedules it
+    (nextVelGrad) and YADE's NewtonIntegrator adopts it at the next step."""
+    g = O.cell.nextVelGrad if O.cell.velGradChanged else O.cell.velGrad
+    return np.array([g[k][k] for k in range(3)])
+
+
 def write_to_yade(scene, O=None, ids=None):
-    """Positions, velocities, radii and cell of our scene into YADE's O (for viewing, export)."""
+    """Positions, velocities, radii and cell of our scene into YADE's O (for viewing, export, or
+    to continue in YADE).
+
+    YADE adopts a new velGrad only at its next step, and then adds the jump of the affine field,
+    (new - current velGrad) x, to every body's velocity (homoDeform = 2). So the velocities
+    written carry YADE's current affine field, and the new strain rate is scheduled: after
+    YADE's next step the bodies move with ours, v + rate x. YADE's own rule makes its cell start
+    moving one step later than its bodies (a lag of rate * dt of strain, ~1e-9 in a probe).
+    """
     O = O or _yade()
     from yade import Matrix3, Vector3
+    _check_homo_deform(O)
+    ids = ids if ids is not None else list(range(scene.num_bodies))
+    if len(ids) != scene.num_bodies:
+        raise BridgeError("ids must list one YADE body per scene body")
+    current = _current_velocity_gradient(O)
     h = scene.cell_size
     O.cell.hSize = Matrix3(h[0], 0, 0, 0, h[1], 0, 0, 0, h[2])
     rate = scene.strain_rate
     O.cell.velGrad = Matrix3(rate[0], 0, 0, 0, rate[1], 0, 0, 0, rate[2])
     pos, vel, ang, rad = scene.positions, scene.velocities, scene.angular_velocities, scene.radii
-    ids = ids if ids is not None else list(range(scene.num_bodies))
-    if len(ids) != scene.num_bodies:
-        raise BridgeError("ids must list one YADE body per scene body")
+    total = vel + pos @ current.T
     for k, i in enumerate(ids):
         b = O.bodies[i]
         b.state.pos = Vector3(*pos[k])
-        b.state.vel = Vector3(*(vel[k] + rate * pos[k]))
+        b.state.vel = Vector3(*total[k])
         b.state.angVel = Vector3(*ang[k])
         b.shape.radius = float(rad[k])
 
