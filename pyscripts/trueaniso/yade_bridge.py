@@ -193,13 +193,16 @@ def _copy_contacts_to_yade(scene, O, ids):
     active = np.nonzero(c["normal_force"] > 0)[0]
     if active.size == 0:
         return
-    # One step without motion creates the interactions (geometry and physics) at rest.
-    newton = [e for e in O.engines if type(e).__name__ == "NewtonIntegrator"][0]
-    newton.dead = True
-    saved = [(b.state.vel, b.state.angVel) for b in O.bodies]
+    # One step without motion creates the interactions (geometry and physics) at rest: every
+    # body's DOFs blocked and its velocity zero, the integrator running. (A step with the
+    # integrator switched off instead leaves that step's forces unsynced in O.forces, and YADE's
+    # next step adds them to its own: the first velocity increment came out doubled.)
+    # Copies: YADE hands out references to the state's vectors, which the zeroing would clear.
+    saved = [(Vector3(b.state.vel), Vector3(b.state.angVel), b.state.blockedDOFs) for b in O.bodies]
     for b in O.bodies:
         b.state.vel = Vector3(0, 0, 0)
         b.state.angVel = Vector3(0, 0, 0)
+        b.state.blockedDOFs = "xyzXYZ"
     O.step()
     for k in active:
         i1, i2 = ids[c["body1"][k]], ids[c["body2"][k]]
@@ -210,6 +213,5 @@ def _copy_contacts_to_yade(scene, O, ids):
         fs = sign * c["shear_force"][k]
         I.phys.shearForce = Vector3(*fs)
         I.phys.shearElastic = Vector3(*fs)
-    for b, (v, w) in zip(O.bodies, saved):
-        b.state.vel, b.state.angVel = v, w
-    newton.dead = False
+    for b, (v, w, dofs) in zip(O.bodies, saved):
+        b.state.vel, b.state.angVel, b.state.blockedDOFs = v, w, dofs

@@ -32,6 +32,10 @@ def test_stress_of_yade_packing_matches_get_stress(yade_json):
     assert r["shear_share"] > 0.05  # tangential forces take part
     # Zm of Eq. (14) and YADE's avgNumInteractions(skipFree=True) count the same here
     assert abs(r["ours_Zm"] - r["yade_avg_num_interactions"]) < 1e-12
+    # the unbalanced force as YADE defines it (mean resultant over mean contact force), on the
+    # same forces: only summation order differs (1e-8 rel bounds the force round-off above)
+    assert r["yade_unbalanced"] > 1e-4  # a state still moving: the ratio is not trivially 0
+    assert r["ours_unbalanced"] == pytest.approx(r["yade_unbalanced"], rel=1e-6)
 
 
 def test_probe_matches_yade_user_probe_and_adapter(yade_json, specimen_path):
@@ -69,3 +73,17 @@ def test_bridge_round_trip(yade_json, specimen_path):
     assert abs(r["after_step_affine_slope"]) < 0.01 * abs(r["strain_rate"][0])
     # YADE's own rule: its cell starts moving one step late, then at our rate
     assert r["cell_first_step"] == 0 and abs(r["cell_second_step_rel"]) < 1e-6
+
+
+def test_local_damping_matches_yade_newton_integrator(yade_json):
+    """Our NewtonIntegrator damping against YADE's (cundallDamp2nd) on a free oblique collision,
+    from a state imported through the bridge (velocities included)."""
+    r = yade_json("peer_damping")
+    assert r["steps_in_contact"] > 100  # the collision lasts: forces, torques and damping act
+    # the damping matters: without it the spheres leave 30 % faster
+    assert r["undamped_final_speed"] > 1.2 * r["final_speed"]
+    # same formula on the same doubles; the shear-force rotation differs in round-off only
+    # (velocities 1e-14 m/s of 3.3 m/s, angular velocities 2e-10 of 284 rad/s measured)
+    assert r["max_position_diff"] < 1e-12 * r["radius"]
+    assert r["max_velocity_diff"] < 1e-9 * r["final_speed"]
+    assert r["max_angular_velocity_diff"] < 1e-9 * r["angular_velocity_scale"]

@@ -56,4 +56,7 @@ with open(out, "w") as f:
                    shear_share=float(np.mean([I.phys.shearForce.norm() / I.phys.normalForce.norm()
                                               for I in O.interactions if I.isReal])),
                    yade_avg_num_interactions=utils.avgNumInteractions(skipFree=True),
-                   ours_Zm=E.coordination(scene)["Zm"]), f, indent=1)
+                   ours_Zm=E.coordination(scene)["Zm"],
+                   # YADE's O.forces are those of the step without integration: the same forces
+                   yade_unbalanced=utils.unbalancedForce(), ours_unbalanced=E.unbalanced_force(scene)),
+              f, indent=1)
