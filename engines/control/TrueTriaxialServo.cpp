@@ -50,10 +50,15 @@ Vec3 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   }
 
   const Vec3 strain = m.strain - startStrain;
-  if (strain.cwiseAbs().maxCoeff() > maxStrain || steps > maxSteps || stalled > stallSteps) {
+  if (status == Status::Holding) ++holding;
+  if (strain.cwiseAbs().maxCoeff() > maxStrain || steps > maxSteps || stalled > stallSteps ||
+      holding > holdSteps) {
     std::ostringstream msg;
     msg << "state b = " << goal.b << ", sigma_z = " << goal.sigmaZ / 1e3 << " kPa not reached: ";
     if (steps > maxSteps) msg << "no equilibrium within " << maxSteps << " steps";
+    else if (holding > holdSteps)
+      msg << "held " << holdSteps << " steps without settling (stress off by "
+          << (stress - final).cwiseAbs().maxCoeff() << " Pa, unbalanced force " << unbalanced << ")";
     else if (stalled > stallSteps)
       msg << "the specimen stopped following the path for " << stallSteps << " steps (it fails, at "
           << 100 * progress << " % of the path)";

@@ -153,6 +153,8 @@ void exportControl() {
       .def_readwrite("max_strain", &TrueTriaxialServo::maxStrain)
       .def_readwrite("max_steps", &TrueTriaxialServo::maxSteps)
       .def_readwrite("stall_steps", &TrueTriaxialServo::stallSteps)
+      .def_readwrite("hold_steps", &TrueTriaxialServo::holdSteps)
+      .def_readonly("holding", &TrueTriaxialServo::holding)
       .add_property("status", &servoStatus)
       .def_readonly("message", &TrueTriaxialServo::message)
       .def_readonly("progress", &TrueTriaxialServo::progress)

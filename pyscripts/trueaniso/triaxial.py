@@ -68,13 +68,18 @@ def validate_state(b, sigma_z, p=100e3):
 
 def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0,
                 unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
-                stall_steps=100_000, chunk=5000, progress=None):
-    """Drive the scene (friction as it is, 0.5 after consolidation) to the state and hold it.
+                stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None):
+    """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
 
     Holds until every principal stress is within `tolerance` Pa of Eq. (9) and the unbalanced
-    force is below `unbalanced`. Raises StateNotReached if the specimen cannot get there.
+    force is below `unbalanced`. Raises StateNotReached if the specimen cannot get there: it
+    stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
+    strains beyond `max_strain`, or runs `max_steps`.
     """
     validate_state(b, sigma_z, p)
+    if not (math.isfinite(friction) and friction > 0):
+        raise ValueError("loading friction must be a finite number > 0, not %r" % (friction,))
+    scene.friction = friction  # set, not assumed: a scene fresh from elsewhere may carry 1e23
     servo = engines.TrueTriaxialServo()
     servo.set_goal(b, sigma_z, p)
     servo.path_rate = path_rate
@@ -83,6 +88,7 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     servo.max_strain = max_strain
     servo.max_steps = max_steps
     servo.stall_steps = stall_steps
+    servo.hold_steps = hold_steps
     d50 = 2.0 * float(np.median(scene.radii))
     servo.max_strain_rate = dem.strain_rate_for_inertial_number(inertial_number, d50, scene.density, p)
     chain = dem.Chain(scene, damping=damping, controllers=[servo])
@@ -94,7 +100,8 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     scene.strain_rate = np.zeros(3)
     info = dict(status=servo.status, steps=int(servo.steps), wall_time=time.time() - t0,
                 stress=servo.stress.tolist(), unbalanced=float(servo.unbalanced), message=servo.message,
-                overshoot=servo.overshoot.tolist(), goal=servo.goal_stresses.tolist())
+                overshoot=servo.overshoot.tolist(), goal=servo.goal_stresses.tolist(),
+                friction=float(scene.friction), hold_steps=int(servo.holding))
     if servo.status == "failed":
         raise StateNotReached(servo.message)
     return info

@@ -90,10 +90,39 @@ def predicted_a_squared(A_n, A_s, zeta_h, zeta_v):
     return a_squared(young_moduli(A_n, A_s, zeta_h, zeta_v))
 
 
-def contrast_misfit(E, A_n, A_s, zeta_h, zeta_v):
-    """rms over states and axes of micromechanical minus DEM-derived a_i^2."""
-    r = predicted_a_squared(A_n, A_s, zeta_h, zeta_v) - a_squared(E)
-    return float(np.sqrt(np.mean(r ** 2)))
+def contrast_misfit(E, A_n, A_s, zeta_h, zeta_v, reference=None):
+    """rms over states and axes of micromechanical minus DEM-derived a_i^2 (see fit_contrast)."""
+    return _Contrast(E, A_n, A_s, 1, reference).rms(zeta_h, zeta_v)
+
+
+class _Contrast:
+    """DEM-derived against micromechanical a_i^2 over a state set, each optionally divided by its
+    value at a reference state (Appendix B's reference point (x0, y0))."""
+
+    def __init__(self, E, A_n, A_s, min_states, reference=None):
+        self.E, self.A_n, self.A_s = _checked(E, A_n, A_s, min_states)
+        self.reference = None
+        if reference is not None:
+            E_ref, An_ref, As_ref = reference
+            self.reference = _checked([np.ravel(E_ref)], [An_ref], [As_ref], 1)
+        self.a_dem = a_squared(self.E) / (1.0 if self.reference is None else a_squared(self.reference[0]))
+
+    @property
+    def n_states(self):
+        return len(self.E)
+
+    def predicted(self, zeta_h, zeta_v):
+        a = predicted_a_squared(self.A_n, self.A_s, zeta_h, zeta_v)
+        if self.reference is not None:
+            a = a / predicted_a_squared(self.reference[1], self.reference[2], zeta_h, zeta_v)
+        return a
+
+    def residuals(self, zeta_h, zeta_v):
+        r = self.predicted(zeta_h, zeta_v) - self.a_dem
+        return np.where(np.isfinite(r), r, 1e3).ravel()  # a non-positive E_i scores as a huge misfit
+
+    def rms(self, zeta_h, zeta_v):
+        return float(np.sqrt(np.mean(self.residuals(zeta_h, zeta_v) ** 2)))
 
 
 def _checked(E, A_n, A_s, min_states):
@@ -114,15 +143,10 @@ def _checked(E, A_n, A_s, min_states):
     return E, A_n, A_s
 
 
-def _residuals(E, A_n, A_s, a_dem, zeta_h, zeta_v):
-    r = predicted_a_squared(A_n, A_s, zeta_h, zeta_v) - a_dem
-    return np.where(np.isfinite(r), r, 1e3).ravel()  # a non-positive E_i scores as a huge misfit
-
-
 def _least_squares(residual, start, lower, upper):
     """Bounded Gauss-Newton refinement to round-off; returns (x, jacobian at x)."""
     fit = optimize.least_squares(residual, start, bounds=(lower, upper), xtol=1e-15, ftol=1e-15,
-                                 gtol=1e-15, method="trf", diff_step=1e-7)
+                                 gtol=1e-15, method="trf", jac="3-point")
     return fit.x, _jacobian(residual, fit.x, lower, upper)
 
 
@@ -159,52 +183,58 @@ def _refuse_flat(jac, what):
                          "zeta cannot be fitted" % what)
 
 
-def fit_common(E, A_n, A_s, min_states=1):
-    """One zeta for all axes (zeta_h = zeta_v): dict(zeta, se, rms, at_bound)."""
-    E, A_n, A_s = _checked(E, A_n, A_s, min_states)
-    a_dem = a_squared(E)
-    grid = np.arange(ZETA_BOUNDS[0], ZETA_BOUNDS[1] + _GRID_STEP / 2, _GRID_STEP)
-    score = [np.sum(_residuals(E, A_n, A_s, a_dem, z, z) ** 2) for z in grid]
-    k = int(np.argmin(score))
+def _grid(step):
+    return np.arange(ZETA_BOUNDS[0], ZETA_BOUNDS[1] + step / 2, step)
+
+
+def _fit_common(data):
+    grid = _grid(_GRID_STEP)
+    k = int(np.argmin([np.sum(data.residuals(z, z) ** 2) for z in grid]))
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
-    x, jac = _least_squares(lambda p: _residuals(E, A_n, A_s, a_dem, p[0], p[0]), [grid[k]], [lo], [hi])
+    residual = lambda p: data.residuals(p[0], p[0])  # noqa: E731
+    x, jac = _least_squares(residual, [grid[k]], [lo], [hi])
     _refuse_flat(jac, "zeta")
-    res = _residuals(E, A_n, A_s, a_dem, x[0], x[0])
-    return dict(zeta=float(x[0]), se=float(_standard_error(res, jac, len(E), 1)[0]),
-                rms=contrast_misfit(E, A_n, A_s, x[0], x[0]), at_bound=_on_bound(x[0]))
+    return dict(zeta=float(x[0]), se=float(_standard_error(residual(x), jac, data.n_states, 1)[0]),
+                rms=data.rms(x[0], x[0]), at_bound=_on_bound(x[0]))
 
 
-def fit_contrast(E, A_n, A_s, min_states=2):
+def fit_common(E, A_n, A_s, min_states=1, reference=None):
+    """One zeta for all axes (zeta_h = zeta_v): dict(zeta, se, rms, at_bound). Arguments as
+    fit_contrast; one state is enough here (two equations, one unknown)."""
+    return _fit_common(_Contrast(E, A_n, A_s, min_states, reference))
+
+
+def fit_contrast(E, A_n, A_s, min_states=2, reference=None):
     """Least-squares zeta_h, zeta_v on a_i^2 over states (module doc).
 
     E: DEM Young's moduli (n, 3); A_n, A_s: per state the Voigt (n, 6, 6) or normal-block (n, 3, 3)
     parts of Eq. (37), C(zeta) = A_n + zeta A_s, at any common scale (``parts_*``).
+    reference: optional (E, A_n, A_s) of one state (the isotropic one) by which both the DEM-derived
+    and the micromechanical a_i^2 are divided, as Appendix B's reference point (x0, y0) does for an
+    assembly whose a_i^2 at the isotropic state are not 1.
     Returns dict: zeta_h, zeta_v (and their standard errors se_h, se_v), rms (misfit of a_i^2 at
     the fit), rms_at_1 (zeta_h = zeta_v = 1, Eq. 35), rms_at_paper (both 0.552), zeta (one common
     zeta) with its se and rms_common, at_bound, n_states, a_dem and a_fit (n, 3).
     Raises ValueError for fewer than `min_states` states, NaN or non-positive E_i, or states on
     which the predicted contrast does not depend on zeta.
     """
-    E, A_n, A_s = _checked(E, A_n, A_s, min_states)
-    a_dem = a_squared(E)
-    common = fit_common(E, A_n, A_s, min_states)
+    data = _Contrast(E, A_n, A_s, min_states, reference)
+    common = _fit_common(data)
     # The per-direction optimum starts from the best point of a coarse 2-D scan, so that a flat or
     # two-valleyed misfit does not trap the refinement at the common value.
-    grid = np.arange(ZETA_BOUNDS[0], ZETA_BOUNDS[1] + _GRID_STEP / 2, 2 * _GRID_STEP)
-    scan = [(np.sum(_residuals(E, A_n, A_s, a_dem, h, v) ** 2), h, v) for h in grid for v in grid]
-    _, h0, v0 = min(scan + [(common["rms"] ** 2 * E.size, common["zeta"], common["zeta"])])
-    x, jac = _least_squares(lambda p: _residuals(E, A_n, A_s, a_dem, p[0], p[1]), [h0, v0],
-                            [ZETA_BOUNDS[0]] * 2, [ZETA_BOUNDS[1]] * 2)
+    grid = _grid(2 * _GRID_STEP)
+    scan = [(np.sum(data.residuals(h, v) ** 2), h, v) for h in grid for v in grid]
+    _, h0, v0 = min(scan + [(np.sum(data.residuals(common["zeta"], common["zeta"]) ** 2),
+                             common["zeta"], common["zeta"])])
+    residual = lambda p: data.residuals(p[0], p[1])  # noqa: E731
+    x, jac = _least_squares(residual, [h0, v0], [ZETA_BOUNDS[0]] * 2, [ZETA_BOUNDS[1]] * 2)
     _refuse_flat(jac, "zeta_h or zeta_v")
-    res = _residuals(E, A_n, A_s, a_dem, x[0], x[1])
-    se = _standard_error(res, jac, len(E), 2)
+    se = _standard_error(residual(x), jac, data.n_states, 2)
     return dict(zeta_h=float(x[0]), zeta_v=float(x[1]), se_h=float(se[0]), se_v=float(se[1]),
-                rms=contrast_misfit(E, A_n, A_s, x[0], x[1]),
-                rms_at_1=contrast_misfit(E, A_n, A_s, 1.0, 1.0),
-                rms_at_paper=contrast_misfit(E, A_n, A_s, PAPER_ZETA, PAPER_ZETA),
+                rms=data.rms(x[0], x[1]), rms_at_1=data.rms(1.0, 1.0), rms_at_paper=data.rms(PAPER_ZETA, PAPER_ZETA),
                 zeta=common["zeta"], se=common["se"], rms_common=common["rms"],
                 at_bound=_on_bound(x[0], x[1]) or common["at_bound"],
-                n_states=len(E), a_dem=a_dem, a_fit=predicted_a_squared(A_n, A_s, x[0], x[1]))
+                n_states=data.n_states, a_dem=data.a_dem, a_fit=data.predicted(x[0], x[1]))
 
 
 def magnitude_zeta(A_n, A_s, E):

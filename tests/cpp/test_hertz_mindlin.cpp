@@ -113,6 +113,33 @@ TEST(HertzMindlin, CyclicTangentialLoadingHitsCoulombCap) {
   EXPECT_GT(slipping, 200);  // the cap was reached on each leg
 }
 
+// The probe switch: tangential force built up with mu = 1e23 to twice the 0.5 cap, then mu set
+// back to 0.5 on the loaded contact. The next evaluation, with no relative motion, must cap the
+// force at 0.5 N in its own direction; and with mu = 1e23 again nothing is capped.
+TEST(HertzMindlin, FrictionSwitchedAtRunTimeCapsLoadedContacts) {
+  const Real r = 0.1e-3, delta = 1e-6;
+  auto s = twoSpheres(r, r, delta, 1e23);
+  Driver drv(s);
+  drv.evaluate();
+  const Real N = s->contacts.normalForce[0];
+  const Real ks = s->material.stiffnessRatio() * s->contacts.kn(0);
+  const Real arm = r - 0.5 * delta;
+  const Real du = 2.0 * 0.5 * N / ks / 100.0;  // 100 steps to twice the 0.5 cap
+  s->bodies.angVel[1] = Vec3(0, 0, -du / (arm * s->dt));
+  for (int k = 0; k < 100; ++k) drv.evaluate();
+  const Vec3 loaded = s->contacts.shearForce[0];
+  ASSERT_NEAR(loaded.norm(), 1.0 * N, 0.02 * N);  // uncapped: ~2x the 0.5 cap
+  s->bodies.angVel[1] = Vec3::Zero();
+  s->material.friction = 0.5;
+  drv.evaluate();
+  const Vec3 capped = s->contacts.shearForce[0];
+  EXPECT_NEAR(capped.norm(), 0.5 * N, 1e-12 * N);
+  EXPECT_NEAR(capped.normalized().dot(loaded.normalized()), 1.0, 1e-12);
+  s->material.friction = 1e23;
+  drv.evaluate();
+  EXPECT_NEAR(s->contacts.shearForce[0].norm(), 0.5 * N, 1e-12 * N);  // history kept, not restored
+}
+
 // A loaded pair turned as a rigid body (about an axis with a component along the normal, so the
 // twist is exercised too): normal and tangential force magnitudes must not change.
 TEST(HertzMindlin, RigidRotationKeepsForceMagnitudes) {

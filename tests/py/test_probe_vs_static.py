@@ -3,7 +3,7 @@ of the static solve equals the micromechanical stiffness of Eq. 35 with zeta = 1
 import numpy as np
 import pytest
 
-from trueaniso import engines, fabric, specimen, statics, triaxial
+from trueaniso import dem, engines, fabric, specimen, statics, triaxial
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,9 @@ def test_dynamic_probe_converges_to_static(held, rotations):
         for j in range(3):
             if j != axis:
                 name = "nu_%s%s" % ("xyz"[axis], "xyz"[j])
-                assert 0.5 * (up[name] + down[name]) == pytest.approx(st["nu"][axis, j], abs=1e-3)
+                # Poisson's ratios of ~0.12: the issue's 0.5 % of that is 6e-4 absolute; the
+                # +/- mean measured within 3e-4 of the static value
+                assert 0.5 * (up[name] + down[name]) == pytest.approx(st["nu"][axis, j], abs=6e-4)
 
 
 def test_affine_static_equals_micromechanics_at_zeta_1(held):
@@ -41,3 +43,33 @@ def test_affine_static_equals_micromechanics_at_zeta_1(held):
     # Normal 3x3 block (the part Eqs. 40-42 use): two independent assemblies of the same sum.
     # (The shear block differs by the factor ~2 of Appendix A's C44-C66: docs/statics.md section 5.)
     np.testing.assert_allclose(C[:3, :3], affine[:3, :3], rtol=1e-10, atol=1e-10 * np.abs(affine).max())
+
+
+def test_shear_block_conventions_are_the_documented_ones(held):
+    """The shear block, checked against a brute-force sum instead of left out: with the
+    unsymmetrised T_ijkl = (1/V) sum L_i K_jl L_k (K = k_n n n + k_s (I - n n)), the static
+    affine part takes the minor-symmetrised (T_ijij + T_jiji + T_ijji + T_jiij)/4 of the
+    engineering shear strain, Appendix A (A7-A9) takes (T_ijij + T_jiji)/2 (docs/statics.md
+    section 5): the ~1.965x between them is that convention, nothing else. The study CSV's
+    mic_G_* columns carry Appendix A's."""
+    scene = held[0].copy()
+    dem.refresh(scene)  # both computations and the brute force read the same contact state
+    st = statics.static_stiffness(scene, rotations=False)
+    C = np.asarray(fabric.prediction(scene, zeta=1.0, density="count")["voigt"])
+    A = np.asarray(st["affine_normal"]) + np.asarray(st["affine_shear"])
+    c = scene.contact_arrays()
+    on = c["normal_force"] > 0
+    L, n, kn = c["branch"][on], c["normal"][on], c["kn"][on]
+    ks = kn * 2 * (1 - scene.poisson) / (2 - scene.poisson)  # Eq. (6) / Eq. (5)
+    nn = n[:, :, None] * n[:, None, :]
+    K = kn[:, None, None] * nn + ks[:, None, None] * (np.eye(3) - nn)
+    T = np.einsum("ci,cjl,ck->ijkl", L, K, L) / np.prod(scene.cell_size)
+    for a, (i, j) in enumerate([(1, 2), (0, 2), (0, 1)]):  # Voigt 4, 5, 6: yz, xz, xy
+        minor = 0.25 * (T[i, j, i, j] + T[j, i, j, i] + T[i, j, j, i] + T[j, i, i, j])
+        appendix = 0.5 * (T[i, j, i, j] + T[j, i, j, i])
+        assert A[3 + a, 3 + a] == pytest.approx(minor, rel=1e-10)
+        assert C[3 + a, 3 + a] == pytest.approx(appendix, rel=1e-10)
+        assert 1.9 < C[3 + a, 3 + a] / A[3 + a, 3 + a] < 2.0  # below 2 by the cross terms
+    for i in range(3):
+        for k in range(3):
+            assert C[i, k] == pytest.approx(T[i, i, k, k], rel=1e-10)

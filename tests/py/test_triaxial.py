@@ -72,24 +72,52 @@ def test_simple_cubic_probe_gives_closed_form():
                 assert abs(v) < 1e-3
 
 
+def test_simple_cubic_micromechanics_equals_probe():
+    """Issue 4: Eq. (40) with zeta = 1 on the simple cubic packing gives E = k_n / a (k_n/(2r) to
+    O(delta/r)), the same as the stress probe measures with rotations restrained. The +/- probe
+    mean removes the secant error of the finite increment; 4e-7 measured, 1e-5 allowed."""
+    from trueaniso import fabric
+    s, _ = simple_cubic()
+    predicted = fabric.prediction(s, zeta=1.0)["E"]
+    c = s.contact_arrays()
+    kn = c["kn"][c["normal_force"] > 0]
+    a = s.cell_size[0] / 4
+    for axis in range(3):
+        assert predicted[axis] == pytest.approx(kn.mean() / a, rel=1e-12)
+        up = triaxial.probe(s, [100e3] * 3, axis, restrain_rotations=True)
+        down = triaxial.probe(s, [100e3] * 3, axis, sign=-1, restrain_rotations=True)
+        assert 0.5 * (up["E"] + down["E"]) == pytest.approx(predicted[axis], rel=1e-5)
+
+
 @pytest.fixture(scope="module")
 def specimen300():
     scene, _ = specimen.prepare_spheres(300, seed=3)
     return scene
 
 
-def test_probe_is_linear(specimen300):
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_probe_is_linear(specimen300, axis):
     s = specimen300
     hold = [100e3] * 3
-    up = triaxial.probe(s, hold, "z", sign=1)
-    down = triaxial.probe(s, hold, "z", sign=-1)
-    half = triaxial.probe(s, hold, "z", gamma=0.5e-6)
+    up = triaxial.probe(s, hold, axis, sign=1)
+    down = triaxial.probe(s, hold, axis, sign=-1)
+    half = triaxial.probe(s, hold, axis, gamma=0.5e-6)
     assert up["gamma"] >= 1e-6 and half["gamma"] >= 0.5e-6
     assert down["E"] == pytest.approx(up["E"], rel=1e-2)
     assert half["E"] == pytest.approx(up["E"], rel=1e-2)
     # the other two stresses were held: their increments are tiny against the probe's
     ds = np.abs(up["d_stress"])
-    assert ds[0] < 5e-3 * ds[2] and ds[1] < 5e-3 * ds[2]
+    others = [j for j in range(3) if j != axis]
+    assert ds[others[0]] < 5e-3 * ds[axis] and ds[others[1]] < 5e-3 * ds[axis]
+    # Eq. (12) from the reported strain increments, written out here independently
+    ex, ey, ez = up["d_strain"]
+    gamma12 = math.sqrt(((ex - ey) ** 2 + (ex - ez) ** 2 + (ey - ez) ** 2) / 2)
+    assert up["gamma"] == pytest.approx(gamma12, rel=1e-12)
+    # and Eqs. (10)-(11): E_i = d sigma_i / d eps_i, nu_ij = -d eps_j / d eps_i
+    assert up["E"] == pytest.approx(up["d_stress"][axis] / up["d_strain"][axis], rel=1e-12)
+    for j in others:
+        name = "nu_%s%s" % ("xyz"[axis], "xyz"[j])
+        assert up[name] == pytest.approx(-up["d_strain"][j] / up["d_strain"][axis], rel=1e-12)
     # the state is restored: same stress as before the probes
     np.testing.assert_allclose(np.diag(engines.stress(s)), hold, atol=200.0)
 
@@ -143,13 +171,28 @@ def test_probe_bad_input(specimen300, axis, gamma, message):
         triaxial.probe(specimen300, [100e3] * 3, axis, gamma=gamma)
 
 
-def test_hardest_state_reached_without_overshoot(specimen300):
+@pytest.mark.parametrize("sid,b,sz", [(21, 0.5, 140e3), (25, 0.5, 60e3)])  # q = +69.3, -69.3 kPa
+def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, sid, b, sz):
     s = specimen300.copy()
-    info = triaxial.reach_state(s, 0.5, 140e3)  # state 21, q = 69.3 kPa
-    goal = engines.true_triaxial_stresses(0.5, 140e3)
+    s.friction = 1e23  # as a probe leaves it unrestored: reach_state must load with 0.5
+    goal = engines.true_triaxial_stresses(b, sz)
+    held = []  # |sigma - goal| sampled every 200 steps once the servo holds the state
+
+    def watch(servo):
+        if servo.status in ("holding", "reached"):
+            held.append(np.abs(np.asarray(servo.stress) - goal).max())
+    info = triaxial.reach_state(s, b, sz, chunk=200, progress=watch)
+    assert info["friction"] == 0.5 and s.friction == 0.5
     np.testing.assert_allclose(np.diag(engines.stress(s)), goal, atol=500.0)
     assert max(info["overshoot"]) < 500.0  # never past the goal by more than the tolerance
     assert info["unbalanced"] < 1e-4
+    # no oscillation: the goal stops at the state with the stresses up to ~1 kPa behind (the
+    # follow tolerance); from then on they close in (state 21: 949 -> 90 Pa over 21 samples, one
+    # 31 Pa bump from a rearrangement) and, once inside the 0.5 kPa band, never leave it
+    assert held, sid
+    inside = next(k for k, d in enumerate(held) if d < 500.0)
+    assert max(held[inside:]) < 500.0, (sid, held)
+    assert all(b < a + 100.0 for a, b in zip(held, held[1:])), (sid, held)
 
 
 def test_unreachable_state_fails_cleanly(specimen300):
@@ -157,3 +200,11 @@ def test_unreachable_state_fails_cleanly(specimen300):
     # sigma_x = sigma_y = 15 kPa against sigma_z = 270 kPa: far beyond the friction's capacity
     with pytest.raises(triaxial.StateNotReached, match="not reached"):
         triaxial.reach_state(s, 0.0, 270e3, stall_steps=20000)
+
+
+def test_state_that_never_settles_is_reported(specimen300):
+    """A hold criterion the dynamics cannot meet (unbalanced force below 1e-30) ends with a
+    clear message after hold_steps, not after the 3M-step cap."""
+    s = specimen300.copy()
+    with pytest.raises(triaxial.StateNotReached, match="without settling"):
+        triaxial.reach_state(s, 0.0, 100e3, unbalanced=1e-30, hold_steps=2000, chunk=500)
