@@ -212,7 +212,8 @@ def signed_q_over_p(sigma):
 
 def per_state(src, referenced):
     """(q/p, zeta) of one common zeta per anisotropic state, raw or relative to the isotropic state
-    (Appendix B's reference point); None when a reference is asked for and there is none."""
+    (Appendix B's reference point), the common fit over those states, and the isotropic state's
+    a_i^2 (DEM, micromechanical at zeta = 1); None when a reference is asked for and there is none."""
     A_n, A_s = parts_of(src)
     iso = [k for k, sig in enumerate(src["sigma"]) if isotropic(sig)]
     if referenced and not iso:
@@ -222,7 +223,8 @@ def per_state(src, referenced):
     out = [(signed_q_over_p(src["sigma"][k]),
             zeta.fit_common([src["E"][k]], [A_n[k]], [A_s[k]], reference=ref)["zeta"]) for k in keep]
     overall = zeta.fit_common(src["E"][keep], A_n[keep], A_s[keep], min_states=2, reference=ref)
-    return out, overall
+    iso_a = (zeta.a_squared(ref[0]), zeta.predicted_a_squared(ref[1], ref[2], 1.0, 1.0)) if ref else None
+    return out, overall, iso_a
 
 
 # ---------------------------------------------------------------------------- tables
@@ -248,13 +250,15 @@ def band_row(src, referenced):
     got = per_state(src, referenced)
     if got is None:
         return None
-    states, overall = got
+    states, overall, iso_a = got
     cells = []
     for lo, hi in BANDS:
         z = [v for qp, v in states if (lo < qp <= hi if hi <= 0 else lo <= qp < hi)]
         cells.append("%.2f (%d)" % (np.median(z), len(z)) if z else "-")
     return "| %s | %s | %s | %s | %.3f ± %.3f |" % (
-        src["label"], src["rotations"], "isotropic state" if referenced else "none (a_i^2 = 1)",
+        src["label"], src["rotations"],
+        "isotropic state: DEM %s, mic. %s" % tuple(", ".join("%.3f" % v for v in a) for a in iso_a)
+        if referenced else "none (a_i^2 = 1)",
         " | ".join(cells), overall["zeta"], overall["se"])
 
 

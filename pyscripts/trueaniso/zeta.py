@@ -23,8 +23,8 @@ Eq. (32) that multiplies the tangential part of C_iikk by sqrt(zeta_i zeta_k):
     C_ik(zeta_h, zeta_v) = A_n,ik + sqrt(zeta_i zeta_k) A_s,ik        (normal block, i, k = x, y, z)
 
 with A_n = C(zeta = 0) and A_s = C(1) - C(0) from the existing one-zeta prediction (Eq. 37 is
-linear in zeta). It is Eq. (37) itself when zeta_h = zeta_v, keeps C symmetric and positive, and
-one C gives all three E_i, so the predicted a_i^2 multiply to 1. Only the normal block is formed:
+linear in zeta). It is Eq. (37) itself when zeta_h = zeta_v, keeps C symmetric (and positive
+semi-definite for zeta >= 0, as K* is), and one C gives all three E_i, so the predicted a_i^2 multiply to 1. Only the normal block is formed:
 Eq. (40) needs nothing else (the shear entries would need B and M separately).
 """
 import numpy as np
@@ -35,7 +35,6 @@ from . import engines, fabric
 PAPER_ZETA = 0.552      # zeta_h = zeta_v fitted by the paper for its sphere assembly (Fig. 13b)
 ZETA_BOUNDS = (0.0, 5.0)  # k_s* < 0 has no meaning (and sqrt(zeta) in C); 5 as rotation_factor
 _GRID_STEP = 0.05       # coarse scan before the least-squares refinement (misfit may be flat)
-_HORIZONTAL = np.array([True, True, False])  # x, y carry zeta_h; z carries zeta_v
 
 
 def a_squared(E):
