@@ -6,8 +6,10 @@
 // A_n = (1/V) sum k_n L n L n and A_s = (1/V) sum k_s (L L d - L n L n) (both as Voigt matrices of
 // the contacts of the held state, zeta = 1 giving Eq. 32). E_i(zeta) follows from C(zeta) by
 // Eq. (40). Two factors are derived, per axis and for the paper's pair (h = x, y; v = z):
-//  - zeta ("paper"): E_i(zeta_i) = E_i of the relaxed static solve with rotations free, the
-//    quantity the paper fits to its probes (it lumps the translational non-affinity in too);
+//  - zeta ("magnitude"): E_i(zeta_i) = E_i of the relaxed static solve with rotations free (it
+//    lumps the translational non-affinity in too, and depends on the N_c/V choice). The paper
+//    fits zeta on the directional contrast a_i^2 of Eq. (25) instead, which does not:
+//    pyscripts/trueaniso/zeta.py, docs/statics.md section 7.1;
 //  - zetaRotation ("rotation alone"): E_i(zeta)/E_i(1) = E_i(rotations free)/E_i(rotations
 //    blocked), i.e. the reduction that freeing the rotations adds to the relaxed, rotation-
 //    blocked solve, expressed as a tangential-stiffness factor on the kinematic estimate.
