@@ -76,9 +76,17 @@ def main():
             zeta_h=zeta["zeta_h"], zeta_v=zeta["zeta_v"], residual=free["residual"],
             rattlers=len(free["rattlers"]), time=free["time"]["total"] + blocked["time"]["total"]))
     sres = json.load(open(statics_path))
-    print("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, zeta_h = %.3f, zeta_v = %.3f"
+    print("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %.3f, zeta_v = %.3f"
           % ([round(e / 1e6, 1) for e in sres["E_free"]], [round(e / 1e6, 1) for e in sres["E_blocked"]],
              sres["zeta_h"], sres["zeta_v"]))
+
+    contrast = contrast_zeta(o.out, rows)
+    if contrast:
+        print("zeta calibrated on the contrast a_i^2 (Eq. 25) over %d states, as the paper's Fig. 13: "
+              "zeta_h = %.3f, zeta_v = %.3f (rms of a_i^2 %.4f; %.4f at the paper's 0.552, %.4f at 1); the "
+              "magnitude zeta above answers another question (docs/statics.md 7.1)"
+              % (contrast["n_states"], contrast["zeta_h"], contrast["zeta_v"], contrast["rms"],
+                 contrast["rms_at_paper"], contrast["rms_at_1"]))
 
     fig_dir = os.path.join(o.out, "figures")
     os.makedirs(fig_dir, exist_ok=True)
@@ -87,12 +95,38 @@ def main():
     fits = figures.scalar_moduli_vs_zm(rows, os.path.join(fig_dir, "K_G_vs_Zm.png"))
     atomic.write_json(os.path.join(o.out, "summary.json"), dict(
         specimen=st, states=len({r["state"] for r in rows}), probes=len(rows), statics=sres, K_G_fits=fits,
+        zeta_contrast=contrast,
         wall_time=time.time() - t0))
     print("results: %s (probes.csv, figures/, summary.json) in %.0f s" % (o.out, time.time() - t0))
     if cli.in_yade():
         from trueaniso import yade_bridge
         yade_bridge.yade_scene_from(scene, import_contacts=False)
         print("specimen written into YADE's O (%d spheres) for viewing/export" % scene.num_bodies)
+
+
+def contrast_zeta(out, rows):
+    """zeta_h, zeta_v fitted on a_i^2 over the probed states (trueaniso.zeta), from the probe
+    rows and the held-state checkpoints; None with fewer than two complete states."""
+    import numpy as np
+    from trueaniso import dem, zeta
+    by_state = {}
+    for r in rows:
+        by_state.setdefault(r["state"], {})[r["probe"]] = float(r["E"])
+    E, A_n, A_s = [], [], []
+    for sid, moduli in sorted(by_state.items()):
+        ck = os.path.join(out, "states", "%s.npz" % sid)
+        if set(moduli) != set("xyz") or not os.path.exists(ck):
+            continue
+        held, _ = specimen_file.load(ck)
+        dem.refresh(held)
+        a_n, a_s = zeta.parts_from_scene(held)
+        E.append([moduli[a] for a in "xyz"])
+        A_n.append(a_n)
+        A_s.append(a_s)
+    if len(E) < 2:
+        return None
+    fit = zeta.fit_contrast(np.array(E), np.array(A_n), np.array(A_s))
+    return {k: v for k, v in fit.items() if not isinstance(v, np.ndarray)}
 
 
 if __name__ == "__main__" or cli.in_yade():

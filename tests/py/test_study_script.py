@@ -108,3 +108,22 @@ def test_bad_input_refused_before_any_work(small_specimen, tmp_path, args, messa
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1 and message in lines[0], proc.stderr
     assert not out.exists()
+
+
+def test_main_job_writes_results_figures_and_both_zetas(tmp_path):
+    """The main job's script (run_study.py, what ./main.sh runs) on a small specimen: every
+    output is there, and the contrast zeta is fitted over the probed states."""
+    out = tmp_path / "study"
+    script = os.path.join(REPO, "pyscripts", "run_study.py")
+    env = dict(os.environ, OMP_NUM_THREADS=os.environ.get("OMP_NUM_THREADS", "2"))
+    proc = subprocess.run([sys.executable, script, "--n", "150", "--ids", "1,2,6", "--out", str(out)],
+                          capture_output=True, text=True, timeout=600, env=env)
+    assert proc.returncode == 0, proc.stderr
+    for name in ("specimen.npz", "probes.csv", "metadata.json", "summary.json", "statics_isotropic.json",
+                 "figures/E_vs_sigma.png", "figures/K_G_vs_Zm.png"):
+        assert (out / name).exists(), name
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["states"] == 3 and summary["probes"] == 9
+    z = summary["zeta_contrast"]
+    assert z["n_states"] == 3 and 0 <= z["zeta_h"] <= 5 and z["rms"] <= z["rms_at_1"]
+    assert "magnitude zeta_h" in proc.stdout and "contrast" in proc.stdout
