@@ -1,6 +1,9 @@
 """Specimen files that must be refused: corrupt, wrong version, not a specimen."""
 import json
+import os
 import shutil
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -34,7 +37,9 @@ def test_flipped_bytes_are_refused(saved, tmp_path):
         specimen_file.load(str(bad))
 
 
-def _rewrite(src, dst, edit_meta=None, edit_arrays=None):
+def _rewrite(src, dst, edit_meta=None, edit_arrays=None, reseal=False):
+    """A copy of src with edited metadata or arrays; reseal recomputes the checksum, so that
+    only the contents check can refuse the edited arrays."""
     with np.load(src) as z:
         arrays = {k: z[k] for k in z.files}
     meta = json.loads(str(arrays.pop("meta")))
@@ -42,6 +47,8 @@ def _rewrite(src, dst, edit_meta=None, edit_arrays=None):
         edit_meta(meta)
     if edit_arrays:
         edit_arrays(arrays)
+    if reseal:
+        meta["sha256"] = specimen_file._checksum(arrays)
     np.savez(dst, meta=np.array(json.dumps(meta)), **arrays)
 
 
@@ -83,17 +90,6 @@ def test_save_replaces_atomically(saved, tmp_path):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".tmp-")] == []
 
 
-def _resealed(src, dst, edit_arrays):
-    """A file whose contents are bad but whose checksum is right: only the contents check can
-    refuse it."""
-    with np.load(src) as z:
-        arrays = {k: z[k] for k in z.files}
-    meta = json.loads(str(arrays.pop("meta")))
-    edit_arrays(arrays)
-    meta["sha256"] = specimen_file._checksum(arrays)
-    np.savez(dst, meta=np.array(json.dumps(meta)), **arrays)
-
-
 @pytest.mark.parametrize("edit,message", [
     (lambda a: a.update(radii=np.where(np.arange(a["radii"].size) == 3, 0.0, a["radii"])), "radius <= 0"),
     (lambda a: a.update(positions=a["positions"][:0], member_begin=a["member_begin"][:1]), "no bodies"),
@@ -103,17 +99,14 @@ def _resealed(src, dst, edit_arrays):
 ])
 def test_sealed_but_invalid_contents_are_refused(saved, tmp_path, edit, message):
     bad = tmp_path / "sealed.npz"
-    _resealed(saved, bad, edit)
+    _rewrite(saved, bad, edit_arrays=edit, reseal=True)
     with pytest.raises(specimen_file.SpecimenFileError, match=message):
         specimen_file.load(str(bad))
 
 
 def test_script_refuses_invalid_specimen_in_one_line(saved, tmp_path):
-    import os
-    import subprocess
-    import sys
     bad = tmp_path / "sealed.npz"
-    _resealed(saved, bad, lambda a: a.update(radii=a["radii"] * 0.0))
+    _rewrite(saved, bad, edit_arrays=lambda a: a.update(radii=a["radii"] * 0.0), reseal=True)
     script = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                           "pyscripts", "run_states.py")
     out = tmp_path / "out"

@@ -15,9 +15,9 @@ REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SCRIPT = os.path.join(REPO, "pyscripts", "run_states.py")
 
 
-def run(*args, timeout=600):
+def run(*args, timeout=600, script=SCRIPT):
     env = dict(os.environ, OMP_NUM_THREADS=os.environ.get("OMP_NUM_THREADS", "2"))
-    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True, timeout=timeout, env=env)
+    return subprocess.run([sys.executable, script, *args], capture_output=True, text=True, timeout=timeout, env=env)
 
 
 @pytest.fixture(scope="module")
@@ -114,10 +114,8 @@ def test_main_job_writes_results_figures_and_both_zetas(tmp_path):
     """The main job's script (run_study.py, what ./main.sh runs) on a small specimen: every
     output is there, and the contrast zeta is fitted over the probed states."""
     out = tmp_path / "study"
-    script = os.path.join(REPO, "pyscripts", "run_study.py")
-    env = dict(os.environ, OMP_NUM_THREADS=os.environ.get("OMP_NUM_THREADS", "2"))
-    proc = subprocess.run([sys.executable, script, "--n", "150", "--ids", "1,2,6", "--out", str(out)],
-                          capture_output=True, text=True, timeout=600, env=env)
+    proc = run("--n", "150", "--ids", "1,2,6", "--out", str(out),
+               script=os.path.join(REPO, "pyscripts", "run_study.py"))
     assert proc.returncode == 0, proc.stderr
     for name in ("specimen.npz", "probes.csv", "metadata.json", "summary.json", "statics_isotropic.json",
                  "figures/E_vs_sigma.png", "figures/K_G_vs_Zm.png"):
