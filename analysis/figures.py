@@ -80,10 +80,10 @@ def main(argv=None):
     p.add_argument("--title", default="sphere assembly", help="assembly named in the titles")
     o = p.parse_args(argv)
     try:
-        rows = read_probes(o.csv, need=("state", "probe", "E", "sigma_x", "sigma_y", "sigma_z", "Zm",
+        rows = read_probes(o.csv, need=("state", "probe", "E", "sigma_x", "sigma_y", "sigma_z", "Zm", "b", "q",
                                         "nu_1", "nu_2", "nu_1_name", "nu_2_name"))
         for r in rows:
-            for column in ("E", "sigma_x", "sigma_y", "sigma_z", "Zm", "nu_1", "nu_2"):
+            for column in ("E", "sigma_x", "sigma_y", "sigma_z", "Zm", "b", "q", "nu_1", "nu_2"):
                 number(r, column, o.csv)
         if rows.note:
             sys.stderr.write("note: %s\n" % rows.note)

@@ -79,7 +79,8 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                          "restrained: ask for --rotations restrained" % specimen_path)
     fp = fingerprint(spec_meta, gamma, restrain_rotations, skip_detection, damping, state_options,
                      probe_options, recipe)
-    record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, states=ids, probes=axes,
+    record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),
+                  states=ids, probes=axes,
                   versions=provenance.versions(),
                   specimen=dict(path=os.path.abspath(specimen_path), sha256=spec_meta["sha256"],
                                 seed=spec_meta["seed"], summary=spec_meta.get("summary")))
