@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from conftest import REPO, SCRIPTS, one_line_error, run_script
 
-from trueaniso import cli, dem, fabric, resources, specimen
+from trueaniso import cli, dem, fabric, specimen
 
-TOO_MANY = resources.max_threads() + 1
+TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (trueaniso/resources.py)
 
 
 @pytest.mark.parametrize("args,words", [
@@ -21,7 +21,7 @@ TOO_MANY = resources.max_threads() + 1
     (["--d50", "inf"], ["--d50", "finite"]),
     (["--seed=-1"], ["--seed", ">= 0"]),  # before: failed after the preparation started
     (["--threads", "100000"], ["--threads", "at most"]),  # before: segfault
-    (["--threads", str(TOO_MANY)], ["--threads", "%d x the cores" % resources.THREADS_PER_CORE]),
+    (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
     (["--n", "1000000000"], ["memory", "this machine allows", "MemTotal"]),  # before: ran away past 7.8 GB
 ])
 def test_prepare_specimen_refuses_before_work(tmp_path, args, words):
@@ -137,7 +137,7 @@ def test_fabric_of_a_scene_without_contacts_is_refused():
     s = specimen.new_scene(np.array([[1e-3, 1e-3, 1e-3], [3e-3, 3e-3, 3e-3]]), np.full(2, 1e-4), np.full(3, 5e-3))
     dem.refresh(s)
     for measure in (fabric.fabric, fabric.fabric_row, fabric.prediction):
-        with pytest.raises(fabric.NoContacts, match="no contact"):
+        with pytest.raises(ValueError, match="no contact"):  # fabric.NoContacts
             measure(s)
 
 
