@@ -131,8 +131,9 @@ def main(argv=None):
     with lock.held(o.out, wait=o.wait, log=log):
         if o.force_new:
             study_dir.supersede(o.out, log)
+        scene = check_recipe(o, log)  # a refusal changes nothing
         study_dir.clean_strays(o.out, log)
-        scene = check_recipe(o, log) or prepare(o, log)
+        scene = scene or prepare(o, log)
         # The summary is derived; it is written again at the end, so a run that stops never
         # leaves one that describes other rows than probes.csv holds.
         study_dir.remove([os.path.join(o.out, "summary.json")])
@@ -181,6 +182,8 @@ def isotropic_statics(out, scene):
     path = os.path.join(out, "statics_isotropic.json")
     if not os.path.exists(path):
         from trueaniso import statics
+        print("statics (isotropic state): solving the contact network's stiffness, rotations free and blocked ...",
+              flush=True)
         free = statics.static_stiffness(scene, rotations=True)
         blocked = statics.static_stiffness(scene, rotations=False)
         zeta = statics.rotation_factor(scene, free=free, blocked=blocked)

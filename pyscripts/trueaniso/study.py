@@ -88,8 +88,8 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
     with lock.held(out, wait=wait, log=log):
         if force_new:
             study_dir.supersede(out, log)
+        previous = study_dir.check(out, fp, states)  # a refusal changes nothing
         study_dir.clean_strays(out, log)
-        previous = study_dir.check(out, fp, states)
         try:
             table = results_csv.repair(results_csv.read(csv_path), log)
         except results_csv.TableError as exc:

@@ -25,6 +25,10 @@ LAYOUT = 2  # of metadata.json; 1 (before fingerprints) cannot prove what its ro
 WAY_OUT = "use a new --out, or --force-new to move the old study aside into %s/"
 
 
+LABELS = {"code": "the code version (code: a hash of engines/ and pyscripts/trueaniso/)",
+          "specimen": "the specimen (specimen: its checksum)", "threads": "the engine thread count (threads)"}
+
+
 class StudyMismatch(Refusal):
     """The directory holds another study than the run asks for."""
 
@@ -137,8 +141,12 @@ def check(out, fingerprint, states):
     if diff:
         field, there, here = diff[0]
         more = " (and %d more difference%s)" % (len(diff) - 1, "s" if len(diff) > 2 else "") if len(diff) > 1 else ""
+        way = _way_out(out)
+        if field == "threads" and len(diff) == 1 and isinstance(there, int):
+            # The same study on another thread count: the last bits of every sum would differ.
+            way = "continue it with --threads %d (under yade-double: -j %d), or %s" % (there, there, way)
         raise StudyMismatch("%s holds another study: %s is %s there, %s in this run%s; %s"
-                            % (out, field, _show(there), _show(here), more, _way_out(out)))
+                            % (out, LABELS.get(field, field), _show(there), _show(here), more, way))
     have = meta.get("states", {})
     for sid, d in states_table(states).items():
         if sid in have and have[sid] != d:

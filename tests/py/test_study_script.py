@@ -85,8 +85,8 @@ def test_resume_adds_only_the_missing_probe(finished, small_specimen, tmp_path):
         w.writerows(kept)
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(out))
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.count("probe x") == 1 and "probe z" not in proc.stdout
-    assert "checkpoint" in proc.stdout  # state 2 came from its checkpoint, not a new path
+    assert proc.stdout.count("probe x  E") == 1 and "probe z  E" not in proc.stdout
+    assert "state 2: b =" not in proc.stdout  # state 2 came from its checkpoint, not a new path
     assert len(rows(out)) == 4
 
 
