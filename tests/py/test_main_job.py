@@ -124,3 +124,14 @@ def test_kill_9_leaves_no_stale_summary_and_the_rerun_completes(first, tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["states"] == 4 and summary["probes"] == 12 == len(rows(out))
+
+
+def test_two_studies_cannot_share_a_directory(tmp_path):
+    """Before: two run_study.py runs on one --out mixed the specimens of two seeds."""
+    from trueaniso import lock
+    out = tmp_path / "W"
+    with lock.held(str(out)):
+        proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), "--n", "100", "--seed", "9",
+                               "--out", str(out)], capture_output=True, text=True, timeout=300)
+    one_line_error(proc, "in use by another run", "--wait")
+    assert sorted(p.name for p in out.iterdir()) == [".lock"]
