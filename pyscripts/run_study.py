@@ -116,7 +116,8 @@ def prepare(o, log):
     params["threads"] = engines.threads()
     specimen_file.save(path, scene, seed=o.seed, parameters=params, summary=specimen.state(scene))
     log("specimen: saved %s (%.1f s)" % (path, time.time() - t0))
-    return scene
+    # Everything after this starts from the file, as a rerun does: the same numbers either way.
+    return specimen_file.load(path)[0]
 
 
 def main(argv=None):
