@@ -132,7 +132,11 @@ def main(argv=None):
     with lock.held(o.out, wait=o.wait, log=log):
         if o.force_new:
             study_dir.supersede(o.out, log)
+        path = os.path.join(o.out, SPECIMEN)
+        options = dict(state_options=dict(friction=o.mu), recipe=recipe(o))
         scene = check_recipe(o, log)  # a refusal changes nothing
+        if scene is not None:
+            study.check(path, states, o.out, **options)  # the whole fingerprint, before anything is written
         study_dir.clean_strays(o.out, log)
         scene = scene or prepare(o, log)
         # The summary is derived; it is written again at the end, so a run that stops never
@@ -143,10 +147,8 @@ def main(argv=None):
         log("specimen: e = %.4f, Zm = %.3f, sigma = (%.2f, %.2f, %.2f) kPa, unbalanced = %.2e"
             % (st["void_ratio"], st["Zm"], st["sigma_x"] / 1e3, st["sigma_y"] / 1e3, st["sigma_z"] / 1e3,
                st["unbalanced"]))
-        path = os.path.join(o.out, SPECIMEN)
         try:
-            study.run_states(path, states, o.out, state_options=dict(friction=o.mu), recipe=recipe(o), log=log,
-                             progress_every=o.progress_every)
+            study.run_states(path, states, o.out, log=log, progress_every=o.progress_every, **options)
         except triaxial.StateNotReached as exc:
             cli.fail(str(exc), 1)
         sres = isotropic_statics(o.out, scene)

@@ -59,11 +59,9 @@ def fingerprint(specimen_meta, gamma, restrain_rotations, skip_detection, dampin
     return fp
 
 
-def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False,
-               skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None,
-               wait=False, force_new=False, progress_every=EVERY, recipe=None):
-    """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering, or
-    ``state_id``). Returns the complete rows of probes.csv after the run."""
+def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping, state_options,
+           probe_options, recipe):
+    """Every check that needs no work, then (ids, axes, specimen metadata, fingerprint)."""
     for i, b, sz in states:
         triaxial.validate_state(b, sz)  # every state checked before any work
     ids = [str(i) for i, _, _ in states]
@@ -79,6 +77,26 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                          "restrained: ask for --rotations restrained" % specimen_path)
     fp = fingerprint(spec_meta, gamma, restrain_rotations, skip_detection, damping, state_options,
                      probe_options, recipe)
+    return ids, axes, spec_meta, fp
+
+
+def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False, skip_detection=False,
+          damping=0.4, state_options=None, probe_options=None, recipe=None):
+    """What run_states checks before any work, alone (run_study.py asks before it writes anything):
+    the metadata of the study in `out` (None for a new one), or a refusal. The caller holds the lock."""
+    assert lock.is_held(out)
+    _, _, _, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping,
+                         state_options, probe_options, recipe)
+    return study_dir.check(out, fp, states)
+
+
+def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False,
+               skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None,
+               wait=False, force_new=False, progress_every=EVERY, recipe=None):
+    """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering, or
+    ``state_id``). Returns the complete rows of probes.csv after the run."""
+    ids, axes, spec_meta, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection,
+                                      damping, state_options, probe_options, recipe)
     record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),
                   states=ids, probes=axes,
                   versions=provenance.versions(),

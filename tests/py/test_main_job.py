@@ -105,6 +105,12 @@ def test_other_specimen_recipe_is_refused_before_preparing(first, tmp_path):
     one_line_error(proc, "another study", "--n 100 --seed 2", "--n 300 --seed 9", "--force-new", yade=True)
     assert "preparing" not in proc.stdout
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"} == before
+    # Same specimen, other loading friction: refused before the summary or anything else is touched.
+    proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
+                           "--ids", "1,5,9", "--mu", "0.3"], capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    one_line_error(proc, "another study", "state.friction")
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"} == before
 
 
 def test_kill_9_leaves_no_stale_summary_and_the_rerun_completes(first, tmp_path):
