@@ -5,7 +5,7 @@
 // exactly, which Hertz contacts allow without changing any stress (see Scene.hpp).
 #include <vector>
 
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

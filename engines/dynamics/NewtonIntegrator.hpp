@@ -3,7 +3,7 @@
 // NewtonIntegrator (each acceleration component scaled by 1 -/+ damping against the velocity),
 // plus the cell's deformation: positions follow the affine field of the cell's strain rates
 // and velocities are stored as fluctuations about it.
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

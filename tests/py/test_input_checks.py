@@ -141,7 +141,8 @@ def test_fabric_of_a_scene_without_contacts_is_refused():
             measure(s)
 
 
-SCRIPT_NAMES = sorted(n for n in os.listdir(SCRIPTS) if n.endswith(".py"))
+SCRIPT_NAMES = (sorted(n for n in os.listdir(SCRIPTS) if n.endswith(".py"))
+                + sorted("bench/" + n for n in os.listdir(os.path.join(SCRIPTS, "bench")) if n.endswith(".py")))
 
 
 @pytest.mark.parametrize("name", SCRIPT_NAMES)
@@ -152,7 +153,7 @@ def test_help_shows_defaults_and_a_whole_description(name):
     assert "--table" in text and "--line" in text
     doc = open(os.path.join(SCRIPTS, name)).read().split('"""')[1]
     first = " ".join(doc.strip().split("\n\n")[0].split())
-    assert first in text  # before: bench_statics.py's description stopped at "rotations free and"
+    assert first in text  # before: bench/bench_statics.py's description stopped at "rotations free and"
     if name in ("run_states.py", "prepare_specimen.py", "run_study.py"):
         assert "(default: 0.5)" in text and "--mu" in text  # the loading friction, with its default
         assert "--threads THREADS OpenMP threads" in text
