@@ -13,6 +13,7 @@
 #include "dynamics/Simulation.hpp"
 #include "dynamics/TimeStepper.hpp"
 #include "python/Numpy.hpp"
+#include "EngineSourceHash.hpp"  // generated at build time (cmake/EngineSourceHash.cmake)
 
 namespace trueaniso::py {
 
@@ -55,6 +56,8 @@ void setThreads(int n) {
 
 void exportEngines() {
   bp::def("threads", &maxThreads, "OpenMP threads the engines use.");
+  bp::def("source_hash", +[]() { return std::string(kEngineSourceHash); },
+          "SHA-256 of the engine sources this module was compiled from (cmake/EngineSourceHash.cmake).");
   bp::def("set_threads", &setThreads, "Set the OpenMP threads of the engines (OMP_NUM_THREADS is read only at start).");
   bp::class_<Engine, std::shared_ptr<Engine>, boost::noncopyable>("Engine", bp::no_init)
       .def("apply", &Engine::apply)

@@ -1,11 +1,16 @@
 """What produced a result: the code version a study is bound to, and the software around it.
 
-``code_version()`` is a SHA-256 over the sources that make the numbers: every file under engines/
-(the C++ physics and its build) and pyscripts/trueaniso/ (the package that composes it), by
-relative path and content. It changes exactly when that code changes, whether or not the tree is a
-git checkout, committed or not; edits to docs, tests, benchmarks, analysis/ (which only reads
-results, and is rerun on every study run) or the user scripts (whose options are recorded in the
-study's fingerprint) leave it alone. The git commit is recorded beside it for people, not compared.
+``code_version()`` hashes the code that makes the numbers, in two parts:
+- the engines: the hash of the C++ sources under engines/ that CMake compiled into the module
+  (``engines.source_hash()``, cmake/EngineSourceHash.cmake), so it is known wherever the module
+  is, installed or in a build tree. In a source tree the same hash is computed from engines/ and
+  compared: a module built from other sources than those beside it (edited, not rebuilt) is
+  refused, because its numbers would be credited to code that did not make them;
+- the package: the .py files of trueaniso itself, wherever it is imported from.
+It changes exactly when that code changes, committed or not, in a checkout or an installation;
+edits to docs, tests, benchmarks, analysis/ (which only reads results, and is rerun on every study
+run) or the user scripts (whose options are recorded in the study's fingerprint) leave it alone.
+The git commit is recorded beside it for people, not compared.
 """
 import functools
 import hashlib
@@ -13,34 +18,49 @@ import os
 import platform
 import sys
 
-from . import REPO_ROOT, __version__
+from . import REPO_ROOT, __version__, _HERE, engines
+from .refusal import Refusal
 
-SOURCE_DIRS = ("engines", os.path.join("pyscripts", "trueaniso"))
-SOURCE_SUFFIXES = (".cpp", ".hpp", ".h", ".py", ".txt", ".cmake")
+ENGINE_SUFFIXES = (".cpp", ".hpp", ".h", ".txt", ".cmake")
 
 
-def source_files(root=REPO_ROOT):
-    out = []
-    for top in SOURCE_DIRS:
-        for d, dirs, files in os.walk(os.path.join(root, top)):
-            dirs[:] = sorted(x for x in dirs if x != "__pycache__")
-            for name in sorted(files):
-                if name.endswith(SOURCE_SUFFIXES):
-                    out.append(os.path.relpath(os.path.join(d, name), root))
-    return sorted(out)
+class StaleBuild(Refusal):
+    """The compiled module was not built from the engine sources beside it."""
+
+
+def manifest_hash(root, top, suffixes):
+    """SHA-256 of the lines "path sha256(content)", sorted by path (the scheme of
+    cmake/EngineSourceHash.cmake; paths relative to root, '/'-separated)."""
+    lines = []
+    for d, dirs, files in os.walk(os.path.join(root, top)):
+        dirs[:] = [x for x in dirs if x != "__pycache__"]
+        for name in files:
+            if name.endswith(suffixes):
+                full = os.path.join(d, name)
+                with open(full, "rb") as f:
+                    digest = hashlib.sha256(f.read()).hexdigest()
+                lines.append((os.path.relpath(full, root).replace(os.sep, "/"), digest))
+    return hashlib.sha256("".join("%s %s\n" % x for x in sorted(lines)).encode()).hexdigest()
+
+
+def engine_source_hash(root=REPO_ROOT):
+    """The engines' hash compiled into the module, checked against engines/ when it is there."""
+    compiled = engines.source_hash()
+    if os.path.isdir(os.path.join(root, "engines")):
+        tree = manifest_hash(root, "engines", ENGINE_SUFFIXES)
+        if tree != compiled:
+            raise StaleBuild("the compiled module %s was built from other engine sources than %s "
+                             "(edited since the last build?); rebuild it: ./setup.sh, or cmake --build build"
+                             % (engines.__file__, os.path.join(root, "engines")))
+    return compiled
 
 
 @functools.lru_cache(maxsize=None)
 def code_version(root=REPO_ROOT):
-    """'src-' + the first 16 hex digits of the SHA-256 of the sources (module doc)."""
-    h = hashlib.sha256()
-    files = source_files(root)
-    for rel in files:
-        h.update(rel.replace(os.sep, "/").encode() + b"\0")
-        with open(os.path.join(root, rel), "rb") as f:
-            h.update(f.read())
-        h.update(b"\0")
-    return "src-" + h.hexdigest()[:16] if files else "unknown (no sources beside the package)"
+    """'src-' + 16 hex digits of the SHA-256 of the engines' and the package's hashes (module doc)."""
+    package = manifest_hash(os.path.dirname(_HERE), os.path.basename(_HERE), (".py",))
+    both = hashlib.sha256((engine_source_hash(root) + " " + package).encode()).hexdigest()
+    return "src-" + both[:16]
 
 
 @functools.lru_cache(maxsize=None)
@@ -61,7 +81,6 @@ def versions():
     """Code, interpreter, libraries, machine and engine threads."""
     import numpy as np
 
-    from . import engines
     out = dict(trueaniso=__version__, code=code_version(), git=git_commit(), python=platform.python_version(),
                numpy=np.__version__, machine=platform.machine(), threads=engines.threads())
     if "yade" in sys.modules:

@@ -26,12 +26,15 @@ def _env(prefix):
 
 
 def test_python_module_and_scripts_run_from_the_installation(prefix, tmp_path):
-    probe = ("import trueaniso, analysis.figures; e = trueaniso.engines; "
-             "print(e.__file__); print(trueaniso.__file__); print(e.PROBE_FRICTION)")
+    probe = ("import trueaniso, analysis.figures; from trueaniso import provenance; e = trueaniso.engines; "
+             "print(e.__file__); print(trueaniso.__file__); print(e.PROBE_FRICTION); print(provenance.code_version())")
     out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=_env(prefix), capture_output=True,
                          text=True, check=True).stdout.split()
     assert out[0].startswith(str(prefix)) and out[1].startswith(str(prefix))  # not the build tree
     assert float(out[2]) == 1e23
+    # the same sources installed are the same code: a study can be continued from the installation
+    from trueaniso import provenance
+    assert out[3] == provenance.code_version()
     script = prefix / "share" / "trueaniso" / "scripts" / "run_states.py"
     help_text = subprocess.run([sys.executable, str(script), "--help"], cwd=tmp_path, env=_env(prefix),
                                capture_output=True, text=True, check=True).stdout
