@@ -1,14 +1,18 @@
-"""Speed of the stepper against YADE's on the same consolidated packing (issue 2 benchmark).
+"""Speed of the stepper against YADE's and LAMMPS's on the same consolidated packing.
 
     /usr/bin/python3 pyscripts/bench/bench_stepper.py --specimen S.npz [--doc docs/benchmarks.md]
 
-Both codes run the same scene (spheres, periodic cell, contact history), the same fixed time step,
-local damping 0.2, the simplified Hertz-Mindlin law (ours: engines; YADE 2023.02a:
-Law2_ScGeom_MindlinPhys_Mindlin with InsertionSortCollider), on 1 and 2 OpenMP threads, each run
-in its own process (ours under /usr/bin/python3, YADE under yade-double -j N). The figure is
-particle-steps per second of the timed steps only (set-up excluded); repeats interleave the two
-codes and the median is reported. With --doc the table between the markers
-<!-- stepper:begin --> and <!-- stepper:end --> of that file is replaced.
+Every code runs the same scene (spheres, periodic cell) at the same fixed time step with the
+simplified Hertz-Mindlin law: ours (engines, local damping 0.2); YADE 2023.02a
+(Law2_ScGeom_MindlinPhys_Mindlin with InsertionSortCollider, local damping 0.2, yade-double -j N);
+LAMMPS (Debian's `lmp`) with `pair_style granular` (hertz/material + mindlin, the same law) and
+with `gran/hertz/history` (the same normal force and initial shear stiffness, a simpler shear
+update), no damping, fix nve/sphere, on N MPI ranks (the Debian build has no OpenMP package), from
+data files written by lammps_peer.py. LAMMPS's pair pressure at step 0 is checked against ours
+before its time counts: the same packing and law, or the run stops. Each run is its own process;
+the figure is particle-steps per second of the timed steps only (set-up excluded); repeats
+interleave the codes (their order rotates) and the median is reported. With --doc the table
+between the markers <!-- stepper:begin --> and <!-- stepper:end --> of that file is replaced.
 """
 import json
 import os
@@ -17,6 +21,7 @@ import re
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
@@ -53,21 +58,48 @@ def worker_yade(o):
                 pressure=float(-utils.getStress().trace() / 3))
 
 
+def worker_lammps(style, threads, o, dt, steps):
+    import lammps_peer
+    from trueaniso import engines, specimen_file
+    s, _ = specimen_file.load(o.specimen)
+    with tempfile.TemporaryDirectory(prefix="lammps-") as d:
+        lammps_peer.write_inputs(s, d, style, dt, steps)
+        r = lammps_peer.run(d, procs=threads)
+    ours = float(engines.stress(s).trace() / 3)
+    if not abs(r["pressure"] - ours) <= 1e-6 * abs(ours):  # the same packing and normal law
+        cli.fail("LAMMPS %s: pair pressure %.9g Pa at step 0, ours %.9g Pa: not the same scene" % (style, r["pressure"], ours), 1)
+    return dict(code="lammps " + style, steps=r["steps"], seconds=r["seconds"], n=r["atoms"], pressure=r["pressure"])
+
+
+CODES = ("ours", "yade", "lammps granular", "lammps gran/hertz/history")
+
+
 def options():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--specimen", required=True, help="specimen file (.npz) to step")
     p.add_argument("--worker", choices=("ours", "yade"), help="(internal) time one stepper in this process")
     p.add_argument("--dt", type=float, default=0.0, help="time step (s); 0: half the stiffness bound")
-    p.add_argument("--steps", type=int, default=0, help="timed steps (0: 20000 ours, 2000 YADE)")
+    p.add_argument("--steps", type=int, default=0, help="timed steps (0: 20000 ours and LAMMPS, 2000 YADE)")
+    p.add_argument("--codes", default="ours,yade,lammps granular,lammps gran/hertz/history",
+                   help="codes to time, comma separated, from: " + ", ".join(CODES))
     p.add_argument("--threads", default="1,2", help="thread counts to time, comma separated")
     p.add_argument("--repeats", type=int, default=3, help="timed runs per setting (the best is kept)")
     p.add_argument("--doc", help="Markdown file whose stepper table is replaced")
-    return cli.parse(p)
+    o = cli.parse(p)
+    o.codes = [c.strip() for c in o.codes.split(",") if c.strip()]
+    for c in o.codes:
+        if c not in CODES:
+            cli.fail("--codes: %r is not one of %s" % (c, ", ".join(CODES)))
+    if "ours" not in o.codes:
+        cli.fail("--codes must include ours (every ratio is against it)")
+    return o
 
 
 def run_worker(code, threads, o, dt):
     me = os.path.abspath(os.path.join(HERE, "bench_stepper.py"))
-    steps = o.steps or (20000 if code == "ours" else 2000)
+    steps = o.steps or (2000 if code == "yade" else 20000)
+    if code.startswith("lammps"):
+        return worker_lammps(code.split(" ", 1)[1], threads, o, dt, steps)
     args = ["--specimen", o.specimen, "--worker", code, "--dt", repr(dt), "--steps", str(steps)]
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
     cmd = (["/usr/bin/python3", me] if code == "ours" else ["yade-double", "-j", str(threads), "-n", "-x", me]) + args
@@ -102,23 +134,29 @@ def main():
     threads = [int(t) for t in o.threads.split(",")]
     rows = []
     for th in threads:
-        res = dict(ours=[], yade=[])
+        res = {c: [] for c in o.codes}
         for rep in range(o.repeats):
-            for code in (("ours", "yade") if rep % 2 == 0 else ("yade", "ours")):
+            k = rep % len(o.codes)
+            for code in o.codes[k:] + o.codes[:k]:  # the order rotates, so no code always runs first
                 r = run_worker(code, th, o, dt)
                 res[code].append(r["n"] * r["steps"] / r["seconds"])
-                print("threads %d %-5s %.3f M particle-steps/s" % (th, code, res[code][-1] / 1e6), flush=True)
-        ours, yade = statistics.median(res["ours"]), statistics.median(res["yade"])
-        rows.append((th, ours, yade))
+                print("threads %d %-26s %.3f M particle-steps/s" % (th, code, res[code][-1] / 1e6), flush=True)
+        rows.append((th, {c: statistics.median(v) for c, v in res.items()}))
     n = s.num_bodies
+    names = {"ours": "trueaniso", "yade": "YADE Mindlin", "lammps granular": "LAMMPS granular (mindlin)",
+             "lammps gran/hertz/history": "LAMMPS gran/hertz/history"}
+    others = [c for c in o.codes if c != "ours"]
     lines = ["Machine: %s. Specimen: %d spheres at 100 kPa (e = %.3f, Zm = %.2f), time step %.3g s, "
-             "damping 0.2, medians of %d interleaved runs, %s."
+             "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
+             "Figures in M particle-steps/s; ratios: ours / theirs."
              % (machine(), n, meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d")), "",
-             "| threads | trueaniso (M particle-steps/s) | YADE Mindlin (M particle-steps/s) | ratio |",
-             "|---|---|---|---|"]
-    for th, ours, yade in rows:
-        lines.append("| %d | %.2f | %.3f | %.1f |" % (th, ours / 1e6, yade / 1e6, ours / yade))
+             "| threads | %s |" % " | ".join(["trueaniso"] + ["%s | ratio" % names[c] for c in others]),
+             "|" + "---|" * (2 + 2 * len(others))]
+    for th, med in rows:
+        cells = ["%.2f" % (med["ours"] / 1e6)] + ["%.3f | %.2f" % (med[c] / 1e6, med["ours"] / med[c]) for c in others]
+        lines.append("| %d | %s |" % (th, " | ".join(cells)))
+
     lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_stepper.py --specimen %s --doc docs/benchmarks.md`"
               % os.path.relpath(o.specimen)]
     table = "\n".join(lines)
