@@ -4,6 +4,8 @@
     yade-double -n -x pyscripts/run_states.py --specimen S.npz --states 0.5:140e3,0:60e3 --out results/x
     /usr/bin/python3 pyscripts/run_states.py --specimen S.npz --ids 1,5,21 --out results/y
     yade-batch states.table pyscripts/run_states.py      (one run per table line; docs/runs.md)
+    mpiexec -n 3 /usr/bin/python3 -m mpi4py.futures pyscripts/run_states.py --mpi --table-c1 ...
+                                                         (loading paths on 2 MPI workers; docs/runs.md)
 
 Writes probes.csv (one row per state and probe direction), metadata.json (the study's fingerprint)
 and a checkpoint per state. The output directory is one study: a rerun continues it (adding
@@ -44,6 +46,9 @@ def parser():
                                                        "refusing")
     p.add_argument("--force-new", action="store_true",
                    help="start a new study in --out: the old one is moved into --out/superseded/, not deleted")
+    p.add_argument("--mpi", action="store_true",
+                   help="walk the loading paths on MPI workers: start as mpiexec -n K /usr/bin/python3 -m "
+                        "mpi4py.futures pyscripts/run_states.py --mpi ... (K-1 workers; --threads defaults to 1)")
     p.add_argument("--progress-every", type=cli.non_negative, default=progress.EVERY,
                    help="seconds between progress lines of long work (0: after every chunk of steps)")
     return p
@@ -89,9 +94,27 @@ def check_probe_options(o):
     resources.check_threads(o.threads)
 
 
+def mpi_executor(o):
+    """The MPI pool of `python3 -m mpi4py.futures` (None without --mpi), checked before any work."""
+    if not o.mpi:
+        return None
+    try:
+        from mpi4py import MPI
+        from mpi4py.futures import MPIPoolExecutor
+    except ImportError:
+        raise cli.InputError("--mpi needs mpi4py (Debian: python3-mpi4py openmpi-bin)") from None
+    if MPI.COMM_WORLD.Get_size() < 2:
+        raise cli.InputError("--mpi: no MPI workers; start as mpiexec -n K /usr/bin/python3 -m mpi4py.futures "
+                             "pyscripts/run_states.py --mpi ... with K >= 2 (K-1 workers)")
+    if not o.threads:
+        o.threads = 1  # workers x threads within the cores; a thread count is part of the study
+    return MPIPoolExecutor()
+
+
 def main(argv=None):
     o = cli.parse(parser(), argv)
     states = validate(o)
+    executor = mpi_executor(o)
     if o.threads:
         from trueaniso import engines
         engines.set_threads(o.threads)
@@ -100,9 +123,12 @@ def main(argv=None):
                          restrain_rotations=o.rotations == "restrained", skip_detection=o.skip_detection,
                          damping=o.damping, state_options=dict(friction=o.mu), wait=o.wait,
                          force_new=o.force_new, progress_every=o.progress_every,
-                         log=lambda m: print(m, flush=True))
+                         log=lambda m: print(m, flush=True), executor=executor)
     except triaxial.StateNotReached as exc:
         cli.fail(str(exc), 1)
+    finally:
+        if executor is not None:
+            executor.shutdown(wait=False, cancel_futures=True)
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing

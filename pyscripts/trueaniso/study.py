@@ -92,16 +92,25 @@ def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rot
 
 def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False,
                skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None,
-               wait=False, force_new=False, progress_every=EVERY, recipe=None):
+               wait=False, force_new=False, progress_every=EVERY, recipe=None, executor=None):
     """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering, or
-    ``state_id``). Returns the complete rows of probes.csv after the run."""
+    ``state_id``). Returns the complete rows of probes.csv after the run.
+
+    executor: a concurrent.futures executor (e.g. mpi4py.futures.MPIPoolExecutor) whose workers
+    each walk whole loading paths (the unit of work: a path's states follow one another). Workers
+    write their states' checkpoints (atomic files, one path each, never shared) and hand their
+    rows back; this process alone, holding the lock, appends them to probes.csv as paths end. A
+    worker computes exactly what this process would (every piece of work starts from a file, at
+    the study's thread count), so the values equal a serial run's; rows arrive in path-completion
+    order."""
     ids, axes, spec_meta, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection,
                                       damping, state_options, probe_options, recipe)
     record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),
                   states=ids, probes=axes,
                   versions=provenance.versions(),
                   specimen=dict(path=os.path.abspath(specimen_path), sha256=spec_meta["sha256"],
-                                seed=spec_meta["seed"], summary=spec_meta.get("summary")))
+                                seed=spec_meta["seed"], summary=spec_meta.get("summary"),
+                                material=spec_meta.get("material")))
     csv_path = os.path.join(out, CSV_NAME)
     with lock.held(out, wait=wait, log=log):
         if force_new:
@@ -124,20 +133,73 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                    dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
                         damping=damping, **(probe_options or {})),
                    dict(damping=damping, **(state_options or {})))
-        for (b, side), path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0])):
-            run.path(path)
+        ordered = [path for _, path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
+        if executor is None:
+            for path in ordered:
+                run.path(path)
+        else:
+            _run_paths_on(executor, run, ordered)
         return results_csv.read(csv_path).rows
+
+
+def _run_paths_on(executor, run, paths):
+    """Paths with work left go to the executor's workers; their rows are appended here, in the
+    order paths end. A failed path stops the run (the rows of paths already ended are kept)."""
+    import concurrent.futures as cf
+    todo = [p for p in paths if any(run.wanted(sid) for sid, _, _ in p)]
+    run.log("%d loading paths with work left, on %s" % (len(todo), type(executor).__name__))
+    futures = {executor.submit(_path_worker, run.job(p)): p for p in todo}
+    try:
+        for fut in cf.as_completed(futures):
+            rows = fut.result()
+            for row, columns in rows:
+                run.append(row, columns)
+            run.log("path of states %s: %d rows appended" % (",".join(str(s[0]) for s in futures[fut]), len(rows)))
+    finally:
+        for f in futures:
+            f.cancel()
+
+
+def _path_worker(job):
+    """One loading path in a worker process: its checkpoints written, its rows returned."""
+    engines.set_threads(job["fp"]["threads"])  # the study's thread count: the same bits as serial
+    rows = []
+    run = _Run(job["specimen_path"], job["spec_meta"], job["out"], job["fp"], job["axes"], None,
+               results_csv.Table(None, job["columns"], [], None), lambda m: print(m, flush=True), job["every"],
+               job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)))
+    run.done = set(job["done"])
+    run.path(job["path"])
+    return rows
 
 
 class _Run:
     """One run's walk over the loading paths (the caller holds the lock)."""
 
-    def __init__(self, specimen_path, spec_meta, out, fp, axes, csv_path, table, log, every, probe_kw, state_kw):
+    def __init__(self, specimen_path, spec_meta, out, fp, axes, csv_path, table, log, every, probe_kw, state_kw,
+                 sink=None):
         self.specimen_path, self.spec_meta, self.out, self.fp = specimen_path, spec_meta, out, fp
         self.axes, self.csv_path, self.log, self.every = axes, csv_path, log, every
         self.columns = list(table.columns)
         self.done = {(r["state"], r["probe"]) for r in table.rows}
         self.probe_kw, self.state_kw = probe_kw, state_kw
+        self.sink = sink or self.append
+
+    def job(self, path):
+        """What a worker needs to walk `path` as this run would (picklable)."""
+        return dict(specimen_path=self.specimen_path, spec_meta=self.spec_meta, out=self.out, fp=self.fp,
+                    axes=self.axes, columns=self.columns, every=self.every, probe_kw=self.probe_kw,
+                    state_kw=self.state_kw, done=sorted(self.done), path=path)
+
+    def append(self, row, columns):
+        """A row into probes.csv (this process holds the lock)."""
+        if not self.columns:
+            self.columns = list(columns)
+        if set(row) != set(self.columns):
+            raise study_dir.StudyMismatch("%s has other columns than this trueaniso writes; %s"
+                                          % (self.csv_path, study_dir.WAY_OUT
+                                             % os.path.join(self.out, study_dir.SUPERSEDED)))
+        results_csv.append(self.csv_path, row, self.columns)
+        self.done.add((str(row["state"]), row["probe"]))
 
     def checkpoint(self, sid):
         return os.path.join(self.out, "states", "%s.npz" % sid)
@@ -220,13 +282,7 @@ class _Run:
                        probe_wall_time=r["wall_time"], state_steps=p["steps"], state_wall_time=p["wall_time"],
                        state_from=p["start"])
             row.update(extra)
-            if not self.columns:
-                self.columns = COLUMNS + list(extra)
-            if set(row) != set(self.columns):
-                raise study_dir.StudyMismatch("%s has other columns than this trueaniso writes; %s"
-                                              % (self.csv_path, study_dir.WAY_OUT
-                                                 % os.path.join(self.out, study_dir.SUPERSEDED)))
-            results_csv.append(self.csv_path, row, self.columns)
+            self.sink(row, self.columns or COLUMNS + list(extra))
             self.done.add((str(sid), name))
             self.log("state %s: probe %s  E = %.1f MPa  %s = %.4f  %s = %.4f  (%d steps, %.1f s)"
                      % (sid, name, r["E"] / 1e6, nus[0], r[nus[0]], nus[1], r[nus[1]], r["steps"], r["wall_time"]))
