@@ -1,6 +1,9 @@
-"""LAMMPS as a speed peer on our own packings (Debian's `lammps`, binary `lmp`, package GRANULAR).
+"""LAMMPS input and data files from one of our specimens, and a LAMMPS run timed and checked.
 
-Our specimen is written as a LAMMPS data file (atom_style sphere, units si, the periodic box) with
+    /usr/bin/python3 pyscripts/bench/lammps_peer.py --specimen S.npz --out DIR [--style granular] [--run]
+
+LAMMPS is a speed peer (Debian's `lammps`, binary `lmp`, package GRANULAR); bench_stepper.py uses
+this module. Our specimen is written as a LAMMPS data file (atom_style sphere, units si, the periodic box) with
 an input script for one of two pair styles:
  - `granular`: pair_coeff hertz/material E 0 nu, tangential mindlin NULL 0 mu. Its Hertz normal
    force (4/3) E* sqrt(R*) delta^1.5 with E* = E/(2(1-nu^2)) = G/(1-nu), and Mindlin's
@@ -16,8 +19,14 @@ import math
 import os
 import re
 import subprocess
+import sys
 
 import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+if os.path.dirname(HERE) not in sys.path:
+    sys.path.insert(0, os.path.dirname(HERE))  # trueaniso
+from trueaniso import cli  # noqa: E402
 
 STYLES = ("granular", "gran/hertz/history")
 
@@ -74,3 +83,31 @@ def run(directory, procs=1, timeout=3600):
     p0 = re.search(r"Step\s+c_pair_pressure\s*\n\s*0\s+([0-9.eE+-]+)", log)
     return dict(seconds=float(seconds), procs=int(nproc), steps=int(steps), atoms=int(atoms),
                 pressure=float(p0.group(1)) if p0 else math.nan)
+
+
+def main():
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimen", required=True, help="specimen file (.npz)")
+    p.add_argument("--out", required=True, help="directory for data.lmp and in.lmp")
+    p.add_argument("--style", default="granular", choices=STYLES, help="LAMMPS pair style")
+    p.add_argument("--steps", type=int, default=1000, help="timed steps in in.lmp")
+    p.add_argument("--dt", type=float, default=0.0, help="time step (s); 0: half our stiffness bound")
+    p.add_argument("--run", action="store_true", help="also run LAMMPS there and compare its pressure with ours")
+    p.add_argument("--procs", type=int, default=1, help="MPI ranks for --run")
+    o = cli.parse(p)
+    if o.steps < 1 or o.procs < 1 or o.dt < 0:
+        cli.fail("--steps and --procs must be >= 1 and --dt >= 0")
+    from trueaniso import engines, specimen_file
+    s, _ = specimen_file.load(o.specimen)
+    dt = o.dt or 0.5 * engines.TimeStepper.stiffness_bound(s)
+    write_inputs(s, o.out, o.style, dt, o.steps)
+    print("wrote %s (data.lmp, in.lmp: %d steps of %g s, pair style %s)" % (o.out, o.steps, dt, o.style))
+    if o.run:
+        r = run(o.out, o.procs)
+        ours = float(engines.stress(s).trace() / 3)
+        print("LAMMPS: %.3f M particle-steps/s on %d ranks; pair pressure at step 0 %.9g Pa, ours %.9g Pa"
+              % (r["atoms"] * r["steps"] / r["seconds"] / 1e6, r["procs"], r["pressure"], ours))
+
+
+if __name__ == "__main__":
+    cli.guarded(main)
