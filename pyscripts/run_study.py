@@ -8,7 +8,8 @@
    on z, x and y (docs/triaxial.md), with the micro-structure of each state (docs/fabric.md);
 3. the exact static stiffness at the isotropic state and the rotation factor zeta it implies
    (docs/statics.md), and zeta fitted on the contrast over the probed states (analysis/zeta_contrast.py);
-4. figures (E_i against sigma_i, K and G against Zm) and a summary.
+4. figures (E_i against sigma_i, K and G against Zm), the report beside the paper's numbers
+   (OUT/report/report.md, analysis/report.py) and a summary.
 The output directory is one study (docs/runs.md): a rerun continues it where it stopped, also
 after a kill, and may add states (--ids 1,5 then --ids 1,5,9); a rerun that asks for another
 specimen or other settings refuses in one line.
@@ -20,7 +21,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
-from analysis import figures, zeta_contrast  # noqa: E402
+from analysis import figures, report, zeta_contrast  # noqa: E402
 from trueaniso import (atomic, cli, engines, lock, progress, resources, specimen, specimen_file,  # noqa: E402
                        study, study_dir, triaxial)
 
@@ -169,10 +170,12 @@ def main(argv=None):
         rows = study.read_rows(csv_path)
         figures.modulus_vs_stress(rows, os.path.join(fig_dir, "E_vs_sigma.png"))
         fits = figures.scalar_moduli_vs_zm(rows, os.path.join(fig_dir, "K_G_vs_Zm.png"))
+        report_path, _ = report.build(o.out, os.path.join(o.out, "report"), log=log)
         atomic.write_json(os.path.join(o.out, "summary.json"), dict(
             specimen=st, states=len({r["state"] for r in rows}), probes=len(rows), statics=sres, K_G_fits=fits,
-            zeta_contrast=contrast, wall_time=time.time() - t0))
+            zeta_contrast=contrast, report=os.path.relpath(report_path, o.out), wall_time=time.time() - t0))
     log("results: %s (probes.csv, figures/, summary.json) in %.0f s" % (o.out, time.time() - t0))
+    log("report: %s" % report_path)
     if cli.in_yade():
         from trueaniso import yade_bridge
         yade_bridge.yade_scene_from(scene, import_contacts=False)

@@ -1,0 +1,140 @@
+"""The paper's analysis chain (sections 3.1 and 4), from a study's probe table.
+
+Per state: the DEM E_i (three axial probes) and nu_ij, K and G of the hyperelastic model (Eqs.
+21-22 inverted, hyperelastic.scalar_moduli), the DEM a_i^2 (Eq. 25) and the micromechanical a_i^2
+from the state's fabric (B, M, Nc/V of the row; Eqs. 37-40 with zeta in the directional form
+sqrt(zeta_i zeta_k), trueaniso.zeta). Over the states:
+- Table 2: K(Zm) and G(Zm) as quadratics, with R^2 (Fig. 11);
+- Fig. 13: micromechanical against DEM a_i^2 at zeta = 1, at the paper's 0.552 and at the value
+  fitted on the contrast (analysis.zeta_contrast);
+- Figs 14-15: E_i and nu_ij predicted through Eqs. 21-22 from K(Zm), G(Zm) of the Table 2 fits and
+  the micromechanical a_i^2, against the DEM values, with RMSE (nu: absolute, as the paper's
+  0.003; E: relative);
+- Fig. 4a: E_i/E_j against sigma_i/sigma_j, the power-law exponent m of E_i/E_j = (sigma_i/sigma_j)^m
+  (a least-squares line through the origin in log-log, all six ordered pairs of every state).
+Everything here reads numbers already in the table; nothing is simulated.
+"""
+import numpy as np
+
+from . import hyperelastic, zeta_contrast
+from trueaniso import zeta as _zeta  # noqa: E402 - analysis.results put pyscripts/ on the path
+
+AXES = "xyz"
+PAPER_ZETA = _zeta.PAPER_ZETA  # section 4.2, zeta_h = zeta_v = 0.552 for spheres
+# Paper values the report stands beside (Table 2 in MPa; section 4.3; Table B1 in MPa).
+PAPER = dict(
+    spheres=dict(K=(1902.7, -22607.0, 67289.1), G=(3386.1, -40197.0, 119436.5), nu_rmse=0.003, zeta=(0.552, 0.552),
+                 B1={"isotropic": dict(pred=(456.9, 456.9, 456.9), dem=(418.7, 418.7, 418.7)),
+                     "21": dict(pred=(455.4, 400.8, 489.7), dem=(415.3, 367.2, 446.5))},
+                 B1_fcc=dict(pred=386.7, dem=386.1)),
+    clump1=dict(K=(-10.2, 151.9, -423.7), G=(-4.7, 120.0, -429.6), nu_rmse=0.036,
+                B1={"isotropic": dict(pred=(340.5, 340.5, 648.0), dem=(306.0, 306.0, 581.5)),
+                    "21": dict(pred=(335.5, 287.6, 684.7), dem=(297.3, 255.4, 604.2))}),
+    clump2=dict(K=(48.1, -577.4, 1841.7), G=(101.7, -1229.9, 3814.8), nu_rmse=0.004,
+                B1={"isotropic": dict(pred=(490.5, 490.5, 413.1), dem=(405.1, 405.1, 346.2)),
+                    "21": dict(pred=(488.5, 441.6, 442.1), dem=(399.9, 356.6, 371.2))}),
+)
+
+
+def state_table(rows):
+    """The complete states of one rotations setting: dict of arrays over states, in file order:
+    state ids, Zm, sigma (n, 3), E (n, 3), nu (n, 3, 3), K, G (Pa), a2_dem (n, 3). States without
+    all three axial probes or all six nu_ij are left out (a study still running)."""
+    per_state = hyperelastic.states_from_rows(rows)
+    off = ~np.eye(3, dtype=bool)
+    out = dict(state=[], Zm=[], sigma=[], E=[], nu=[], K=[], G=[])
+    for sid, st in per_state.items():
+        if not (np.all(np.isfinite(st["E"])) and np.all(np.isfinite(st["nu"][off]))):
+            continue
+        m = hyperelastic.scalar_moduli(st["E"], st["nu"])
+        out["state"].append(sid)
+        for k, v in (("Zm", st["Zm"]), ("sigma", st["sigma"]), ("E", st["E"]), ("nu", st["nu"]), ("K", m["K"]),
+                     ("G", m["G"])):
+            out[k].append(v)
+    res = {k: (v if k == "state" else np.array(v, dtype=float)) for k, v in out.items()}
+    res["a2_dem"] = hyperelastic.fabric_a2(res["E"]) if len(res["state"]) else np.zeros((0, 3))
+    return res
+
+
+def table2(tab):
+    """Quadratic fits of K and G (MPa) against Zm: {K: (c1, c2, c3, R^2), G: ...}; None below 3 states."""
+    if len(tab["state"]) < 3:
+        return None
+    out = {}
+    for name in ("K", "G"):
+        c, r2 = hyperelastic.quadratic_fit(tab["Zm"], tab[name] / 1e6)
+        out[name] = (float(c[0]), float(c[1]), float(c[2]), r2)
+    return out
+
+
+def micromechanical_a2(parts, zeta_h, zeta_v):
+    """a_i^2 of Eq. (25) applied to the micromechanical E_i of every state (n, 3)."""
+    A_n, A_s = parts
+    return _zeta.predicted_a_squared(A_n, A_s, zeta_h, zeta_v)
+
+
+def fit_contrast(E, A_n, A_s):
+    """zeta_h, zeta_v fitted on the contrast a_i^2 over the states (trueaniso.zeta.fit_contrast)."""
+    return _zeta.fit_contrast(E, A_n, A_s, min_states=2)
+
+
+def predictions(tab, fits, a2_mic):
+    """Figs 14-15: E_i (n, 3) and nu_ij (n, 3, 3) from Eqs. (21)-(22) with K(Zm) and G(Zm) of the
+    Table 2 fits and the given a_i^2; with their RMSE against the DEM values."""
+    K = np.polyval(fits["K"][:3], tab["Zm"]) * 1e6
+    G = np.polyval(fits["G"][:3], tab["Zm"]) * 1e6
+    E = np.empty_like(tab["E"])
+    nu = np.empty_like(tab["nu"])
+    for k in range(len(K)):
+        E[k], nu[k], _ = hyperelastic.predicted(K[k], G[k], a2_mic[k])
+    off = ~np.eye(3, dtype=bool)
+    nu_err = (nu - tab["nu"])[:, off]
+    return dict(E=E, nu=nu, E_rel_rmse=float(np.sqrt(np.mean(((E - tab["E"]) / tab["E"]) ** 2))),
+                nu_rmse=float(np.sqrt(np.mean(nu_err ** 2))))
+
+
+def stress_ratio_exponent(tab):
+    """Fig. 4a: m in E_i/E_j = (sigma_i/sigma_j)^m over all ordered pairs i != j of every state,
+    least squares through the origin in log-log; with R^2 of that line and the points."""
+    x, y = [], []
+    for s, E in zip(tab["sigma"], tab["E"]):
+        for i in range(3):
+            for j in range(3):
+                if i != j:
+                    x.append(np.log(s[i] / s[j]))
+                    y.append(np.log(E[i] / E[j]))
+    x, y = np.array(x), np.array(y)
+    if len(x) == 0 or not np.any(x != 0):
+        return None
+    m = float(np.dot(x, y) / np.dot(x, x))
+    r2 = 1 - np.sum((y - m * x) ** 2) / np.sum(y ** 2)
+    return dict(m=m, r2=float(r2), log_sigma_ratio=x, log_E_ratio=y)
+
+
+def fabric_parts(path, tab, shear_modulus, poisson, rotations):
+    """(A_n, A_s) per state of `tab` (same order), from the fabric columns of the probe table."""
+    for src in zeta_contrast.sources(path, shear_modulus, poisson, complete_only=True):
+        if src["rotations"] != rotations:
+            continue
+        index = {s: k for k, s in enumerate(src["states"])}
+        A_n, A_s = zeta_contrast.parts_of(src)
+        pick = [index[s] for s in tab["state"]]
+        return A_n[pick], A_s[pick]
+    return None
+
+
+def zeta_per_state(tab, parts, reference):
+    """One zeta (zeta_h = zeta_v) per state, fitted on that state's a_i^2 divided by those of the
+    reference state (Appendix B's reference point), as the issue's zeta-against-Zm analysis does:
+    {state: zeta or None where the contrast does not depend on zeta}."""
+    A_n, A_s = parts
+    ref = (tab["E"][reference], A_n[reference], A_s[reference])
+    out = {}
+    for k, sid in enumerate(tab["state"]):
+        if k == reference:
+            continue
+        try:
+            out[sid] = _zeta.fit_common(tab["E"][[k]], A_n[[k]], A_s[[k]], min_states=1, reference=ref)["zeta"]
+        except ValueError:
+            out[sid] = None
+    return out

@@ -1,0 +1,113 @@
+"""The paper's analysis chain (analysis/chain.py) against hand-computed values, and the report
+(analysis/report.py) built from a small fixed probe table: eight states of the committed
+4000-sphere, 39-state study (docs/data/table-c1-spheres-4000.csv)."""
+import csv
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import REPO
+from analysis import chain, hyperelastic, report
+
+DATA = os.path.join(REPO, "docs", "data", "table-c1-spheres-4000.csv")
+STATES = ("1", "5", "9", "13", "21", "25", "29", "37")
+
+
+@pytest.fixture(scope="module")
+def small_table(tmp_path_factory):
+    path = tmp_path_factory.mktemp("report") / "probes.csv"
+    with open(DATA) as f:
+        rows = list(csv.reader(f))
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(rows[0])
+        w.writerows(r for r in rows[1:] if r[0] in STATES)
+    return str(path)
+
+
+def test_eq21_22_prediction_by_hand():
+    # K = 150, G = 120 MPa; a^2 = (1.1, 1.0, 1/1.1): det a = 1
+    K, G, a2 = 150e6, 120e6, np.array([1.1, 1.0, 1 / 1.1])
+    E, nu, Gij = hyperelastic.predicted(K, G, a2)
+    E0 = 9 * K * G / (3 * K + G)  # 9*150*120/(450+120) = 284.2105 MPa
+    assert E0 == pytest.approx(284.2105263e6, rel=1e-9)
+    assert E == pytest.approx(E0 * a2 ** 2, rel=1e-12)
+    nu0 = (3 * K - 2 * G) / (2 * (3 * K + G))  # (450-240)/(2*570) = 0.184210526
+    assert nu[0, 2] == pytest.approx(0.184210526 * 1.1 * 1.1, rel=1e-8)  # a_x^2/a_z^2 = 1.21
+    assert nu[2, 0] == pytest.approx(nu0 / 1.21, rel=1e-12)
+    assert Gij[2] == pytest.approx(G * 1.1, rel=1e-12)  # G_xy = G a_x^2 a_y^2
+
+
+def test_eq25_inverts_eq21_with_det_a_one():
+    a2 = np.array([1.07, 0.96, 1 / (1.07 * 0.96)])
+    E = 300e6 * a2 ** 2
+    back = hyperelastic.fabric_a2(E)
+    assert back == pytest.approx(a2, rel=1e-12)
+    assert np.prod(back) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_table2_fit_recovers_known_coefficients():
+    zm = np.linspace(5.6, 5.95, 12)
+    c_K, c_G = (1902.7, -22607.0, 67289.1), (-10.2, 151.9, -423.7)
+    tab = dict(state=[str(k) for k in range(12)], Zm=zm, K=np.polyval(c_K, zm) * 1e6, G=np.polyval(c_G, zm) * 1e6)
+    fits = chain.table2(tab)
+    assert fits["K"][:3] == pytest.approx(c_K, rel=1e-6) and fits["K"][3] == pytest.approx(1.0, abs=1e-12)
+    assert fits["G"][:3] == pytest.approx(c_G, rel=1e-6)
+    assert chain.table2(dict(tab, state=["a", "b"], Zm=zm[:2], K=tab["K"][:2], G=tab["G"][:2])) is None
+
+
+def test_stress_ratio_exponent_of_an_exact_power_law():
+    sig = np.array([[100e3, 60e3, 140e3], [90e3, 105e3, 105e3], [120e3, 100e3, 80e3]])
+    tab = dict(sigma=sig, E=300e6 * (sig / 100e3) ** 0.45)
+    exp = chain.stress_ratio_exponent(tab)
+    assert exp["m"] == pytest.approx(0.45, rel=1e-12) and exp["r2"] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_predictions_reproduce_states_that_obey_the_model():
+    """States made by Eqs. 21-22 from K(Zm), G(Zm) and known a^2 are predicted exactly (RMSE 0)."""
+    zm = np.array([5.95, 5.9, 5.8, 5.7])
+    fits = dict(K=(0.0, 40.0, -100.0, 1.0), G=(0.0, 30.0, -40.0, 1.0))
+    a2 = np.array([[1.0, 1.0, 1.0], [1.02, 0.97, 1 / (1.02 * 0.97)], [0.95, 1.0, 1 / 0.95], [1.05, 1.05, 1 / 1.05 ** 2]])
+    E = np.empty((4, 3))
+    nu = np.empty((4, 3, 3))
+    for k in range(4):
+        E[k], nu[k], _ = hyperelastic.predicted(np.polyval(fits["K"][:3], zm[k]) * 1e6,
+                                                np.polyval(fits["G"][:3], zm[k]) * 1e6, a2[k])
+    p = chain.predictions(dict(Zm=zm, E=E, nu=nu), fits, a2)
+    assert p["E_rel_rmse"] < 1e-14 and p["nu_rmse"] < 1e-14
+    p = chain.predictions(dict(Zm=zm, E=E, nu=nu + 0.01), fits, a2)
+    assert p["nu_rmse"] == pytest.approx(0.01, rel=1e-9)
+
+
+def test_report_from_a_small_fixed_table(small_table, tmp_path):
+    out = tmp_path / "rep"
+    path, numbers = report.build(small_table, str(out), log=lambda m: None)
+    text = open(path).read()
+    n = numbers["free"]
+    assert n["states"] == len(STATES)
+    # the same numbers as the chain computes directly, in the report's tables
+    tab = chain.state_table([r for r in csv.DictReader(open(small_table))])
+    fits = chain.table2(tab)
+    assert n["table2"]["K"] == pytest.approx(fits["K"])
+    assert "| K ours | %.1f | %.1f | %.1f | %.4f |" % fits["K"] in text
+    assert "| zeta = 0.552 (paper) |" in text and "| paper (spheres, 0.552) | | | 0.003 |" in text
+    # Zm of these states spans the contact loss; zeta follows it (issue 14's finding)
+    assert 5.59 < n["Zm"][0] < 5.7 and 5.94 < n["Zm"][1] < 5.96
+    assert 0.3 < n["m"] < 0.5
+    for fig in ("fig3-E-vs-sigma.png", "fig11-K-G-vs-Zm.png", "fig13-a2.png", "fig14-E.png", "fig15-nu.png", "fig4a.png", "zeta-vs-Zm.png"):
+        assert (out / fig).stat().st_size > 5000 and "](%s)" % fig in text
+    assert "## Departures from the paper" in text and "763.97" in text
+    assert "Not in this study" in text  # no statics_isotropic.json beside a bare table
+
+
+def test_report_refuses_a_wrong_material_and_bad_input(small_table, tmp_path):
+    run = lambda *a: subprocess.run([sys.executable, "-m", "analysis.report", *a], cwd=REPO,  # noqa: E731
+                                    capture_output=True, text=True)
+    proc = run(small_table, "--out", str(tmp_path / "r"), "--shear-modulus", "28e9")
+    assert proc.returncode == 2 and proc.stderr.startswith("error:") and "mic_E" in proc.stderr
+    proc = run(str(tmp_path / "missing.csv"))
+    assert proc.returncode == 2 and "does not exist" in proc.stderr
+    assert not (tmp_path / "r" / "report.md").exists()
