@@ -1,0 +1,111 @@
+"""Steps to reach a state: the servo's path rate against the whole load at once, on Table C1 states.
+
+    /usr/bin/python3 pyscripts/bench/bench_state_speed.py --specimen S.npz [--ids 1,5,21] \
+        [--rates 2,inf] [--doc docs/state-speed.md] [--csv docs/data/state-speed-N.csv]
+
+Every state is reached from the specimen itself (not along its path, so that each pair compares
+the two ways from the same start), once per path rate (Pa per step; inf: the goal jumps to the
+state at once and the servo relaxes onto it, its strain rate capped by the inertial number as
+always). At each reached state: Zm, void ratio, and E_i, nu_ij of the exact static solve
+(rotations free; noise-free, so a difference is the state's, not a probe's). The table gives,
+per state, the steps and wall time of each way and the differences of the fast way from the
+first: |dZm|, max |dE_i/E_i|, max |dnu_ij|, beside the default probe's own error (6.0e-4 in E,
+1.1e-4 in nu against the static solve; docs/speed-vs-error.md).
+"""
+import csv
+import math
+import os
+import re
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
+from trueaniso import cli  # noqa: E402
+
+PROBE_ERROR_E, PROBE_ERROR_NU = 6.0e-4, 1.1e-4  # docs/speed-vs-error.md, default probe, 1000-16,000 spheres
+
+
+def options():
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimen", required=True, help="specimen file (.npz)")
+    p.add_argument("--ids", default="", help="Table C1 states by number (default: all 39)")
+    p.add_argument("--rates", default="2,inf", help="path rates to compare (Pa per step; inf: at once), the first is the reference")
+    p.add_argument("--doc", help="Markdown file whose table between <!-- state-speed:begin/end --> is replaced")
+    p.add_argument("--csv", help="CSV of every state and rate")
+    o = cli.parse(p)
+    try:
+        o.rates = [float(r) for r in o.rates.split(",")]
+    except ValueError:
+        cli.fail("--rates: comma-separated numbers or inf")
+    if len(o.rates) < 2 or any(not r > 0 for r in o.rates):
+        cli.fail("--rates needs at least two rates, each > 0")
+    return o
+
+
+def measure(path, b, sz, rate):
+    from trueaniso import fabric, specimen, specimen_file, statics, triaxial
+    scene, _ = specimen_file.load(path)
+    info = triaxial.reach_state(scene, b, sz, path_rate=rate)
+    st = specimen.state(scene)
+    res = statics.static_stiffness(scene, rotations=True)
+    nu = res["nu"]
+    return dict(steps=info["steps"], wall=info["wall_time"], Zm=fabric.fabric(scene)["Zm"], e=st["void_ratio"],
+                E=list(res["E"]), nu=[nu[i][j] for i in range(3) for j in range(3) if i != j])
+
+
+def main():
+    o = options()
+    from trueaniso import study
+    states = study.table_states(study.parse_ids(o.ids)) if o.ids else study.table_states()
+    rows, table = [], []
+    for sid, b, sz in states:
+        res = [measure(o.specimen, b, sz, r) for r in o.rates]
+        ref = res[0]
+        for rate, r in zip(o.rates, res):
+            rows.append(dict(state=sid, b=b, sigma_z=sz, rate=rate, steps=r["steps"], wall=r["wall"], Zm=r["Zm"],
+                             e=r["e"], E_x=r["E"][0], E_y=r["E"][1], E_z=r["E"][2]))
+        for rate, r in zip(o.rates[1:], res[1:]):
+            dE = max(abs(a / c - 1) for a, c in zip(r["E"], ref["E"]))
+            dnu = max(abs(a - c) for a, c in zip(r["nu"], ref["nu"]))
+            table.append((sid, b, sz, ref["steps"], ref["wall"], rate, r["steps"], r["wall"], abs(r["Zm"] - ref["Zm"]), dE, dnu))
+        t = table[-1]
+        print("state %s: %d steps %.1f s -> %d steps %.1f s; |dZm| %.4f, max|dE/E| %.1e, max|dnu| %.1e"
+              % (sid, t[3], t[4], t[6], t[7], t[8], t[9], t[10]), flush=True)
+    from trueaniso import atomic, specimen_file
+    _, meta = specimen_file.read(o.specimen)
+    if o.csv:
+        with atomic.atomic_open(o.csv) as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+    steps0 = sum(t[3] for t in table)
+    steps1 = sum(t[6] for t in table)
+    within = sum(1 for t in table if t[9] <= PROBE_ERROR_E and t[10] <= PROBE_ERROR_NU)
+    lines = ["Specimen %s (%d spheres), 1 thread, %s; each state from the specimen, moduli from the static solve."
+             % (os.path.basename(o.specimen), meta["summary"].get("n", 0) or 0, time.strftime("%Y-%m-%d")), "",
+             "| state | b | sigma_z (kPa) | steps (rate %g) | s | steps (rate %s) | s | abs dZm | max abs dE/E | max abs dnu |"
+             % (o.rates[0], ", ".join("%g" % r for r in o.rates[1:])), "|---|---|---|---|---|---|---|---|---|---|"]
+    for t in table:
+        lines.append("| %s | %.2f | %.0f | %d | %.1f | %d | %.1f | %.4f | %.1e | %.1e |"
+                     % (t[0], t[1], t[2] / 1e3, t[3], t[4], t[6], t[7], t[8], t[9], t[10]))
+    lines += ["", "Total steps %d -> %d (%.1fx fewer); %d of %d states within the default probe's own error "
+              "(%.1e in E, %.1e in nu); max abs dZm %.4f." % (steps0, steps1, steps0 / max(steps1, 1), within, len(table),
+                                                              PROBE_ERROR_E, PROBE_ERROR_NU, max(t[8] for t in table))]
+    text = "\n".join(lines)
+    print(text)
+    if o.doc:
+        from trueaniso import atomic
+        old = open(o.doc).read() if os.path.exists(o.doc) else "# Steps to reach a state\n"
+        block = "<!-- state-speed:begin -->\n" + text + "\n<!-- state-speed:end -->"
+        if "<!-- state-speed:begin -->" in old:
+            old = re.sub(r"<!-- state-speed:begin -->.*?<!-- state-speed:end -->", lambda m: block, old, flags=re.S)
+        else:
+            old += "\n" + block + "\n"
+        with atomic.atomic_open(o.doc) as f:
+            f.write(old)
+    return math.nan
+
+
+if __name__ == "__main__":  # also under yade-double -x; an import runs nothing
+    cli.guarded(main)
