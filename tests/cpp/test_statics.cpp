@@ -33,7 +33,7 @@ std::shared_ptr<Scene> simpleCubic(int n, const Vec3& delta, Real r = kR) {
   auto s = std::make_shared<Scene>();
   s->material = paperMaterial();
   const Vec3 a = Vec3::Constant(2 * r) - delta;
-  s->cell.size = s->cell.refSize = n * a;
+  s->cell.setBox(n * a);
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
       for (int k = 0; k < n; ++k) s->addSphere(Vec3(i + 0.5, j + 0.5, k + 0.5).cwiseProduct(a), r);
@@ -45,7 +45,7 @@ std::shared_ptr<Scene> fcc(int n, Real delta, Real r = kR) {
   auto s = std::make_shared<Scene>();
   s->material = paperMaterial();
   const Real A = std::sqrt(2.0) * (2 * r - delta);
-  s->cell.size = s->cell.refSize = Vec3::Constant(n * A);
+  s->cell.setBox(Vec3::Constant(n * A));
   const Vec3 basis[4] = {Vec3(0, 0, 0), Vec3(0.5, 0.5, 0), Vec3(0.5, 0, 0.5), Vec3(0, 0.5, 0.5)};
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
@@ -115,7 +115,7 @@ Response respond(const Scene& held, const Eigen::VectorXd& q, const Vec3& e, Rea
   Scene s = held;
   s.dt = h;
   s.blockRotations = false;
-  s.cell.strainRate = e;
+  s.cell.velGrad = e.asDiagonal();
   const Vec3 stretch = Vec3::Ones() + h * e;
   for (int b = 0; b < s.bodies.size(); ++b) {
     s.bodies.vel[b] = q.segment<3>(6 * b);
@@ -125,7 +125,7 @@ Response respond(const Scene& held, const Eigen::VectorXd& q, const Vec3& e, Rea
     if (w.norm() > 0)
       s.bodies.orientation[b] = (Quat(Eigen::AngleAxisd(w.norm() * h, w.normalized())) * s.bodies.orientation[b]).normalized();
   }
-  s.cell.size = s.cell.size.cwiseProduct(stretch);
+  s.cell.hSize = stretch.asDiagonal() * s.cell.hSize;
   s.refreshMembers();
   ContactForces().apply(s);
   Response r;
@@ -172,14 +172,14 @@ Eigen::VectorXd randomIncrement(int bodies, Real length, Real angle, unsigned se
 Scene heldPair(bool clumps) {
   Scene s;
   s.material = paperMaterial();
-  s.cell.size = s.cell.refSize = Vec3(8, 9, 10) * kR;
+  s.cell.setBox(Vec3(8, 9, 10) * kR);
   const Vec3 c1(0.5 * kR, 4 * kR, 5 * kR);
   Vec3 dir = Vec3(-1.0, 0.3, -0.2).normalized();  // body 2 sits across x = 0, in the image
   if (!clumps) {
     // Radii r and 0.9 r, overlap 2e-6 = 0.02 r (large, so that the initial-force terms are
     // well above the finite differences' error).
     s.addSphere(c1, kR);
-    s.addSphere(c1 + (1.9 * kR - 2e-6) * dir + Vec3(s.cell.size.x(), 0, 0), 0.9 * kR);
+    s.addSphere(c1 + (1.9 * kR - 2e-6) * dir + Vec3(s.cell.hSize(0, 0), 0, 0), 0.9 * kR);
   } else {
     // Two 2-member clumps; member radii r and 0.7 r, offsets along the clump axis.
     const std::vector<Vec3> off = {Vec3(0.5 * kR, 0, 0), Vec3(-0.6 * kR, 0, 0)};
@@ -190,7 +190,7 @@ Scene heldPair(bool clumps) {
     // Put clump 2's first member in contact with clump 1's first member.
     const Vec3 m1 = c1 + q1 * off[0];
     const Vec3 m2 = m1 + (2 * kR - 2e-6) * dir;
-    s.addClump(m2 - q2 * off[0] + Vec3(s.cell.size.x(), 0, 0), q2, off, rad, 1e-9, Vec3(1e-17, 2e-17, 2e-17));
+    s.addClump(m2 - q2 * off[0] + Vec3(s.cell.hSize(0, 0), 0, 0), q2, off, rad, 1e-9, Vec3(1e-17, 2e-17, 2e-17));
   }
   s.refreshMembers();
   return heldState(s);
