@@ -34,6 +34,7 @@ struct CellServoLaw {
   // Engineering strain rates (extension positive) from the goals: stresses (compression
   // positive) for the components in `stressMask`, strain rates for the others.
   Vec6 rates(const Vec6& goal, unsigned stressMask, const Vec6& stress, const Vec6& stiffness, Real dt) const {
+    require(dt > 0, "cell servo: the time step must be > 0 (a TimeStepper runs after the controllers: set scene.dt)");
     Vec6 r;
     for (int k = 0; k < 6; ++k) {
       if (!(stressMask >> k & 1u)) {
