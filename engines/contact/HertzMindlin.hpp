@@ -32,8 +32,10 @@ class HertzMindlin {
   // evaluation), its normal `nPrev` and tangential force `FsPrev`. Kinematics of the step: the
   // tangential relative displacement `dus` (in the plane normal to n) and the `twist`, the
   // pair's spin about n times dt.
-  Response evaluate(Real delta, Real rbar, const Vec3& n, bool loaded, const Vec3& nPrev, const Vec3& FsPrev,
-                    const Vec3& dus, Real twist) const {
+  // Inlined into the force loop: a call per contact costs ~6 % of the loop (callgrind).
+  __attribute__((always_inline)) inline Response evaluate(Real delta, Real rbar, const Vec3& n, bool loaded,
+                                                          const Vec3& nPrev, const Vec3& FsPrev, const Vec3& dus,
+                                                          Real twist) const {
     // N = (4/3) E* sqrt(R*) delta^(3/2), R* = rbar/2; k_s = (C_s/C_n) 1.5 N/delta written with
     // sqrt(delta) instead of a division (the same number, one operation fewer per contact).
     const Real sqrtDelta = std::sqrt(delta);
