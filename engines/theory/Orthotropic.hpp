@@ -30,7 +30,8 @@ struct OrthotropicModuli {
   Real Delta = 0;         // Eq. (41): determinant of the normal 3x3 block of C
 };
 
-// NaN everywhere for a singular C. The printed Eq. (42) has two misprints in its last line
+// A singular block gives non-finite moduli (a C without shear block: G is, E_i and nu_ij of an
+// uncoupled C are not). The printed Eq. (42) has two misprints in its last line
 // (docs/fabric.md).
 OrthotropicModuli orthotropicModuli(const Mat6& C);
 

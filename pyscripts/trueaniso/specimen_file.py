@@ -19,8 +19,8 @@ from . import FORMAT_VERSION, __version__, atomic, engines
 
 FORMAT = "trueaniso-specimen"
 _ARRAYS = ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia",
-           "member_begin", "member_body", "member_offsets", "radii", "cell_size", "cell_ref_size",
-           "strain_rate", "c_member1", "c_member2", "c_shift", "c_normal", "c_normal_force",
+           "member_begin", "member_body", "member_offsets", "radii", "cell", "cell_ref",
+           "velocity_gradient", "c_member1", "c_member2", "c_shift", "c_normal", "c_normal_force",
            "c_shear_force")
 
 
@@ -47,7 +47,7 @@ def scene_arrays(scene):
         angular_velocities=scene.angular_velocities, orientations=scene.orientations,
         masses=scene.masses, inertia=scene.inertia, member_begin=scene.member_begin,
         member_body=scene.member_body, member_offsets=scene.member_offsets, radii=scene.radii,
-        cell_size=scene.cell_size, cell_ref_size=scene.cell_ref_size, strain_rate=scene.strain_rate,
+        cell=scene.cell, cell_ref=scene.cell_ref, velocity_gradient=scene.velocity_gradient,
         c_member1=c["member1"][active], c_member2=c["member2"][active], c_shift=c["shift"][active],
         c_normal=c["normal"][active], c_normal_force=c["normal_force"][active],
         c_shear_force=c["shear_force"][active])
@@ -142,21 +142,35 @@ def contents_problem(a):
     nm = int(mb[-1])
     if a["radii"].shape != (nm,) or a["member_body"].shape != (nm,) or a["member_offsets"].shape != (nm, 3):
         return "inconsistent body/member arrays"
-    for name in ("positions", "velocities", "angular_velocities", "masses", "radii", "cell_size",
-                 "member_offsets", "c_normal_force", "c_shear_force"):
+    for name in ("positions", "velocities", "angular_velocities", "masses", "radii", "cell", "cell_ref",
+                 "velocity_gradient", "member_offsets", "c_normal_force", "c_shear_force"):
         if not np.all(np.isfinite(a[name])):
             return "non-finite values in %s" % name
     if np.any(a["radii"] <= 0):
         return "radius <= 0"
     if np.any(a["masses"] <= 0):
         return "mass <= 0"
-    if a["cell_size"].shape != (3,) or np.any(a["cell_size"] <= 0):
-        return "cell size <= 0"
+    problem = cell_problem(a)
+    if problem:
+        return problem
     nc = a["c_member1"].shape[0]
     for name in ("c_member1", "c_member2"):
         m = a[name]
         if m.shape != (nc,) or (nc and (m.min() < 0 or m.max() >= nm)):
             return "contact member index out of range"
+    return None
+
+
+def cell_problem(a):
+    """What makes the saved cell unusable (its shapes; a singular or inverted matrix), or None."""
+    for name in ("cell", "cell_ref", "velocity_gradient"):
+        if np.shape(a[name]) != (3, 3):
+            return "%s must be a 3x3 matrix" % name
+    for name in ("cell", "cell_ref"):
+        h = np.asarray(a[name], dtype=float)
+        scale = np.prod(np.linalg.norm(h, axis=0))
+        if not scale > 0 or np.linalg.det(h) <= 1e-6 * scale:
+            return "%s is a singular or inverted cell matrix (det %.3g)" % (name, np.linalg.det(h))
     return None
 
 
@@ -171,8 +185,8 @@ def load(path):
     m = meta["material"]
     s.shear_modulus, s.poisson, s.friction = m["shear_modulus"], m["poisson"], m["friction"]
     s.density = m["density"]
-    s.cell_size = a["cell_size"]
-    s.cell_ref_size = a["cell_ref_size"]
+    s.cell = a["cell"]
+    s.cell_ref = a["cell_ref"]
     if np.all(np.diff(mb) == 1):
         s.add_spheres(a["positions"], a["radii"])
     else:
@@ -183,7 +197,7 @@ def load(path):
     s.orientations = a["orientations"]
     s.velocities = a["velocities"]
     s.angular_velocities = a["angular_velocities"]
-    s.strain_rate = a["strain_rate"]
+    s.velocity_gradient = a["velocity_gradient"]
     s.set_contact_history(a["c_member1"], a["c_member2"], a["c_shift"], a["c_normal"],
                           a["c_normal_force"], a["c_shear_force"])
     s.dt, s.time, s.step = meta["dt"], meta["time"], meta["step"]

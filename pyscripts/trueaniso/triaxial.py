@@ -1,5 +1,7 @@
 """True-triaxial states (paper Table C1) and directional stress probes, composed from the C++
-engines TrueTriaxialServo and StressProbe.
+engines TrueTriaxialServo and StressProbe. The servo holds the shear stresses at zero (the cell's
+axes are the principal axes, as the paper's frictionless walls make them); probes act on a normal
+stress (E_i, nu_ij) or a shear stress (G_ij).
 
 A state is (b, sigma_z) at p = 100 kPa; Eq. (9) gives sigma_x, sigma_y. The 39 states of Table C1
 lie on eight paths from the isotropic state (b = 0, 0.25, 0.5, 0.75, 1; compression and
@@ -68,17 +70,24 @@ def validate_state(b, sigma_z, p=100e3):
 
 def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0,
                 unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
-                stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None):
+                stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
+                control_shear=True, shear=(0.0, 0.0, 0.0)):
     """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
 
-    Holds until every principal stress is within `tolerance` Pa of Eq. (9) and the unbalanced
-    force is below `unbalanced`. Raises StateNotReached if the specimen cannot get there: it
+    Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
+    within `tolerance` of `shear` (sigma_yz, sigma_xz, sigma_xy; zero: the cell's axes are the
+    principal axes) and the unbalanced force is below `unbalanced`. control_shear=False holds the
+    cell's shear strains instead (the orthorhombic servo, whose shear stresses nothing holds; a
+    non-zero `shear` is then refused). Raises StateNotReached if the specimen cannot get there: it
     stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
     strains beyond `max_strain`, or runs `max_steps`.
     """
     validate_state(b, sigma_z, p)
     servo = engines.TrueTriaxialServo()
     servo.set_goal(b, sigma_z, p)
+    servo.control_shear = bool(control_shear)
+    servo.shear_goal = np.asarray(shear, dtype=float)
+    servo.validate()  # shear goals on a path that holds the shear strains: refused before any work
     servo.path_rate = path_rate
     servo.stress_tolerance = tolerance
     servo.unbalanced_tolerance = unbalanced
@@ -96,29 +105,52 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
         chain.run(chunk)
         if progress:
             progress(servo)
-    scene.strain_rate = np.zeros(3)
+    scene.velocity_gradient = np.zeros((3, 3))
     # The integrator moved the bodies after the last force evaluation: forces for the positions
     # held, so that what is measured, saved and probed next is one consistent state.
     dem.refresh(scene)
     info = dict(status=servo.status, steps=int(servo.steps), wall_time=time.time() - t0,
                 stress=servo.stress.tolist(), unbalanced=float(servo.unbalanced), message=servo.message,
-                overshoot=servo.overshoot.tolist(), goal=servo.goal_stresses.tolist(),
-                friction=float(scene.friction), hold_steps=int(servo.holding))
+                overshoot=servo.overshoot.tolist(), goal=servo.final_stress.tolist(),
+                friction=float(scene.friction), hold_steps=int(servo.holding), control_shear=bool(control_shear))
+    info.update(stress_record(scene, servo.final_stress))
     if servo.status == "failed":
         raise StateNotReached(servo.message)
     return info
 
 
-AXES = "xyz"
+def stress_record(scene, goal=None):
+    """What a state record reports of the stress (Pa, compression positive): the six components,
+    the three principal values (largest first), the largest off-diagonal, and with a goal (six
+    Voigt components) the largest principal and shear errors against it (the acceptance of the
+    full-cell issue: both within 0.5 kPa)."""
+    sig = engines.stress(scene)
+    sym = 0.5 * (sig + sig.T)
+    principal = engines.principal_stresses(sym)
+    out = dict(sigma_yz=float(sym[1, 2]), sigma_xz=float(sym[0, 2]), sigma_xy=float(sym[0, 1]),
+               sigma_1=float(principal[0]), sigma_2=float(principal[1]), sigma_3=float(principal[2]),
+               tau_max=float(max(abs(sym[1, 2]), abs(sym[0, 2]), abs(sym[0, 1]))))
+    if goal is not None:
+        goal = np.asarray(goal, dtype=float)
+        g = np.array([[goal[0], goal[5], goal[4]], [goal[5], goal[1], goal[3]], [goal[4], goal[3], goal[2]]])
+        out["principal_error"] = float(np.abs(principal - engines.principal_stresses(g)).max())
+        out["shear_error"] = float(np.abs(np.array([sym[1, 2], sym[0, 2], sym[0, 1]]) - goal[3:]).max())
+    return out
+
+
+AXES = ("x", "y", "z", "yz", "xz", "xy")  # Voigt order: normal probes, then shear probes
+NORMAL_AXES = AXES[:3]
+SHEAR_AXES = AXES[3:]
 
 
 def validate_probe(axis, gamma):
-    """The axis as 0, 1, 2 (from 0-2 or "x", "y", "z"); ValueError for any other axis (True
-    included: a bool is not an axis) and for a gamma that is not a finite positive number."""
-    if isinstance(axis, str) and axis in ("x", "y", "z"):
-        axis = AXES.index(axis)
-    elif isinstance(axis, bool) or not isinstance(axis, (int, np.integer)) or axis not in (0, 1, 2):
-        raise ValueError("probe axis must be x, y or z, not %r" % (axis,))
+    """The axis as 0-5 (from 0-5 or "x", "y", "z", "yz", "xz", "xy"; "zy", "zx", "yx" name the same
+    shears); ValueError for any other axis (True included: a bool is not an axis) and for a gamma
+    that is not a finite positive number."""
+    if isinstance(axis, str) and axis in AXES + ("zy", "zx", "yx"):
+        axis = AXES.index(axis if axis in AXES else axis[::-1])
+    elif isinstance(axis, bool) or not isinstance(axis, (int, np.integer)) or axis not in range(6):
+        raise ValueError("probe axis must be x, y, z, yz, xz or xy, not %r" % (axis,))
     if not (isinstance(gamma, (int, float, np.floating)) and math.isfinite(gamma) and gamma > 0):
         raise ValueError("probe gamma must be a finite number > 0, not %r" % (gamma,))
     return int(axis)
@@ -126,15 +158,21 @@ def validate_probe(axis, gamma):
 
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
-          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500):
+          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True):
     """One directional probe at a held state; the scene is restored afterwards.
 
-    hold: the state's stresses (Pa) held during the probe on the two other axes.
-    Returns a dict with increments, E_i (Eq. 10), nu_ij (Eq. 11), gamma (Eq. 12), steps, time.
+    axis: x, y, z (a normal stress: E_i, nu_ij) or yz, xz, xy (a shear stress: G_ij).
+    hold: the state's stresses (Pa) held during the probe on the other components: three normal
+    stresses (the shear stresses then held at zero) or six Voigt components.
+    control_shear=False holds the cell's shear strains instead of the shear stresses (the
+    orthorhombic probe; normal axes only).
+    Returns a dict with the Voigt increments, E_i (Eq. 10) and nu_ij (Eq. 11) or G_ij, gamma
+    (Eq. 12, or the engineering shear strain of a shear probe), steps, time.
     """
     axis = validate_probe(axis, gamma)
     p = engines.StressProbe()
     p.axis, p.sign, p.gamma_target, p.increment = axis, sign, gamma, increment
+    p.control_shear = bool(control_shear)
     p.restrain_rotations = restrain_rotations
     p.gain, p.relative_tolerance, p.unbalanced_tolerance = gain, relative_tolerance, unbalanced
     p.settle_steps, p.ramp_steps, p.max_steps = settle_steps, ramp_steps, max_steps
@@ -156,20 +194,31 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
         dem.refresh(scene)
     if p.stage == "failed":
         raise StateNotReached(p.message)
-    de = p.d_strain
-    out = dict(axis=AXES[axis], sign=sign, E=float(p.young_modulus),
-               d_stress=p.d_stress.tolist(), d_strain=de.tolist(), gamma=float(p.gamma),
+    out = dict(axis=AXES[axis], sign=sign, modulus=float(p.modulus),
+               d_stress=p.d_stress.tolist(), d_strain=p.d_strain.tolist(), gamma=float(p.gamma),
                steps=int(p.steps), relax_steps=int(p.relax_steps), ramp_steps=int(p.ramp_steps_done),
                hold_steps=int(p.hold_steps), wall_time=time.time() - t0,
                rotations="restrained" if restrain_rotations else "free",
                detection="off" if skip_detection else "on", damping=damping,
-               detection_calls=int(chain.detection.applied))
-    for j in range(3):
-        if j != axis:
-            out["nu_%s%s" % (AXES[axis], AXES[j])] = float(p.poisson_ratio(j))
+               detection_calls=int(chain.detection.applied), control_shear=bool(control_shear))
+    if axis < 3:
+        out["E"] = out["modulus"]
+        for j in range(3):
+            if j != axis:
+                out["nu_%s%s" % (AXES[axis], AXES[j])] = float(p.poisson_ratio(j))
+    else:
+        out["G"] = out["modulus"]
     return out
 
 
 def probe_state(scene, hold, axes=(2, 0, 1), **kw):
-    """x, y and z probes from the same state (the probe restores it after each)."""
+    """Probes from the same state (the probe restores it after each): z, x, y by default."""
     return [probe(scene, hold, a, **kw) for a in axes]
+
+
+def cross_anisotropic_shear_moduli(G):
+    """The paper's G_vh and G_hh (Fig. 16) of a cross-anisotropic specimen with z vertical, from
+    the shear moduli {"yz": G_yz, "xz": G_xz, "xy": G_xy}: G_vh is the mean of the two vertical
+    planes' G_yz and G_xz (equal for a cross-anisotropic material; their difference measures the
+    departure from it), G_hh = G_xy."""
+    return dict(G_vh=0.5 * (G["yz"] + G["xz"]), G_hh=G["xy"], G_vh_split=abs(G["yz"] - G["xz"]))
