@@ -130,7 +130,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
 
     # Back to the sampled radii exactly: they were placed at `scale` and grew by grow.scale.
     scene.rescale(1.0 / (scale * grow.scale))
-    scene.cell_ref_size = scene.cell_size
+    scene.cell_ref = scene.cell
     scene.friction = mu_final
     servo = engines.StressServo()  # all six components: the shear stresses go to zero too
     servo.target = np.full(3, pressure)

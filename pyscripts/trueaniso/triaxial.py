@@ -142,6 +142,14 @@ AXES = ("x", "y", "z", "yz", "xz", "xy")  # Voigt order: normal probes, then she
 NORMAL_AXES = AXES[:3]
 SHEAR_AXES = AXES[3:]
 
+# The range of gamma (Eq. 12) a study accepts (docs/triaxial.md, "Probe size"): above 1e-5 the
+# probe is no longer a tangent (E grows with the increment: +0.5 % at 1e-5, +4.5 % at 1e-4 on 100
+# spheres at 100 kPa, as the secant of a modulus growing as sigma^(1/3) over d sigma = E gamma);
+# below 1e-8 the increment (E gamma ~ 3 Pa) nears the stress noise of a held state (~5e-5 Pa
+# measured, growing with the specimen; a 0.15 Pa drift was reported on larger ones). The library
+# itself accepts any gamma > 0 (studies of the probe size need to).
+GAMMA_RANGE = (1e-8, 1e-5)
+
 
 def validate_probe(axis, gamma):
     """The axis as 0-5 (from 0-5 or "x", "y", "z", "yz", "xz", "xy"; "zy", "zx", "yx" name the same
@@ -158,7 +166,8 @@ def validate_probe(axis, gamma):
 
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
-          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True):
+          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True,
+          progress=None):
     """One directional probe at a held state; the scene is restored afterwards.
 
     axis: x, y, z (a normal stress: E_i, nu_ij) or yz, xz, xy (a shear stress: G_ij).
@@ -166,6 +175,7 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     stresses (the shear stresses then held at zero) or six Voigt components.
     control_shear=False holds the cell's shear strains instead of the shear stresses (the
     orthorhombic probe; normal axes only).
+    progress: called with the StressProbe after every chunk of steps (the chunk changes no result).
     Returns a dict with the Voigt increments, E_i (Eq. 10) and nu_ij (Eq. 11) or G_ij, gamma
     (Eq. 12, or the engineering shear strain of a shear probe), steps, time.
     """
@@ -189,6 +199,8 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     try:
         while p.stage not in ("done", "failed"):
             chain.run(chunk)
+            if progress:
+                progress(p)
     finally:
         p.restore(scene)
         dem.refresh(scene)
@@ -198,7 +210,8 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
                d_stress=p.d_stress.tolist(), d_strain=p.d_strain.tolist(), gamma=float(p.gamma),
                steps=int(p.steps), relax_steps=int(p.relax_steps), ramp_steps=int(p.ramp_steps_done),
                hold_steps=int(p.hold_steps), wall_time=time.time() - t0,
-               rotations="restrained" if restrain_rotations else "free",
+               # a scene that blocks rotations is restrained whatever was asked
+               rotations="restrained" if restrain_rotations or scene.block_rotations else "free",
                detection="off" if skip_detection else "on", damping=damping,
                detection_calls=int(chain.detection.applied), control_shear=bool(control_shear))
     if axis < 3:
