@@ -229,9 +229,56 @@ def probe_state(scene, hold, axes=(2, 0, 1), **kw):
     return [probe(scene, hold, a, **kw) for a in axes]
 
 
-def cross_anisotropic_shear_moduli(G):
-    """The paper's G_vh and G_hh (Fig. 16) of a cross-anisotropic specimen with z vertical, from
-    the shear moduli {"yz": G_yz, "xz": G_xz, "xy": G_xy}: G_vh is the mean of the two vertical
-    planes' G_yz and G_xz (equal for a cross-anisotropic material; their difference measures the
-    departure from it), G_hh = G_xy."""
-    return dict(G_vh=0.5 * (G["yz"] + G["xz"]), G_hh=G["xy"], G_vh_split=abs(G["yz"] - G["xz"]))
+# Loading paths a study can follow (run_states.py --path). "true-triaxial": the paper's Table C1
+# paths, constant b and p = 100 kPa (Eqs. 8-9). "cross-anisotropic": its Fig. 16 (after Zhou et
+# al. 2026c), sigma_h = sigma_x = sigma_y held at SIGMA_H while sigma_v = sigma_z varies.
+PATHS = ("true-triaxial", "cross-anisotropic")
+SIGMA_H = 100e3
+# The sigma_v of a cross-anisotropic study when none are given (Pa): stress ratios sigma_v/sigma_h
+# from 0.5 to 2.5 on both sides of the isotropic state. The paper does not list the states of
+# Fig. 16's source; this choice spans the ratios of Table C1's extreme states (sigma_1/sigma_3 up to 3).
+CROSS_ANISOTROPIC_SIGMA_V = (50e3, 60e3, 70e3, 80e3, 90e3, 100e3, 120e3, 140e3, 160e3, 180e3, 200e3, 250e3)
+
+
+def path_mean_stress(path, b, sigma_z):
+    """The mean stress p of the state (b, sigma_z) on a path: 100 kPa on the true-triaxial paths;
+    on the cross-anisotropic path (b = 0 there) (2 sigma_h + sigma_v) / 3, which makes Eq. (9)
+    give sigma_x = sigma_y = sigma_h for any sigma_v, so the servo's straight stress path from the
+    isotropic state keeps sigma_h at 100 kPa all the way."""
+    if path == "true-triaxial":
+        return 100e3
+    if path == "cross-anisotropic":
+        return (2.0 * SIGMA_H + sigma_z) / 3.0
+    raise ValueError("unknown path %r: the paths are %s" % (path, ", ".join(PATHS)))
+
+
+def validate_path_state(path, b, sigma_z):
+    """ValueError with the reason for a state that is not on the path (or not a state)."""
+    p = path_mean_stress(path, b, sigma_z)
+    if path == "cross-anisotropic":
+        if b != 0:
+            raise ValueError("a cross-anisotropic state is given by sigma_v alone (b = 0 in its definition), "
+                             "not b = %r" % (b,))
+        if not (isinstance(sigma_z, (int, float)) and math.isfinite(sigma_z) and sigma_z > 0):
+            raise ValueError("sigma_v must be a finite stress > 0 Pa, not %r" % (sigma_z,))
+    return validate_state(b, sigma_z, p)
+
+
+def path_stresses(path, b, sigma_z):
+    """sigma_x, sigma_y, sigma_z (Pa) of the state on its path."""
+    return engines.true_triaxial_stresses(b, sigma_z, path_mean_stress(path, b, sigma_z))
+
+
+def cross_anisotropic_states(sigma_v=CROSS_ANISOTROPIC_SIGMA_V):
+    """[(id, 0, sigma_v)]: ids 'sv<sigma_v in kPa>' (e.g. sv60, sv112.5), exact for any Pa value
+    that is a multiple of 0.1 Pa."""
+    out = []
+    for sv in sigma_v:
+        sv = float(sv)
+        validate_path_state("cross-anisotropic", 0.0, sv)
+        out.append(("sv%s" % ("%.4f" % (sv / 1e3)).rstrip("0").rstrip("."), 0.0, sv))
+    ids = [i for i, _, _ in out]
+    twice = sorted({i for i in ids if ids.count(i) > 1})
+    if twice:
+        raise ValueError("sigma_v of state %s is given twice" % ", ".join(twice))
+    return out

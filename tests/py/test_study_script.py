@@ -60,7 +60,7 @@ def test_metadata_says_what_produced_the_rows(finished, small_specimen):
     assert fp["specimen"] == specimen_file.read(str(small_specimen))[1]["sha256"]
     assert meta["runs"][-1]["specimen"]["seed"] == 6
     assert meta["versions"]["threads"] >= 1 and "git" in meta["versions"] and fp["code"].startswith("src-")
-    assert fp["probe"]["gamma"] == 1e-6 and meta["probes"] == "zx"
+    assert fp["probe"]["gamma"] == 1e-6 and meta["probes"] == ["z", "x"] and fp["path"] == "true-triaxial"
     assert fp["state"]["tolerance"] == 100.0 and fp["state"]["unbalanced"] == 1e-4 and fp["state"]["friction"] == 0.5
     assert "relative_tolerance" in fp["probe"]
     assert sorted(meta["states"]) == ["1", "2"] and meta["states"]["2"] == dict(b=0.0, sigma_z=110e3)
