@@ -21,7 +21,7 @@ Real maskedError(const Vec6& a, const Vec6& b, unsigned mask) {
 
 void StressProbe::begin(const Vec6& hold) {
   require(axis >= 0 && axis <= 5, "probe axis must be x, y, z, yz, xz or xy (0-5)");
-  require(axis < 3 || controlShear,
+  require(axis < 3 || controlShear || holdOtherStrains,
           "a shear probe needs the shear stresses under control (controlShear): with the cell's shear strains "
           "held there is nothing to probe");
   require(sign == 1 || sign == -1, "probe sign must be +1 or -1");

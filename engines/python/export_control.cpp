@@ -221,6 +221,8 @@ void exportControl() {
       .def_readwrite("axis", &StressProbe::axis, "0, 1, 2 = x, y, z; 3, 4, 5 = yz, xz, xy (checked by start/begin)")
       .def_readwrite("control_shear", &StressProbe::controlShear,
                      "Hold the shear stresses (default) or the cell's shear strains (x, y, z probes only).")
+      .def_readwrite("hold_other_strains", &StressProbe::holdOtherStrains,
+                     "Hold the five other strains instead of their stresses: the probe measures C_kk, not 1/S_kk.")
       .def_readwrite("sign", &StressProbe::sign, "+1 loads, -1 unloads (checked by start/begin)")
       .def_readwrite("gamma_target", &StressProbe::gammaTarget, "Eq. (12) at which the ramp stops")
       .def_readwrite("increment", &StressProbe::increment)

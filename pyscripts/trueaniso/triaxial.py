@@ -167,7 +167,7 @@ def validate_probe(axis, gamma):
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
           settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True,
-          progress=None):
+          hold_other_strains=False, progress=None):
     """One directional probe at a held state; the scene is restored afterwards.
 
     axis: x, y, z (a normal stress: E_i, nu_ij) or yz, xz, xy (a shear stress: G_ij).
@@ -175,6 +175,8 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     stresses (the shear stresses then held at zero) or six Voigt components.
     control_shear=False holds the cell's shear strains instead of the shear stresses (the
     orthorhombic probe; normal axes only).
+    hold_other_strains=True holds the five other strains at zero instead of their stresses: the
+    modulus is then the stiffness C_kk (static solve's C), not 1/S_kk (docs/cell.md).
     progress: called with the StressProbe after every chunk of steps (the chunk changes no result).
     Returns a dict with the Voigt increments, E_i (Eq. 10) and nu_ij (Eq. 11) or G_ij, gamma
     (Eq. 12, or the engineering shear strain of a shear probe), steps, time.
@@ -183,6 +185,7 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     p = engines.StressProbe()
     p.axis, p.sign, p.gamma_target, p.increment = axis, sign, gamma, increment
     p.control_shear = bool(control_shear)
+    p.hold_other_strains = bool(hold_other_strains)
     p.restrain_rotations = restrain_rotations
     p.gain, p.relative_tolerance, p.unbalanced_tolerance = gain, relative_tolerance, unbalanced
     p.settle_steps, p.ramp_steps, p.max_steps = settle_steps, ramp_steps, max_steps
@@ -213,7 +216,8 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
                # a scene that blocks rotations is restrained whatever was asked
                rotations="restrained" if restrain_rotations or scene.block_rotations else "free",
                detection="off" if skip_detection else "on", damping=damping,
-               detection_calls=int(chain.detection.applied), control_shear=bool(control_shear))
+               detection_calls=int(chain.detection.applied), control_shear=bool(control_shear),
+               hold_other_strains=bool(hold_other_strains))
     if axis < 3:
         out["E"] = out["modulus"]
         for j in range(3):
