@@ -82,6 +82,9 @@ def test_bridge_round_trip(yade_json, specimen_path):
     assert r["stress_rel"] < 1e-9          # tangential forces carried through YADE's interactions
     assert r["yade_stress_rel"] < 1e-6     # YADE's getStress right after import agrees
     assert r["written_positions"] == 0 and r["written_cell"] == 0
+    # the cell written is sheared (200 steps at 10 /s in yz: ~6e-5 of the edge) and YADE holds it
+    assert r["written_cell_yz"] == r["written_cell_yz_expected"] > 2e-5 * 1e-3
+    assert r["reread_velocity_gradient"] == 0  # the full velGrad (its yz term included) reads back
     # what was written reads back: fluctuating velocities (YADE holds totals) and strain rate
     assert r["reread_positions"] == 0 and r["reread_strain_rate"] == [0, 0, 0]
     assert r["reread_velocities"] <= 1e-12 * r["velocity_scale"]

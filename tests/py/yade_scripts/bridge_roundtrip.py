@@ -27,12 +27,15 @@ res = dict(
     contacts=[engines.coordination(ours)["Nc"], engines.coordination(back)["Nc"]])
 # Move our scene (a few hundred steps of our dynamics at 0.99 of the cell) and show it in YADE.
 c = dem.Chain(ours)
-ours.velocity_gradient = np.diag([-20.0, 0.0, 0.0])
+# y moves with z too (a shear rate of 10 /s in the yz plane): the cell written into YADE is sheared
+ours.velocity_gradient = np.array([[-20.0, 0.0, 0.0], [0.0, 0.0, 10.0], [0.0, 0.0, 0.0]])
 c.run(200)
 yade_bridge.write_to_yade(ours, O, ids)
 res["written_positions"] = float(np.abs(np.array([list(O.bodies[i].state.pos) for i in ids]) - ours.positions).max())
 res["written_cell"] = float(np.abs(np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)]) - ours.cell).max())
 res["scale"] = float(ours.radii.max())
+res["written_cell_yz"] = float(O.cell.hSize[1][2])
+res["written_cell_yz_expected"] = float(ours.cell[1, 2])
 # Read what was written back: YADE holds total velocities and velGrad; our fluctuations and
 # strain rate must come back unchanged (the affine part x velGrad is added, then removed).
 again, _ = yade_bridge.scene_from_yade(O, import_contacts=False)
