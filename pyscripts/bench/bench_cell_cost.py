@@ -36,7 +36,10 @@ def machine():
                 break
     except OSError:
         pass
-    return "%s, %d cores, Debian 12" % (model, os.cpu_count())
+    debian = ""
+    if os.path.exists("/etc/debian_version"):
+        debian = ", Debian " + open("/etc/debian_version").read().strip()
+    return "%s, %d cores%s" % (model, os.cpu_count(), debian)
 
 
 def timings(o):

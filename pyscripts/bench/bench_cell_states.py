@@ -75,6 +75,21 @@ def run(o):
     print("wrote %s (%.0f s; specimen %s, sha256 %s)" % (out, time.time() - t_all, o.specimen, meta["sha256"][:12]))
 
 
+def machine():
+    model = platform.machine()
+    try:
+        for ln in open("/proc/cpuinfo"):
+            if ln.startswith("model name"):
+                model = ln.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    debian = ""
+    if os.path.exists("/etc/debian_version"):
+        debian = ", Debian " + open("/etc/debian_version").read().strip()
+    return "%s, %d cores%s" % (model, os.cpu_count(), debian)
+
+
 def _rows():
     out = {}
     for path in sorted(glob.glob(os.path.join(DATA, "cell-states-*.csv"))):
@@ -89,10 +104,11 @@ def tables():
     data = _rows()
     if not data:
         raise cli.InputError("no docs/data/cell-states-*.csv yet: run with --specimen first")
-    lines = ["Machine: %s, %d cores (Debian 12), 1 engine thread; %s. Data: `docs/data/cell-states-N-CONTROL.csv`; "
-             "run: `pyscripts/bench/bench_cell_states.py` (reach_state defaults: stress tolerance 100 Pa, "
-             "unbalanced force 1e-4, mu = 0.5)." % (platform.processor() or platform.machine(), os.cpu_count(),
-                                                     time.strftime("%Y-%m-%d")), "",
+    lines = ["Machine: %s; 1 engine thread; %s. Data: `docs/data/cell-states-N-CONTROL.csv`; "
+             "run: `pyscripts/bench/bench_cell_states.py --specimen specimens/spheres-N-s1.npz [--control three]` "
+             "(reach_state defaults: stress tolerance 100 Pa, unbalanced force 1e-4, mu = 0.5). State 1 of Table C1 "
+             "is the isotropic state; `iso` is the same goal reached from the specimen, state 1 from `iso`."
+             % (machine(), time.strftime("%Y-%m-%d")), "",
              "| N | control | states | max principal error (Pa) | max off-diagonal (Pa) | all within 0.5 kPa | "
              "steps per state (median, max) | wall time (s) |", "|---|---|---|---|---|---|---|---|"]
     for (n, control), rows in sorted(data.items()):
