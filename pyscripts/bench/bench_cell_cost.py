@@ -8,7 +8,7 @@ The sheared scene is the specimen as prepared (its consolidation sheared the cel
 hSize has off-diagonal terms and every step takes the sheared path); the orthorhombic scene is the
 same packing with those terms set to zero (the diagonal fast path). Both run the same fixed time
 step, damping 0.2, rotations free, with the velocity gradient zero, on the engine thread count
-given (1 by default), timed in turns (best of --repeats). With --doc the table between
+given (1 by default), timed in turns (best, median and slowest of --repeats). With --doc the table between
 <!-- cell-cost:begin --> and <!-- cell-cost:end --> of that file is replaced.
 """
 import csv
@@ -69,7 +69,7 @@ def timings(o):
             chains[name].run(o.steps)
             rate[name].append(o.steps / (time.perf_counter() - t))
             print("%-12s %.0f steps/s" % (name, rate[name][-1]), flush=True)
-    return sheared.num_bodies, dt, {k: max(v) for k, v in rate.items()}, off_diagonal(sheared)
+    return sheared.num_bodies, dt, rate, off_diagonal(sheared)
 
 
 def off_diagonal(s):
@@ -111,13 +111,17 @@ def main(argv=None):
         raise cli.InputError("--doc %s: no such file" % o.doc)
     n, dt, rate, shear = timings(o)
     lines = ["Machine: %s; %d engine thread(s); %s. Specimen %s: %d spheres, cell shear %.1e (largest off-diagonal "
-             "of hSize over its diagonal), time step %.3g s, damping 0.2, best of %d runs of %d steps."
+             "of hSize over its diagonal), time step %.3g s, damping 0.2, %d runs of %d steps each, interleaved. "
+             "The machine is shared: the spread of the runs says how far a difference can be read."
              % (machine(), o.threads, time.strftime("%Y-%m-%d"), os.path.basename(o.specimen), n, shear, dt,
                 o.repeats, o.steps), "",
-             "| cell | steps/s | M particle-steps/s | relative |", "|---|---|---|---|"]
+             "| cell | best steps/s | median | slowest | best M particle-steps/s | best relative to orthorhombic |",
+             "|---|---|---|---|---|---|"]
+    best = {k: max(v) for k, v in rate.items()}
     for name in ("orthorhombic", "sheared"):
-        lines.append("| %s | %.0f | %.2f | %.3f |" % (name, rate[name], rate[name] * n / 1e6,
-                                                     rate[name] / rate["orthorhombic"]))
+        lines.append("| %s | %.0f | %.0f | %.0f | %.2f | %.3f |"
+                     % (name, best[name], statistics.median(rate[name]), min(rate[name]), best[name] * n / 1e6,
+                        best[name] / best["orthorhombic"]))
     steps = steps_table()
     if steps:
         lines += ["", "Steps to reach a state (bench_cell_states.py, the isotropic state and the 39 of Table C1, "
