@@ -85,7 +85,7 @@ def figure(rows, path):
         ax.plot(sr, [m["predicted_ratio"] for m in rows], "k--", label="$a_h^2/a_v^2$ predicted (Eqs. 35-37, 25)")
     ax.set_xlabel(r"$\sigma_v/\sigma_h$ ($\sigma_h$ = 100 kPa)")
     ax.set_ylabel("anisotropy ratio")
-    ax.set_title("Does each modulus measure the same anisotropy? (Fig. 16)")
+    ax.set_title("Do G, E and nu show one anisotropy? (Fig. 16)", fontsize=11)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
