@@ -61,6 +61,8 @@ def states_from_rows(rows):
     out = {}
     ax = "xyz"
     for r in rows:
+        if r["probe"] not in ("x", "y", "z"):  # a shear probe (yz, xz, xy: G_ij) has no E_i or nu_ij
+            continue
         st = out.setdefault(r["state"], dict(E=np.full(3, np.nan), nu=np.full((3, 3), np.nan), Zm=float(r["Zm"]),
                                              sigma=np.array([float(r["sigma_x"]), float(r["sigma_y"]), float(r["sigma_z"])]),
                                              b=float(r["b"]), q=float(r["q"])))

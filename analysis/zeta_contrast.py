@@ -26,8 +26,10 @@ def read_probe_table(path, complete_only=False):
     rows = read_probes(path, NEEDED)
     states = collections.OrderedDict()
     for r in rows:
+        if r["probe"] in ("yz", "xz", "xy"):  # shear probes (G_ij) take no part in the E_i contrast
+            continue
         per_axis = states.setdefault((r["rotations"], r["state"]), {})
-        if r["probe"] not in AXES or r["probe"] in per_axis:
+        if r["probe"] not in ("x", "y", "z") or r["probe"] in per_axis:
             raise ResultsError("%s: state %s has a probe %r that is not a single x, y or z probe"
                                % (path, r["state"], r["probe"]))
         E = number(r, "E", path)

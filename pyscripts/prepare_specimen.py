@@ -139,6 +139,8 @@ def report(scene, log, o):
     st = specimen.state(scene)
     print(json.dumps(dict(n=st["n"], void_ratio=round(st["void_ratio"], 4), Zm=round(st["Zm"], 3),
                           sigma_kPa=[round(st[k] / 1e3, 3) for k in ("sigma_x", "sigma_y", "sigma_z")],
+                          principal_kPa=[round(st[k] / 1e3, 3) for k in ("sigma_1", "sigma_2", "sigma_3")],
+                          tau_max_kPa=round(st["tau_max"] / 1e3, 4),
                           unbalanced=float("%.3g" % st["unbalanced"]), friction=st["friction"])))
     if cli.in_yade():
         from trueaniso import yade_bridge

@@ -1,5 +1,6 @@
 """True-triaxial states and their x, y, z stress probes on a specimen, one CSV row per state and probe.
 
+    yade-double -n -x pyscripts/run_states.py --specimen S.npz --path cross-anisotropic --out results/fig16
     yade-double -n -x pyscripts/run_states.py --specimen S.npz --table-c1 --out results/table-c1
     yade-double -n -x pyscripts/run_states.py --specimen S.npz --states 0.5:140e3,0:60e3 --out results/x
     /usr/bin/python3 pyscripts/run_states.py --specimen S.npz --ids 1,5,21 --out results/y
@@ -7,6 +8,9 @@
     mpiexec -n 3 /usr/bin/python3 -m mpi4py.futures pyscripts/run_states.py --mpi --table-c1 ...
                                                          (loading paths on 2 MPI workers; docs/runs.md)
 
+--path cross-anisotropic follows the paper's Fig. 16 instead: sigma_h = sigma_x = sigma_y held at
+100 kPa while sigma_v = sigma_z takes the values of --sigma-v, probed on x, y, z and on the shear
+strains yz, xz, xy (G_vh, G_hh; docs/cell.md).
 Writes probes.csv (one row per state and probe direction), metadata.json (the study's fingerprint)
 and a checkpoint per state. The output directory is one study: a rerun continues it (adding
 states is fine), or refuses in one line if it asks for something else (docs/runs.md).
@@ -25,11 +29,20 @@ def parser():
                                     "a state's id is its Table C1 number, else b<b>_sz<sigma_z>")
     p.add_argument("--table-c1", action="store_true", help="all 39 states of the paper's Table C1")
     p.add_argument("--ids", help="a subset of Table C1 states by number, e.g. 1,5,21")
+    p.add_argument("--path", choices=triaxial.PATHS, default="true-triaxial",
+                   help="loading path: true-triaxial (constant b and p = 100 kPa, Table C1; give --states, --table-c1 "
+                        "or --ids) or cross-anisotropic (Fig. 16: sigma_x = sigma_y = 100 kPa, sigma_z = --sigma-v)")
+    p.add_argument("--sigma-v", help="cross-anisotropic path: the vertical stresses sigma_z in Pa, comma separated "
+                                     "(default %s); a state's id is sv<sigma_v in kPa>"
+                                     % ",".join("%g" % v for v in triaxial.CROSS_ANISOTROPIC_SIGMA_V))
     lo, hi = triaxial.GAMMA_RANGE
     p.add_argument("--gamma", type=cli.finite, default=1e-6,
                    help="probe size gamma of Eq. 12, in [%g, %g]: above, the probe is no longer elastic; below, "
                         "its increment nears the stress noise (docs/triaxial.md)" % (lo, hi))
-    p.add_argument("--probes", default="zxy", help="probe axes, each of x, y, z at most once")
+    p.add_argument("--probes", help="probe axes, each at most once: letters of x, y, z (e.g. zxy), or names separated "
+                                    "by commas, where the shear probes yz, xz, xy (G_ij) may be given too (e.g. "
+                                    "z,x,y,yz,xz,xy). Default: zxy on the true-triaxial path, all six on the "
+                                    "cross-anisotropic one")
     p.add_argument("--rotations", choices=("free", "restrained"), default="free",
                    help="particle rotations during probes")
     p.add_argument("--skip-detection", action="store_true",
@@ -56,19 +69,29 @@ def parser():
 
 def validate(o):
     """Every check that needs no work; returns the states."""
-    if sum(bool(x) for x in (o.states is not None, o.table_c1, o.ids is not None)) != 1:
+    if o.path == "cross-anisotropic":
+        if o.states is not None or o.table_c1 or o.ids is not None:
+            raise cli.InputError("--path cross-anisotropic takes its states from --sigma-v, not from --states, "
+                                 "--table-c1 or --ids")
+    elif o.sigma_v is not None:
+        raise cli.InputError("--sigma-v belongs to --path cross-anisotropic")
+    elif sum(bool(x) for x in (o.states is not None, o.table_c1, o.ids is not None)) != 1:
         raise cli.InputError("give exactly one of --states, --table-c1, --ids")
     try:
-        if o.states is not None:
+        if o.path == "cross-anisotropic":
+            states = triaxial.cross_anisotropic_states(parse_sigma_v(o.sigma_v) if o.sigma_v is not None
+                                                       else triaxial.CROSS_ANISOTROPIC_SIGMA_V)
+        elif o.states is not None:
             states = study.parse_states(o.states)
         elif o.ids is not None:
             states = study.table_states(study.parse_ids(o.ids))
         else:
             states = study.table_states()
         for _, b, sz in states:
-            triaxial.validate_state(b, sz)
+            triaxial.validate_path_state(o.path, b, sz)
     except ValueError as exc:
         raise cli.InputError(str(exc)) from None
+    o.probe_axes = probe_axes(o.probes, o.path)
     check_probe_options(o)
     problem = cli.output_problem(o.out)
     if problem:
@@ -80,13 +103,33 @@ def validate(o):
     return states
 
 
+def parse_sigma_v(text):
+    """'60e3,80e3' -> [60e3, 80e3] (Pa); refuses an empty list and what is not a number."""
+    items = [s.strip() for s in text.split(",") if s.strip()]
+    if not items:
+        raise ValueError("--sigma-v names no stress (give Pa values, e.g. 60e3,150e3)")
+    try:
+        return [float(s) for s in items]
+    except ValueError:
+        raise ValueError("--sigma-v %r: expected stresses in Pa separated by commas, e.g. 60e3,150e3" % text) from None
+
+
+def probe_axes(text, path):
+    """The probe axes as names: letters (zxy) or comma-separated names (z,x,y,yz,xz,xy)."""
+    if text is None:
+        return list(triaxial.AXES) if path == "cross-anisotropic" else ["z", "x", "y"]
+    names = [s.strip() for s in text.split(",")] if "," in text else list(text)
+    if not names or any(n not in triaxial.AXES for n in names) or len(set(names)) != len(names):
+        raise cli.InputError("--probes must name each axis at most once: letters of x, y, z (e.g. zxy), or names "
+                             "separated by commas among x, y, z, yz, xz, xy (got %r)" % text)
+    return names
+
+
 def check_probe_options(o):
     lo, hi = triaxial.GAMMA_RANGE
     if not lo <= o.gamma <= hi:
         raise cli.InputError("--gamma %g is outside [%g, %g]: above, the probe is no longer elastic; below, its "
                              "increment nears the stress noise of a held state (docs/triaxial.md)" % (o.gamma, lo, hi))
-    if not o.probes or any(c not in "xyz" for c in o.probes) or len(set(o.probes)) != len(o.probes):
-        raise cli.InputError("--probes must name each of the axes x, y, z at most once (got %r)" % o.probes)
     if not 0 <= o.damping < 1:
         raise cli.InputError("--damping must lie in [0, 1)")
     if not o.mu > 0:
@@ -119,7 +162,7 @@ def main(argv=None):
         from trueaniso import engines
         engines.set_threads(o.threads)
     try:
-        study.run_states(o.specimen, states, o.out, probes=["xyz".index(c) for c in o.probes], gamma=o.gamma,
+        study.run_states(o.specimen, states, o.out, probes=o.probe_axes, gamma=o.gamma, path=o.path,
                          restrain_rotations=o.rotations == "restrained", skip_detection=o.skip_detection,
                          damping=o.damping, state_options=dict(friction=o.mu), wait=o.wait,
                          force_new=o.force_new, progress_every=o.progress_every,

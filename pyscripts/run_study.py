@@ -145,9 +145,10 @@ def main(argv=None):
         study_dir.remove([os.path.join(o.out, "summary.json")])
         st = specimen.state(scene)
         atomic.write_json(os.path.join(o.out, "specimen_state.json"), st)
-        log("specimen: e = %.4f, Zm = %.3f, sigma = (%.2f, %.2f, %.2f) kPa, unbalanced = %.2e"
+        log("specimen: e = %.4f, Zm = %.3f, sigma = (%.2f, %.2f, %.2f) kPa, principal (%.2f, %.2f, %.2f) kPa, "
+            "largest off-diagonal %.3f kPa, unbalanced = %.2e"
             % (st["void_ratio"], st["Zm"], st["sigma_x"] / 1e3, st["sigma_y"] / 1e3, st["sigma_z"] / 1e3,
-               st["unbalanced"]))
+               st["sigma_1"] / 1e3, st["sigma_2"] / 1e3, st["sigma_3"] / 1e3, st["tau_max"] / 1e3, st["unbalanced"]))
         try:
             study.run_states(path, states, o.out, log=log, progress_every=o.progress_every, **options)
         except triaxial.StateNotReached as exc:

@@ -6,9 +6,9 @@ namespace trueaniso {
 
 CellMeasurement CellMeasurement::of(const Scene& s) {
   CellMeasurement m;
-  m.stress = loveWeberStress(s).diagonal();
-  m.strain = s.cell.strain();
-  m.stiffness = affineAxialStiffness(s);
+  m.stress = voigt::fromTensor(loveWeberStress(s));
+  m.deformation = s.cell.deformation();
+  m.stiffness = affineStiffness(s);
   m.unbalanced = unbalancedForce(s);
   return m;
 }

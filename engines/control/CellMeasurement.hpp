@@ -6,10 +6,12 @@
 namespace trueaniso {
 
 struct CellMeasurement {
-  Vec3 stress = Vec3::Zero();     // diagonal of the Love-Weber stress, compression positive
-  Vec3 strain = Vec3::Zero();     // logarithmic cell strain, compression positive
-  Vec3 stiffness = Vec3::Zero();  // affine axial stiffness estimate (Pa per unit strain)
-  Real unbalanced = 0;            // YADE's unbalanced force
+  Vec6 stress = Vec6::Zero();        // Love-Weber stress (symmetric part, Voigt), compression positive
+  // The cell's deformation gradient since its reference: a controller takes its strains between
+  // two of these (strainBetween), so a flip of the cell between them changes nothing.
+  Mat3 deformation = Mat3::Identity();
+  Vec6 stiffness = Vec6::Zero();     // affine stiffness per Voigt component (Pa per unit strain)
+  Real unbalanced = 0;               // YADE's unbalanced force
 
   static CellMeasurement of(const Scene& scene);
 };

@@ -17,7 +17,7 @@ void RadiusExpansion::apply(Scene& s) {
     scale = 1.0;
   }
   pressure = loveWeberStress(s).trace() / 3.0;
-  const Real K = affineAxialStiffness(s).mean();
+  const Real K = affineStiffness(s).head<3>().mean();
   const Real err = targetPressure - pressure;
   // Growing radii by d ln r is, for the contacts, an isotropic affine compression of d ln r.
   Real rate = K > 0 ? gain * err / (K * s.dt) : (err > 0 ? maxGrowthRate : -maxGrowthRate);

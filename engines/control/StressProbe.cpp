@@ -7,15 +7,31 @@
 
 namespace trueaniso {
 
-void StressProbe::begin(const Vec3& hold) {
-  require(axis >= 0 && axis <= 2, "probe axis must be x, y or z (0, 1, 2)");
+namespace {
+const char* const kAxisNames[6] = {"x", "y", "z", "yz", "xz", "xy"};
+
+// Largest |a_I - b_I| over the components in the mask.
+Real maskedError(const Vec6& a, const Vec6& b, unsigned mask) {
+  Real e = 0;
+  for (int I = 0; I < 6; ++I)
+    if (mask >> I & 1u) e = std::max(e, std::abs(a[I] - b[I]));
+  return e;
+}
+}  // namespace
+
+void StressProbe::begin(const Vec6& hold) {
+  require(axis >= 0 && axis <= 5, "probe axis must be x, y, z, yz, xz or xy (0-5)");
+  require(axis < 3 || controlShear || holdOtherStrains,
+          "a shear probe needs the shear stresses under control (controlShear): with the cell's shear strains "
+          "held there is nothing to probe");
   require(sign == 1 || sign == -1, "probe sign must be +1 or -1");
   require(std::isfinite(gammaTarget) && gammaTarget > 0, "probe gamma must be a finite number > 0");
   require(increment >= 0, "probe increment must be >= 0 (0: stop at gamma)");
   require(relativeTolerance > 0 && relativeTolerance < 1, "probe tolerance must lie in (0, 1)");
   require(unbalancedTolerance > 0 && rampSteps > 0 && settleSteps >= 1 && maxSteps > 0,
           "probe tolerances and step counts must be > 0");
-  require((hold.array() > 0).all(), "probe: the held stresses must be > 0 (compression positive)");
+  require(hold.allFinite() && (hold.head<3>().array() > 0).all(),
+          "probe: the held normal stresses must be > 0 (compression positive) and every held stress finite");
   law.validate();
   holdGoal_ = hold;
   target = holdGoal_;
@@ -28,7 +44,7 @@ void StressProbe::begin(const Vec3& hold) {
   done = false;
 }
 
-void StressProbe::start(Scene& s, const Vec3& hold) {
+void StressProbe::start(Scene& s, const Vec6& hold) {
   begin(hold);
   snapshot_ = std::make_shared<Scene>(s);
   s.material.friction = probeFriction;
@@ -50,32 +66,36 @@ void StressProbe::apply(Scene& s) {
     done = true;
     return;
   }
-  s.cell.strainRate = update(CellMeasurement::of(s), s.dt);
+  s.cell.velGrad = CellServoLaw::velocityGradient(update(CellMeasurement::of(s), s.dt));
 }
 
-Vec3 StressProbe::update(const CellMeasurement& m, Real dt) {
+Real StressProbe::strainMeasure() const {
+  return shearProbe() ? std::abs(dStrain[axis]) : shearStrainGamma(dStrain.head<3>());
+}
+
+Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
   if (stage == Stage::Idle) throw InputError("StressProbe: begin() before update()");
   if (stage == Stage::Done || stage == Stage::Failed) {
     done = true;
-    return Vec3::Zero();
+    return Vec6::Zero();
   }
   ++steps;
   stress = m.stress;
-  const Vec3& strain = m.strain;
   unbalanced = m.unbalanced;
-  const Vec3& K = m.stiffness;
+  const Vec6& K = m.stiffness;
+  const unsigned mask = stressMask();
 
   if (stage == Stage::Relax) {
     ++relaxSteps;
     // Before any increment exists, "small" is judged against the expected increment from the
     // affine stiffness (an upper bound, so the criterion is on the safe side).
     const Real expected = increment > 0 ? increment : K[axis] * gammaTarget;
-    const bool ok = (stress - holdGoal_).cwiseAbs().maxCoeff() < relativeTolerance * expected &&
+    const bool ok = maskedError(stress, holdGoal_, mask) < relativeTolerance * expected &&
                     unbalanced < unbalancedTolerance;
     settled_ = ok ? settled_ + 1 : 0;
     if (settled_ >= settleSteps) {
       refStress = stress;
-      refStrain = strain;
+      refDeformation = m.deformation;
       target = refStress;
       rampRate_ = (increment > 0 ? increment : 0.5 * K[axis] * gammaTarget) / rampSteps;
       stage = Stage::Ramp;
@@ -83,7 +103,8 @@ Vec3 StressProbe::update(const CellMeasurement& m, Real dt) {
     }
   } else if (stage == Stage::Ramp) {
     ++rampStepsDone;
-    gamma = shearStrainGamma(strain - refStrain);
+    dStrain = strainBetween(refDeformation, m.deformation);
+    gamma = strainMeasure();
     const Real reached = sign * (target[axis] - refStress[axis]);
     const bool stop = increment > 0 ? reached >= increment : gamma >= gammaTarget;
     if (stop) {
@@ -95,27 +116,29 @@ Vec3 StressProbe::update(const CellMeasurement& m, Real dt) {
   } else if (stage == Stage::Hold) {
     ++holdSteps;
     const Real inc = std::abs(target[axis] - refStress[axis]);
-    const bool ok = (stress - target).cwiseAbs().maxCoeff() < relativeTolerance * inc &&
-                    unbalanced < unbalancedTolerance;
+    const bool ok = maskedError(stress, target, mask) < relativeTolerance * inc && unbalanced < unbalancedTolerance;
     settled_ = ok ? settled_ + 1 : 0;
     if (settled_ >= settleSteps) {
       dStress = stress - refStress;
-      dStrain = strain - refStrain;
-      gamma = shearStrainGamma(dStrain);
+      dStrain = strainBetween(refDeformation, m.deformation);
+      gamma = strainMeasure();
       stage = Stage::Done;
       done = true;
-      return Vec3::Zero();
+      return Vec6::Zero();
     }
   }
   if (steps > maxSteps) {
     std::ostringstream msg;
-    msg << "probe on axis " << "xyz"[axis] << " did not reach equilibrium within " << maxSteps << " steps";
+    msg << "probe on axis " << kAxisNames[axis] << " did not reach equilibrium within " << maxSteps << " steps";
     message = msg.str();
     stage = Stage::Failed;
     done = true;
-    return Vec3::Zero();
+    return Vec6::Zero();
   }
-  return law.rates(target, stress, K, dt);
+  Vec6 goal = target;
+  for (int I = 0; I < 6; ++I)
+    if (!(mask >> I & 1u)) goal[I] = 0;  // held strain: rate 0
+  return law.rates(goal, mask, stress, K, dt);
 }
 
 }  // namespace trueaniso

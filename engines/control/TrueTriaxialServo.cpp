@@ -10,6 +10,10 @@ namespace trueaniso {
 void TrueTriaxialServo::validate() const {
   goal.validate();
   law.validate();
+  require(shearGoal.allFinite(), "servo: the shear stress goals must be finite numbers");
+  require(controlShear || shearGoal.isZero(),
+          "servo: shear stress goals given on a path that holds the cell's shear strains (controlShear off): "
+          "nothing would servo them");
   require(pathRate > 0 && stressTolerance > 0 && followTolerance > 0 && maxStrain > 0,
           "servo tolerances and path rate must be > 0");
   require(std::isfinite(loadingFriction) && loadingFriction > 0,
@@ -29,13 +33,19 @@ void TrueTriaxialServo::apply(Scene& s) {
     return;
   }
   if (!started_) throw InputError("TrueTriaxialServo: call start(scene) before running it");
-  s.cell.strainRate = update(CellMeasurement::of(s), s.dt);
+  s.cell.velGrad = CellServoLaw::velocityGradient(update(CellMeasurement::of(s), s.dt));
 }
 
-Vec3 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
+Vec6 TrueTriaxialServo::finalStress() const {
+  Vec6 f;
+  f << goal.stresses(), shearGoal;
+  return f;
+}
+
+Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   if (status == Status::Reached || status == Status::Failed) {
     done = true;
-    return Vec3::Zero();
+    return Vec6::Zero();
   }
   stress = m.stress;
   unbalanced = m.unbalanced;
@@ -43,13 +53,20 @@ Vec3 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
     validate();
     startStress = stress;
     target = stress;
-    startStrain = m.strain;
+    startDeformation = m.deformation;
     status = Status::Loading;
   }
   ++steps;
-  const Vec3 final = goal.stresses();
+  const unsigned mask = stressMask();
+  Vec6 final = finalStress();
+  // Components not under stress control are no goal: the path and its checks leave them out.
+  for (int k = 0; k < 6; ++k)
+    if (!(mask >> k & 1u)) final[k] = startStress[k];
+  Real follow = 0;
+  for (int k = 0; k < 6; ++k)
+    if (mask >> k & 1u) follow = std::max(follow, std::abs(stress[k] - target[k]));
   if (status == Status::Loading) {
-    if ((stress - target).cwiseAbs().maxCoeff() < followTolerance) {
+    if (follow < followTolerance) {
       const Real length = (final - startStress).cwiseAbs().maxCoeff();
       progress = length > 0 ? std::min(1.0, progress + pathRate / length) : 1.0;
       stalled = 0;
@@ -59,12 +76,13 @@ Vec3 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
     }
   }
   target = startStress + progress * (final - startStress);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 6; ++k) {
     const Real dir = final[k] >= startStress[k] ? 1.0 : -1.0;
     overshoot[k] = std::max(overshoot[k], dir * (stress[k] - final[k]));
   }
+  gap = stressGap(stress, final, mask);
 
-  const Vec3 strain = m.strain - startStrain;
+  const Vec6 strain = strainBetween(startDeformation, m.deformation);
   if (status == Status::Holding) ++holding;
   if (strain.cwiseAbs().maxCoeff() > maxStrain || steps > maxSteps || stalled > stallSteps ||
       holding > holdSteps) {
@@ -73,27 +91,31 @@ Vec3 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
     if (steps > maxSteps) msg << "no equilibrium within " << maxSteps << " steps";
     else if (holding > holdSteps)
       msg << "held " << holdSteps << " steps without settling (stress off by "
-          << (stress - final).cwiseAbs().maxCoeff() << " Pa, unbalanced force " << unbalanced << ")";
+          << gap.error() << " Pa, unbalanced force " << unbalanced << ")";
     else if (stalled > stallSteps)
       msg << "the specimen stopped following the path for " << stallSteps << " steps (it fails, at "
           << 100 * progress << " % of the path)";
     else msg << "strain " << strain.cwiseAbs().maxCoeff() << " beyond " << maxStrain << " (the specimen fails)";
-    msg << " at stresses (" << stress.x() / 1e3 << ", " << stress.y() / 1e3 << ", " << stress.z() / 1e3 << ") kPa";
+    msg << " at stresses (" << stress[0] / 1e3 << ", " << stress[1] / 1e3 << ", " << stress[2] / 1e3
+        << ") kPa, largest shear stress " << gap.maxShear / 1e3 << " kPa";
     message = msg.str();
     status = Status::Failed;
     done = true;
-    return Vec3::Zero();
+    return Vec6::Zero();
   }
   if (status == Status::Holding) {
-    const bool ok = (stress - final).cwiseAbs().maxCoeff() < stressTolerance && unbalanced < unbalancedTolerance;
+    const bool ok = gap.error() < stressTolerance && unbalanced < unbalancedTolerance;
     settled = ok ? settled + 1 : 0;
     if (settled >= settleSteps) {
       status = Status::Reached;
       done = true;
-      return Vec3::Zero();
+      return Vec6::Zero();
     }
   }
-  return law.rates(target, stress, m.stiffness, dt);
+  Vec6 goalNow = target;
+  for (int k = 0; k < 6; ++k)
+    if (!(mask >> k & 1u)) goalNow[k] = 0;  // held shear strains: rate 0
+  return law.rates(goalNow, mask, stress, m.stiffness, dt);
 }
 
 }  // namespace trueaniso

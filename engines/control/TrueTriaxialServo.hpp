@@ -9,10 +9,18 @@
 // until every stress is within `stressTolerance` and the unbalanced force is below its tolerance.
 // A specimen that cannot carry the state (strain beyond `maxStrain`, or no convergence within
 // `maxSteps`) ends the run with status Failed and a message; it never loops forever.
+//
+// The three shear stresses are servoed too (controlShear, the default), to `shearGoal` (zero: the
+// paper's frictionless walls transmit no shear, so the cell's axes are the principal axes), and
+// move along the path with the normal stresses. A state is reached when the principal stresses
+// and the shear stresses are all within `stressTolerance` (StressGap). With controlShear off the
+// cell keeps its shear strains (the orthorhombic cell of before, whose shear stresses nothing
+// holds); a shear goal on such a path is refused.
 #include <string>
 
 #include "control/CellMeasurement.hpp"
 #include "control/CellServoLaw.hpp"
+#include "control/StressGap.hpp"
 #include "control/TrueTriaxialPath.hpp"
 #include "core/Engine.hpp"
 
@@ -23,6 +31,8 @@ class TrueTriaxialServo : public Engine {
   enum class Status { Idle, Loading, Holding, Reached, Failed };
 
   TrueTriaxialState goal;
+  Vec3 shearGoal = Vec3::Zero();   // sigma_yz, sigma_xz, sigma_xy at the state (Pa)
+  bool controlShear = true;        // servo the shear stresses (else hold the shear strains)
   CellServoLaw law;
   // The friction of every contact while loading (the paper's 0.5), set on the scene by start():
   // a scene fresh from a probe or from elsewhere may carry another value. The servo owns it as
@@ -31,7 +41,7 @@ class TrueTriaxialServo : public Engine {
   Real loadingFriction = kLoadingFriction;
   Real pathRate = 2.0;             // Pa per step: the fastest the goal moves along the path
   Real followTolerance = 1000.0;   // Pa
-  Real stressTolerance = 500.0;    // Pa: the 0.5 kPa
+  Real stressTolerance = 500.0;    // Pa: principal and shear stresses, the 0.5 kPa
   Real unbalancedTolerance = 1e-4;  // as reach_state and docs/triaxial.md
   long settleSteps = 200;          // the hold criterion must be met this many steps in a row
   Real maxStrain = 0.05;           // failure: |cell strain since start| on any axis beyond it
@@ -47,11 +57,13 @@ class TrueTriaxialServo : public Engine {
   Status status = Status::Idle;
   std::string message;
   Real progress = 0;               // 0 at the start stresses, 1 at the state
-  Vec3 startStress = Vec3::Zero(), target = Vec3::Zero(), stress = Vec3::Zero();
-  Vec3 startStrain = Vec3::Zero();
+  // Voigt (xx, yy, zz, yz, xz, xy), compression positive.
+  Vec6 startStress = Vec6::Zero(), target = Vec6::Zero(), stress = Vec6::Zero();
+  Mat3 startDeformation = Mat3::Identity();  // the cell's F when the servo started
+  StressGap gap;                   // of the last measurement against the state
   // Largest excursion of each stress beyond its final value in the direction of loading (Pa);
   // <= 0 means it never passed its goal.
-  Vec3 overshoot = Vec3::Constant(-1e300);
+  Vec6 overshoot = Vec6::Constant(-1e300);
   Real unbalanced = 0;
   long steps = 0, settled = 0, stalled = 0, holding = 0;
 
@@ -60,7 +72,7 @@ class TrueTriaxialServo : public Engine {
     message.clear();
     progress = 0;
     steps = settled = stalled = holding = 0;
-    overshoot = Vec3::Constant(-1e300);
+    overshoot = Vec6::Constant(-1e300);
     done = false;
     started_ = false;
   }
@@ -69,13 +81,17 @@ class TrueTriaxialServo : public Engine {
   // apply(), as StressProbe::start.
   void start(Scene& scene);
   void apply(Scene& scene) override;
-  // The control logic alone: cell strain rates from a measurement (used by apply and by the
-  // YADE adapter). Sets `done` when the state is reached or has failed.
-  Vec3 update(const CellMeasurement& m, Real dt);
+  // The control logic alone: cell strain rates (Voigt, engineering, extension positive) from a
+  // measurement (used by apply and by the YADE adapter). Sets `done` when the state is reached or
+  // has failed.
+  Vec6 update(const CellMeasurement& m, Real dt);
   std::string name() const override { return "TrueTriaxialServo"; }
+  // The state's six stresses (Voigt): Eq. (9) on the diagonal, shearGoal off it.
+  Vec6 finalStress() const;
+  unsigned stressMask() const { return controlShear ? kAllComponents : kNormalComponents; }
+  void validate() const;
 
  private:
-  void validate() const;
   bool started_ = false;
 };
 

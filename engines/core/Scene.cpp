@@ -78,8 +78,8 @@ void Scene::refreshMembers() {
 void Scene::rescale(Real f) {
   require(f > 0 && std::isfinite(f), "rescale factor must be > 0");
   const Real f2 = f * f, f3 = f2 * f;
-  cell.size *= f;
-  cell.refSize *= f;
+  cell.hSize *= f;
+  cell.refHSize *= f;
   for (int b = 0; b < bodies.size(); ++b) {
     bodies.pos[b] *= f;
     bodies.vel[b] *= f;  // same strain rate field, same angular velocities
@@ -129,7 +129,7 @@ void Scene::setDensity(Real density) {
 void Scene::validate() const {
   material.validate();
   require(bodies.size() > 0, "the scene has no particles");
-  require((cell.size.array() > 0).all() && cell.size.allFinite(), "cell sizes must be > 0");
+  cell.validate();
   require(solidVolume() < cell.volume(),
           "the particles' volume exceeds the cell's: the size distribution cannot fit the box");
 }

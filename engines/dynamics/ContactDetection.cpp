@@ -1,9 +1,12 @@
 #include "dynamics/ContactDetection.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <tuple>
+
+#include "dynamics/CellFlip.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -22,10 +25,24 @@ bool pairLess(int a1, int a2, const Vec3i& sa, int b1, int b2, const Vec3i& sb) 
   return std::tie(a1, a2, sa[0], sa[1], sa[2]) < std::tie(b1, b2, sb[0], sb[1], sb[2]);
 }
 
-Vec3i floorDiv(const Vec3& p, const Vec3& h) {
-  return Vec3i(static_cast<int>(std::floor(p.x() / h.x())), static_cast<int>(std::floor(p.y() / h.y())),
-               static_cast<int>(std::floor(p.z() / h.z())));
-}
+// Reduced coordinates of the cell: x = hSize s. An orthorhombic cell divides axis by axis, as
+// the diagonal cell always did, so its images and bins are bit-for-bit those of before.
+struct Frame {
+  Mat3 h, hinv;
+  Vec3 diag;
+  bool ortho;
+  explicit Frame(const Mat3& hSize)
+      : h(hSize), hinv(hSize.inverse()), diag(hSize.diagonal()), ortho(Cell::isDiagonal(hSize)) {}
+  Vec3 reduced(const Vec3& x) const { return ortho ? Vec3(x.cwiseQuotient(diag)) : Vec3(hinv * x); }
+  Vec3 offset(const Vec3i& k) const {
+    return ortho ? Vec3(k.cast<Real>().cwiseProduct(diag)) : Vec3(h * k.cast<Real>());
+  }
+  Vec3i image(const Vec3& x) const {  // the cell copy x lies in: floor of its reduced coordinates
+    const Vec3 s = reduced(x);
+    return Vec3i(static_cast<int>(std::floor(s.x())), static_cast<int>(std::floor(s.y())),
+                 static_cast<int>(std::floor(s.z())));
+  }
+};
 
 // Members sorted by the cell they fall in (counting sort), as in a classic linked-cell list.
 struct CellGrid {
@@ -38,16 +55,31 @@ struct CellGrid {
 
 bool ContactDetection::needsRebuild(const Scene& s) const {
   if (s.detectionInvalid || refPos_.size() != s.members.pos.size()) return true;
-  const Vec3 scale = s.cell.size.cwiseQuotient(refSize_);
+  // T: the cell's affine map since the last build. Members are compared with where the affine
+  // field alone would have carried them.
+  const bool diagonal = Cell::isDiagonal(s.cell.hSize) && Cell::isDiagonal(refHSize_);
+  const Mat3 T = diagonal ? Mat3(s.cell.hSize.diagonal().cwiseQuotient(refHSize_.diagonal()).asDiagonal())
+                          : Mat3(s.cell.hSize * refHSize_.inverse());
+  const Vec3 scale = T.diagonal();
   Real maxDisp2 = 0, maxGrow = 0;
   const int nm = s.members.size();
-  for (int m = 0; m < nm; ++m) {
-    maxDisp2 = std::max(maxDisp2, (s.members.pos[m] - refPos_[m].cwiseProduct(scale)).squaredNorm());
-    maxGrow = std::max(maxGrow, s.members.radius[m] - refRadius_[m]);
+  if (diagonal) {
+    for (int m = 0; m < nm; ++m)
+      maxDisp2 = std::max(maxDisp2, (s.members.pos[m] - refPos_[m].cwiseProduct(scale)).squaredNorm());
+  } else {
+    for (int m = 0; m < nm; ++m) maxDisp2 = std::max(maxDisp2, (s.members.pos[m] - T * refPos_[m]).squaredNorm());
   }
+  for (int m = 0; m < nm; ++m) maxGrow = std::max(maxGrow, s.members.radius[m] - refRadius_[m]);
   // A pair's gap shrinks at most by both members' own displacements, both radius increases,
-  // and the cell's relative change times the longest listed branch (2 r_max + skin).
-  const Real affine = (scale.array() - 1.0).abs().maxCoeff() * (2.0 * s.maxRadius() + skin_);
+  // and |T - I| (the spectral norm: the largest stretch of a branch by the affine map) times the
+  // longest listed branch (2 r_max + skin); longer branches keep a longer gap.
+  const Mat3 D = T - Mat3::Identity();
+  const Real stretch = diagonal ? D.diagonal().cwiseAbs().maxCoeff()
+                                : std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(D.transpose() * D,
+                                                                               Eigen::EigenvaluesOnly)
+                                                .eigenvalues()
+                                                .maxCoeff());
+  const Real affine = stretch * (2.0 * s.maxRadius() + skin_);
   return 2.0 * std::sqrt(maxDisp2) + 2.0 * maxGrow + affine >= skin_;
 }
 
@@ -57,41 +89,46 @@ void ContactDetection::apply(Scene& s) {
 
 void ContactDetection::rebuild(Scene& s) {
   s.validate();
+  if (allowFlip && flipIfSheared(s, flipThreshold) != Mat3i::Identity()) ++flips;
   Bodies& B = s.bodies;
   Contacts& C = s.contacts;
-  const Vec3 h = s.cell.size;
+  const Frame frame(s.cell.hSize);
   const int nb = B.size();
 
   // 1. Wrap body centres into the cell and carry the old pairs' image shifts along.
   std::vector<Vec3i> wrap(nb);
   for (int b = 0; b < nb; ++b) {
-    wrap[b] = floorDiv(B.pos[b], h);
-    B.pos[b] -= wrap[b].cast<Real>().cwiseProduct(h);
+    wrap[b] = frame.image(B.pos[b]);
+    B.pos[b] -= frame.offset(wrap[b]);
   }
   for (int c = 0; c < C.size(); ++c) C.shift[c] += wrap[C.b2[c]] - wrap[C.b1[c]];
   s.refreshMembers();
 
-  // 2. Cell grid with cells no smaller than the interaction range.
+  // 2. Cell grid in reduced coordinates, with bins no thinner than the interaction range: two
+  // points closer than the range differ in reduced coordinate k by less than range / width_k
+  // (the row k of hSize^-1 has length 1 / width_k), so by at most one bin.
   const Members& M = s.members;
   const int nm = M.size();
   const Real rmax = s.maxRadius();
   skin_ = skinFactor * rmax;
   const Real range = 2.0 * rmax + skin_;
+  const Vec3 width = s.cell.widths();
   CellGrid g;
-  for (int k = 0; k < 3; ++k) g.n[k] = static_cast<int>(std::floor(h[k] / range));
+  for (int k = 0; k < 3; ++k) g.n[k] = static_cast<int>(std::floor(width[k] / range));
   // Fewer than three cells along an axis is fine: the neighbour scan then visits the same cell
-  // under different periodic images, each one once. Only a cell shorter than the range fails.
+  // under different periodic images, each one once. Only a cell thinner than the range fails.
   require(g.n.minCoeff() >= 1,
-          "the periodic cell is smaller than the interaction range 2 r_max + skin; use more particles");
-  std::vector<Vec3i> image(nm);   // member m sits at wrapped position pos - image*h
+          "the periodic cell is thinner than the interaction range 2 r_max + skin; use more particles");
+  std::vector<Vec3i> image(nm);   // member m sits at wrapped position pos - hSize image
   std::vector<Vec3> wrapped(nm);
   std::vector<Vec3i> cellOf(nm);
   g.begin.assign(g.n.prod() + 1, 0);
   for (int m = 0; m < nm; ++m) {
-    image[m] = floorDiv(M.pos[m], h);
-    wrapped[m] = M.pos[m] - image[m].cast<Real>().cwiseProduct(h);
+    image[m] = frame.image(M.pos[m]);
+    wrapped[m] = M.pos[m] - frame.offset(image[m]);
+    const Vec3 r = frame.reduced(wrapped[m]);
     for (int k = 0; k < 3; ++k)
-      cellOf[m][k] = std::min(g.n[k] - 1, std::max(0, static_cast<int>(wrapped[m][k] / h[k] * g.n[k])));
+      cellOf[m][k] = std::min(g.n[k] - 1, std::max(0, static_cast<int>(r[k] * g.n[k])));
     ++g.begin[g.index(cellOf[m].x(), cellOf[m].y(), cellOf[m].z()) + 1];
   }
   std::partial_sum(g.begin.begin(), g.begin.end(), g.begin.begin());
@@ -126,7 +163,7 @@ void ContactDetection::rebuild(Scene& s) {
               else if (c[k] >= g.n[k]) { c[k] -= g.n[k]; sh[k] = 1; }
             }
             const int cell = g.index(c.x(), c.y(), c.z());
-            const Vec3 shiftVec = sh.cast<Real>().cwiseProduct(h);
+            const Vec3 shiftVec = frame.offset(sh);
             for (int q = g.begin[cell]; q < g.begin[cell + 1]; ++q) {
               const int j = g.items[q];
               if (j <= i || M.body[j] == M.body[i]) continue;
@@ -188,7 +225,7 @@ void ContactDetection::rebuild(Scene& s) {
 
   refPos_ = M.pos;
   refRadius_ = M.radius;
-  refSize_ = h;
+  refHSize_ = frame.h;
   s.detectionInvalid = false;
   ++rebuilds;
 }

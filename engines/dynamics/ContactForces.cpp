@@ -8,13 +8,15 @@
 
 namespace trueaniso {
 
-template <bool Clumps, bool Rotations>
+template <bool Clumps, bool Rotations, bool Sheared>
 void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   Contacts& C = s.contacts;
   Bodies& B = s.bodies;
   const Members& M = s.members;
-  const Vec3 h = s.cell.size;
-  const Vec3 rate = s.cell.strainRate;
+  // Orthorhombic cells act axis by axis (3 products where a sheared cell needs 9): image
+  // offsets hSize k and the affine relative velocity L branch.
+  const Mat3 hSize = s.cell.hSize, L = s.cell.velGrad;
+  const Vec3 h = hSize.diagonal(), rate = L.diagonal();
   const Real dt = s.dt;
   const int nc = C.size(), nb = B.size();
   int nthreads = 1;
@@ -54,7 +56,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     for (int c = 0; c < nc; ++c) {
       const int i = C.m1[c], j = C.m2[c];
       const int a = Clumps ? C.b1[c] : i, b = Clumps ? C.b2[c] : j;
-      const Vec3 sh = C.shift[c].cast<Real>().cwiseProduct(h);
+      const Vec3 sh = Sheared ? Vec3(hSize * C.shift[c].cast<Real>()) : Vec3(C.shift[c].cast<Real>().cwiseProduct(h));
       const Vec3& pi = Clumps ? M.pos[i] : B.pos[a];
       const Vec3 pj = (Clumps ? M.pos[j] : B.pos[b]) + sh;
       const Vec3 d = pj - pi;
@@ -75,7 +77,8 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
 
       // Lever arms from the body centres to the contact point, mid-overlap as in YADE's ScGeom.
       const Real arm1len = ri - 0.5 * delta, arm2len = rj - 0.5 * delta;
-      Vec3 vrel = B.vel[b] - B.vel[a] + rate.cwiseProduct(branch);
+      // Velocities are fluctuations: the affine field adds L (x_b - x_a) = L branch.
+      Vec3 vrel = B.vel[b] - B.vel[a] + (Sheared ? Vec3(L * branch) : Vec3(rate.cwiseProduct(branch)));
       Vec3 arm1, arm2;
       Real twist = 0;
       if (Rotations) {
@@ -121,10 +124,16 @@ void ContactForces::apply(Scene& s) {
   require(!s.detectionInvalid, "contact forces need an up-to-date contact list: run ContactDetection first");
   const HertzMindlin law(s.material);
   const bool clumps = s.hasClumps(), rot = !s.blockRotations;
-  if (clumps) {
-    if (rot) compute<true, true>(s, law); else compute<true, false>(s, law);
+  if (!s.cell.orthorhombic()) {
+    if (clumps) {
+      if (rot) compute<true, true, true>(s, law); else compute<true, false, true>(s, law);
+    } else {
+      if (rot) compute<false, true, true>(s, law); else compute<false, false, true>(s, law);
+    }
+  } else if (clumps) {
+    if (rot) compute<true, true, false>(s, law); else compute<true, false, false>(s, law);
   } else {
-    if (rot) compute<false, true>(s, law); else compute<false, false>(s, law);
+    if (rot) compute<false, true, false>(s, law); else compute<false, false, false>(s, law);
   }
 }
 

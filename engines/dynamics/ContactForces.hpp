@@ -17,7 +17,9 @@ class ContactForces : public Engine {
   long slidingContacts = 0;  // contacts at the Coulomb cap in the last evaluation
 
  private:
-  template <bool Clumps, bool Rotations>
+  // Sheared: a cell with off-diagonal hSize or velGrad (core/Cell.hpp); the orthorhombic
+  // instantiation keeps the diagonal cell's cost.
+  template <bool Clumps, bool Rotations, bool Sheared>
   void compute(Scene& scene, const HertzMindlin& law);
   std::vector<std::vector<Vec3>> forceBuffers_, torqueBuffers_;  // threads 1..n-1
 };

@@ -23,7 +23,10 @@ template <bool Rotations, bool Clumps>
 void NewtonIntegrator::integrate(Scene& s) const {
   Bodies& B = s.bodies;
   const Real dt = s.dt;
-  const Vec3 stretch = Vec3::Ones() + dt * s.cell.strainRate;
+  // The affine map of the step, x -> (I + dt L) x: axis by axis for an orthorhombic cell.
+  const bool sheared = !s.cell.orthorhombic();
+  const Mat3 map = Mat3::Identity() + dt * s.cell.velGrad;
+  const Vec3 stretch = map.diagonal();
   const int nb = B.size();
   const Real damp = damping;
 #pragma omp parallel for schedule(static)
@@ -31,7 +34,7 @@ void NewtonIntegrator::integrate(Scene& s) const {
     Vec3 acc = B.force[b] / B.mass[b];
     if (damp != 0) dampLocal(acc, B.vel[b], dt, damp);
     B.vel[b] += dt * acc;
-    B.pos[b] = B.pos[b].cwiseProduct(stretch) + dt * B.vel[b];
+    B.pos[b] = (sheared ? Vec3(map * B.pos[b]) : Vec3(B.pos[b].cwiseProduct(stretch))) + dt * B.vel[b];
     if (!Rotations) continue;
     if (!Clumps || B.memberCount(b) == 1) {
       // A sphere's inertia is isotropic: no orientation to track, nothing reads it.
@@ -53,7 +56,7 @@ void NewtonIntegrator::integrate(Scene& s) const {
       if (angle > 0) B.orientation[b] = (Quat(Eigen::AngleAxisd(angle, w / w.norm())) * q).normalized();
     }
   }
-  s.cell.size = s.cell.size.cwiseProduct(stretch);
+  s.cell.hSize = sheared ? Mat3(map * s.cell.hSize) : Mat3(stretch.asDiagonal() * s.cell.hSize);
   if (Clumps) s.refreshMembers();
   else s.members.pos = B.pos;  // kept equal for engines that read member positions
 }

@@ -1,8 +1,8 @@
 #pragma once
 // Leap-frog integration of body motion with the local non-viscous damping of YADE's
 // NewtonIntegrator (each acceleration component scaled by 1 -/+ damping against the velocity),
-// plus the cell's deformation: positions follow the affine field of the cell's strain rates
-// and velocities are stored as fluctuations about it.
+// plus the cell's deformation: positions follow the affine field of the cell's velocity gradient
+// (x -> (I + dt L) x, the cell vectors too) and velocities are stored as fluctuations about it.
 #include "core/Engine.hpp"
 
 namespace trueaniso {

@@ -1,5 +1,8 @@
 #include "measure/Stress.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <functional>
 #include <limits>
 
 #include "contact/HertzMindlin.hpp"
@@ -31,21 +34,38 @@ Real unbalancedForce(const Scene& s) {
   return (bodySum / B.size()) / (contact.f / contact.n);
 }
 
-Vec3 affineAxialStiffness(const Scene& s) {
+Vec6 affineStiffness(const Scene& s) {
   const Contacts& C = s.contacts;
   const HertzMindlin law(s.material);
-  const Vec3 sum = blockSum<Vec3>(C.size(), Vec3::Zero(), [&](int c, Vec3& acc) {
+  const Vec6 sum = blockSum<Vec6>(C.size(), Vec6::Zero(), [&](int c, Vec6& acc) {
     const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
     if (kn <= 0) return;
-    const Real ks = law.shearStiffness(kn);
+    const Real ks = law.shearStiffness(kn), kd = (1.0 - law.shearToNormal()) * kn;  // k_n - k_s
     const Vec3& n = C.normal[c];
     const Vec3& L = C.branch[c];
     for (int k = 0; k < 3; ++k) {
       // K_kk = sum L_k^2 [k_s + (k_n - k_s) n_k^2], the kk kk component of Eq. (32).
-      acc[k] += L[k] * L[k] * (ks + (1.0 - law.shearToNormal()) * kn * n[k] * n[k]);
+      acc[k] += L[k] * L[k] * (ks + kd * n[k] * n[k]);
+    }
+    for (int I = 3; I < 6; ++I) {
+      // Engineering shear gamma_ij: the affine displacement u = (gamma/2)(L_j e_i + L_i e_j), the
+      // force k_s u + (k_n - k_s) n (n.u), the stress sym(dF (x) L)_ij: the ij ij component of
+      // Eq. (32) symmetrised over (ij) and (kl), as the static solve's affine part.
+      const int i = voigt::kRow[I], j = voigt::kCol[I];
+      const Real nu = 0.5 * (n[i] * L[j] + n[j] * L[i]);
+      const Real dFi = 0.5 * ks * L[j] + kd * n[i] * nu, dFj = 0.5 * ks * L[i] + kd * n[j] * nu;
+      acc[I] += 0.5 * (dFi * L[j] + dFj * L[i]);
     }
   });
   return sum / s.cell.volume();
+}
+
+Vec3 principalStresses(const Mat3& sigma) {
+  const Mat3 sym = 0.5 * (sigma + sigma.transpose());
+  // The iterative solver: a diagonal tensor gives back its diagonal to the last bit.
+  Vec3 p = Eigen::SelfAdjointEigenSolver<Mat3>(sym, Eigen::EigenvaluesOnly).eigenvalues();
+  std::sort(p.data(), p.data() + 3, std::greater<Real>());
+  return p;
 }
 
 }  // namespace trueaniso

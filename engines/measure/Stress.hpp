@@ -1,6 +1,7 @@
 #pragma once
 // Love-Weber average stress and YADE's unbalanced force.
 #include "core/Scene.hpp"
+#include "core/Voigt.hpp"
 
 namespace trueaniso {
 
@@ -13,8 +14,12 @@ Mat3 loveWeberStress(const Scene& scene);
 // the mean |contact force| over contacts.
 Real unbalancedForce(const Scene& scene);
 
-// d sigma_kk / d epsilon_kk of an affine strain of axis k, (1/V) sum_c k_n (n_k L_k)^2 (plus the
-// shear part); an upper bound of the true stiffness that servos use to scale their gain.
-Vec3 affineAxialStiffness(const Scene& scene);
+// d sigma_I / d e_I of an affine strain of Voigt component I (xx, yy, zz, then engineering shears
+// yz, xz, xy): the diagonal of Eq. (32)'s stiffness (contact springs only), an upper bound of the
+// true stiffness that the cell controllers use to scale their gain.
+Vec6 affineStiffness(const Scene& scene);
+
+// Principal values of the symmetric part of a stress tensor, largest first.
+Vec3 principalStresses(const Mat3& sigma);
 
 }  // namespace trueaniso

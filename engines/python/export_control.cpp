@@ -17,6 +17,24 @@ template <class E, Vec3 E::*F>
 np::ndarray getVec(const E& e) { return toNumpy(e.*F); }
 template <class E, Vec3 E::*F>
 void setVec(E& e, const bp::object& o) { e.*F = toVec3(o, "vector parameter"); }
+template <class E, Vec6 E::*F>
+np::ndarray getVec6(const E& e) { return toNumpy(e.*F); }
+template <class E>
+np::ndarray principal(const E& e) { return toNumpy(e.gap.principal); }
+template <class E>
+Real maxShear(const E& e) { return e.gap.maxShear; }
+template <class E>
+Real stressError(const E& e) { return e.gap.error(); }
+
+// StressServo: the three normal goals as `target`, all six as `goal`.
+np::ndarray servoTarget(const StressServo& s) { return toNumpy(Vec3(s.goal.head<3>())); }
+void setServoTarget(StressServo& s, const bp::object& o) { s.goal.head<3>() = toVec3(o, "servo target"); }
+void setServoGoal(StressServo& s, const bp::object& o) { s.goal = toVec6(o, "servo goal"); }
+bool servoControlsShear(const StressServo& s) { return (s.stressMask & kShearComponents) == kShearComponents; }
+void setServoControlsShear(StressServo& s, bool on) {
+  s.stressMask = on ? (s.stressMask | kShearComponents) : (s.stressMask & ~kShearComponents);
+  if (!on) s.goal.tail<3>().setZero();  // held shear strains: rate 0
+}
 
 // The servo law's parameters appear as attributes of the engine that owns it.
 template <class E> Real getGain(const E& e) { return e.law.gain; }
@@ -72,24 +90,30 @@ Real poisson(const StressProbe& p, int j) { return p.poissonRatio(j); }
 
 // The control logic of an engine without a scene, for the YADE adapter: measurement in, strain
 // rates out (numpy arrays).
-CellMeasurement measurement(const bp::object& stress, const bp::object& strain, const bp::object& stiffness,
+CellMeasurement measurement(const bp::object& stress, const bp::object& deformation, const bp::object& stiffness,
                             Real unbalanced) {
   CellMeasurement m;
-  m.stress = toVec3(stress, "stress");
-  m.strain = toVec3(strain, "strain");
-  m.stiffness = toVec3(stiffness, "stiffness");
+  m.stress = toStressVoigt(stress, "stress");
+  m.deformation = toMatrix3(deformation, "deformation gradient");
+  m.stiffness = toVec6(stiffness, "stiffness");
   m.unbalanced = unbalanced;
   return m;
 }
-np::ndarray servoUpdate(TrueTriaxialServo& s, const bp::object& stress, const bp::object& strain,
+np::ndarray servoUpdate(TrueTriaxialServo& s, const bp::object& stress, const bp::object& deformation,
                         const bp::object& stiffness, Real unbalanced, Real dt) {
-  return toNumpy(s.update(measurement(stress, strain, stiffness, unbalanced), dt));
+  return toNumpy(s.update(measurement(stress, deformation, stiffness, unbalanced), dt));
 }
-np::ndarray probeUpdate(StressProbe& p, const bp::object& stress, const bp::object& strain,
+np::ndarray probeUpdate(StressProbe& p, const bp::object& stress, const bp::object& deformation,
                         const bp::object& stiffness, Real unbalanced, Real dt) {
-  return toNumpy(p.update(measurement(stress, strain, stiffness, unbalanced), dt));
+  return toNumpy(p.update(measurement(stress, deformation, stiffness, unbalanced), dt));
 }
 np::ndarray cellStiffness(const Scene& s) { return toNumpy(CellMeasurement::of(s).stiffness); }
+np::ndarray velocityGradientOf(const bp::object& rates) {
+  return toNumpy(CellServoLaw::velocityGradient(toVec6(rates, "strain rates")));
+}
+np::ndarray strainBetweenPy(const bp::object& F0, const bp::object& F1) {
+  return toNumpy(strainBetween(toMatrix3(F0, "F0"), toMatrix3(F1, "F1")));
+}
 
 }  // namespace
 
@@ -100,14 +124,32 @@ void exportControl() {
   bp::def("deviatoric_q", &pathQ, (bp::arg("b"), bp::arg("sigma_z"), bp::arg("p") = 100e3), "Eq. (13), signed.");
   bp::def("gamma", &gamma, "Eq. (12) from the three strain increments.");
 
+  bp::def("velocity_gradient", &velocityGradientOf, (bp::arg("rates")),
+          "The cell's (symmetric) velocity gradient of six engineering strain rates (xx, yy, zz, yz, xz, xy).");
+  bp::def("strain_between", &strainBetweenPy, (bp::arg("F0"), bp::arg("F1")),
+          "Log strain from deformation gradient F0 to F1, Voigt, engineering shears, compression positive.");
+  bp::scope().attr("NORMAL_COMPONENTS") = kNormalComponents;
+  bp::scope().attr("SHEAR_COMPONENTS") = kShearComponents;
+  bp::scope().attr("ALL_COMPONENTS") = kAllComponents;
+
   bp::class_<StressServo, bp::bases<Engine>, std::shared_ptr<StressServo>>("StressServo")
-      .add_property("target", &getVec<StressServo, &StressServo::target>, &setVec<StressServo, &StressServo::target>)
+      .add_property("target", &servoTarget, &setServoTarget, "Goals of the three normal stresses (Pa).")
+      .add_property("goal", &getVec6<StressServo, &StressServo::goal>, &setServoGoal,
+                    "Six goals (xx, yy, zz, yz, xz, xy): stresses for components under stress control, engineering "
+                    "strain rates for the others.")
+      .def_readwrite("stress_mask", &StressServo::stressMask, "Bit I set: Voigt component I under stress control.")
+      .add_property("control_shear", &servoControlsShear, &setServoControlsShear,
+                    "Servo the three shear stresses (default) or hold the shear strains.")
       .add_property("gain", &getGain<StressServo>, &setGain<StressServo>)
       .add_property("max_strain_rate", &getRate<StressServo>, &setRate<StressServo>)
       .def_readwrite("stress_tolerance", &StressServo::stressTolerance)
       .def_readwrite("unbalanced_tolerance", &StressServo::unbalancedTolerance)
       .def_readwrite("stop_when_reached", &StressServo::stopWhenReached)
-      .add_property("stress", &getVec<StressServo, &StressServo::stress>)
+      .add_property("stress", &getVec6<StressServo, &StressServo::stress>)
+      .add_property("principal", &principal<StressServo>, "Principal stresses, largest first (Pa).")
+      .add_property("max_shear", &maxShear<StressServo>, "Largest |off-diagonal stress| (Pa).")
+      .add_property("stress_error", &stressError<StressServo>,
+                    "Largest principal or component error against the goals (Pa).")
       .def_readonly("unbalanced", &StressServo::unbalanced)
       .def_readonly("reached", &StressServo::reached);
 
@@ -134,7 +176,14 @@ void exportControl() {
       .add_property("b", &goalB)
       .add_property("sigma_z", &goalSz)
       .add_property("p", &goalP)
-      .add_property("goal_stresses", &goalStresses)
+      .add_property("goal_stresses", &goalStresses, "Eq. (9): sigma_x, sigma_y, sigma_z of the state.")
+      .add_property("final_stress", +[](const TrueTriaxialServo& s) { return toNumpy(s.finalStress()); },
+                    "The state's six stresses (Voigt): Eq. (9) and the shear goals.")
+      .add_property("shear_goal", &getVec<TrueTriaxialServo, &TrueTriaxialServo::shearGoal>,
+                    &setVec<TrueTriaxialServo, &TrueTriaxialServo::shearGoal>, "sigma_yz, sigma_xz, sigma_xy at the state.")
+      .def_readwrite("control_shear", &TrueTriaxialServo::controlShear,
+                     "Servo the shear stresses (default) or hold the cell's shear strains.")
+      .def("validate", &TrueTriaxialServo::validate)
       .add_property("gain", &getGain<TrueTriaxialServo>, &setGain<TrueTriaxialServo>)
       .add_property("max_strain_rate", &getRate<TrueTriaxialServo>, &setRate<TrueTriaxialServo>)
       .def_readwrite("path_rate", &TrueTriaxialServo::pathRate, "Pa per step along the path")
@@ -150,22 +199,30 @@ void exportControl() {
       .add_property("status", &servoStatus)
       .def_readonly("message", &TrueTriaxialServo::message)
       .def_readonly("progress", &TrueTriaxialServo::progress)
-      .add_property("stress", &getVec<TrueTriaxialServo, &TrueTriaxialServo::stress>)
-      .add_property("target", &getVec<TrueTriaxialServo, &TrueTriaxialServo::target>)
-      .add_property("overshoot", &getVec<TrueTriaxialServo, &TrueTriaxialServo::overshoot>,
+      .add_property("stress", &getVec6<TrueTriaxialServo, &TrueTriaxialServo::stress>, "Voigt, compression positive.")
+      .add_property("target", &getVec6<TrueTriaxialServo, &TrueTriaxialServo::target>)
+      .add_property("overshoot", &getVec6<TrueTriaxialServo, &TrueTriaxialServo::overshoot>,
                     "Largest excursion of each stress past its goal in the loading direction (Pa).")
+      .add_property("principal", &principal<TrueTriaxialServo>, "Principal stresses, largest first (Pa).")
+      .add_property("max_shear", &maxShear<TrueTriaxialServo>, "Largest |off-diagonal stress| (Pa).")
+      .add_property("stress_error", &stressError<TrueTriaxialServo>,
+                    "Largest principal or shear-stress error against the state (Pa).")
       .def_readonly("unbalanced", &TrueTriaxialServo::unbalanced)
       .def_readonly("steps", &TrueTriaxialServo::steps)
       .def("update", &servoUpdate,
-           (bp::arg("stress"), bp::arg("strain"), bp::arg("stiffness"), bp::arg("unbalanced"), bp::arg("dt")),
-           "Control logic without a scene (YADE adapter): strain rates from a measurement.");
+           (bp::arg("stress"), bp::arg("deformation"), bp::arg("stiffness"), bp::arg("unbalanced"), bp::arg("dt")),
+           "Control logic without a scene (YADE adapter): six engineering strain rates from a measurement.");
 
   bp::class_<StressProbe, bp::bases<Engine>, std::shared_ptr<StressProbe>>("StressProbe")
-      .def("start", +[](StressProbe& p, Scene& s, const bp::object& hold) { p.start(s, toVec3(hold, "held stresses")); },
+      .def("start", +[](StressProbe& p, Scene& s, const bp::object& hold) { p.start(s, toStressVoigt(hold, "held stresses")); },
            (bp::arg("scene"), bp::arg("hold")),
            "Snapshot the scene, suppress sliding, begin relaxing at the held stresses.")
       .def("restore", &StressProbe::restore, "Put the snapshot back into the scene.")
-      .def_readwrite("axis", &StressProbe::axis, "0, 1, 2 = x, y, z (checked by start/begin)")
+      .def_readwrite("axis", &StressProbe::axis, "0, 1, 2 = x, y, z; 3, 4, 5 = yz, xz, xy (checked by start/begin)")
+      .def_readwrite("control_shear", &StressProbe::controlShear,
+                     "Hold the shear stresses (default) or the cell's shear strains (x, y, z probes only).")
+      .def_readwrite("hold_other_strains", &StressProbe::holdOtherStrains,
+                     "Hold the five other strains instead of their stresses: the probe measures C_kk, not 1/S_kk.")
       .def_readwrite("sign", &StressProbe::sign, "+1 loads, -1 unloads (checked by start/begin)")
       .def_readwrite("gamma_target", &StressProbe::gammaTarget, "Eq. (12) at which the ramp stops")
       .def_readwrite("increment", &StressProbe::increment)
@@ -180,11 +237,12 @@ void exportControl() {
       .def_readwrite("max_steps", &StressProbe::maxSteps)
       .add_property("stage", &probeStage)
       .def_readonly("message", &StressProbe::message)
-      .add_property("ref_stress", &getVec<StressProbe, &StressProbe::refStress>)
-      .add_property("stress", &getVec<StressProbe, &StressProbe::stress>)
-      .add_property("target", &getVec<StressProbe, &StressProbe::target>)
-      .add_property("d_stress", &getVec<StressProbe, &StressProbe::dStress>)
-      .add_property("d_strain", &getVec<StressProbe, &StressProbe::dStrain>)
+      .add_property("ref_stress", &getVec6<StressProbe, &StressProbe::refStress>)
+      .add_property("stress", &getVec6<StressProbe, &StressProbe::stress>)
+      .add_property("target", &getVec6<StressProbe, &StressProbe::target>)
+      .add_property("d_stress", &getVec6<StressProbe, &StressProbe::dStress>, "Voigt stress increment (Pa).")
+      .add_property("d_strain", &getVec6<StressProbe, &StressProbe::dStrain>,
+                    "Voigt strain increment (engineering shears), compression positive.")
       .def_readonly("gamma", &StressProbe::gamma)
       .def_readonly("unbalanced", &StressProbe::unbalanced)
       .def_readonly("steps", &StressProbe::steps)
@@ -192,13 +250,15 @@ void exportControl() {
       .def_readonly("ramp_steps_done", &StressProbe::rampStepsDone)
       .def_readonly("hold_steps", &StressProbe::holdSteps)
       .add_property("young_modulus", &StressProbe::youngModulus)
+      .add_property("modulus", &StressProbe::modulus, "E_i (x, y, z probes) or G_ij (yz, xz, xy): d stress / d strain.")
       .def("poisson_ratio", &poisson)
-      .def("begin", +[](StressProbe& p, const bp::object& hold) { p.begin(toVec3(hold, "held stresses")); },
+      .def("begin", +[](StressProbe& p, const bp::object& hold) { p.begin(toStressVoigt(hold, "held stresses")); },
            "Reset the stages without a scene (YADE adapter).")
       .def("update", &probeUpdate,
            (bp::arg("stress"), bp::arg("strain"), bp::arg("stiffness"), bp::arg("unbalanced"), bp::arg("dt")),
            "Control logic without a scene (YADE adapter): strain rates from a measurement.");
-  bp::def("cell_stiffness", &cellStiffness, "Affine axial stiffness estimate the controllers use (Pa).");
+  bp::def("cell_stiffness", &cellStiffness,
+          "Affine stiffness estimate per Voigt component (xx, yy, zz, yz, xz, xy) the controllers use (Pa).");
 }
 
 }  // namespace trueaniso::py

@@ -8,7 +8,8 @@ namespace trueaniso::py {
 namespace {
 
 np::ndarray stress(const Scene& s) { return toNumpy(loveWeberStress(s)); }
-np::ndarray axialStiffness(const Scene& s) { return toNumpy(affineAxialStiffness(s)); }
+np::ndarray stiffness6(const Scene& s) { return toNumpy(affineStiffness(s)); }
+np::ndarray principal(const bp::object& sigma) { return toNumpy(principalStresses(toMatrix3(sigma, "stress tensor"))); }
 bp::dict coordinationDict(const Scene& s) {
   const Coordination z = coordination(s);
   bp::dict d;
@@ -23,7 +24,10 @@ np::ndarray perBody(const Scene& s) { return toNumpy(contactsPerBody(s)); }
 void exportMeasures() {
   bp::def("stress", &stress, "Love-Weber stress tensor (Pa, compression positive) = -YADE getStress().");
   bp::def("unbalanced_force", &unbalancedForce, "YADE's unbalancedForce(useMaxForce=False).");
-  bp::def("affine_axial_stiffness", &axialStiffness);
+  bp::def("affine_stiffness", &stiffness6,
+          "Diagonal of the affine (Eq. 32) stiffness per Voigt component xx, yy, zz, yz, xz, xy (Pa).");
+  bp::def("principal_stresses", &principal, (bp::arg("sigma")),
+          "Principal values of the symmetric part of a 3x3 stress, largest first.");
   bp::def("coordination", &coordinationDict, "Nc, Np, Np0, Np1, Zm (Eq. 14) and Z = 2Nc/Np.");
   bp::def("contacts_per_body", &perBody);
   bp::def("void_ratio", &voidRatio);

@@ -71,21 +71,55 @@ np::ndarray memberBody(const Scene& s) { return toNumpy(s.members.body); }
 np::ndarray memberOffsets(const Scene& s) { return toNumpy(s.members.offset); }
 np::ndarray memberPositions(const Scene& s) { return toNumpy(s.members.pos); }
 
-np::ndarray cellSize(const Scene& s) { return toNumpy(s.cell.size); }
-void setCellSize(Scene& s, const bp::object& o) {
-  const Vec3 h = toVec3(o, "cell size");
-  require((h.array() > 0).all(), "cell sizes must be > 0");
-  s.cell.size = h;
+// The cell as YADE's: hSize (columns = cell vectors), its reference, the velocity gradient.
+np::ndarray cellMatrix(const Scene& s) { return toNumpy(s.cell.hSize); }
+void setCellMatrix(Scene& s, const bp::object& o) {
+  Cell c = s.cell;
+  c.hSize = toMatrix3(o, "cell matrix");
+  c.validate();  // singular or inverted: refused before anything changes
+  s.cell = c;
   s.detectionInvalid = true;
 }
-np::ndarray cellRefSize(const Scene& s) { return toNumpy(s.cell.refSize); }
-void setCellRefSize(Scene& s, const bp::object& o) {
-  const Vec3 h = toVec3(o, "cell reference size");
-  require((h.array() > 0).all(), "cell reference sizes must be > 0");
-  s.cell.refSize = h;
+np::ndarray cellRefMatrix(const Scene& s) { return toNumpy(s.cell.refHSize); }
+void setCellRefMatrix(Scene& s, const bp::object& o) {
+  Cell c = s.cell;
+  c.refHSize = toMatrix3(o, "cell reference matrix");
+  c.validate();
+  s.cell = c;
 }
-np::ndarray strainRate(const Scene& s) { return toNumpy(s.cell.strainRate); }
-void setStrainRate(Scene& s, const bp::object& o) { s.cell.strainRate = toVec3(o, "strain rate"); }
+np::ndarray velocityGradient(const Scene& s) { return toNumpy(s.cell.velGrad); }
+void setVelocityGradient(Scene& s, const bp::object& o) {
+  const Mat3 L = toMatrix3(o, "velocity gradient");
+  require(L.allFinite(), "the velocity gradient must be finite");
+  s.cell.velGrad = L;
+}
+
+// Orthorhombic conveniences: edge lengths and axial strain rates of a diagonal cell. Reading
+// them from a sheared cell would drop its shear, so that is refused.
+Vec3 diagonalOf(const Mat3& m, const char* what) {
+  if (!Cell::isDiagonal(m))
+    throw InputError(std::string("the cell is sheared: ") + what + " describes only an orthorhombic one (read "
+                     "scene.cell, scene.cell_ref or scene.velocity_gradient)");
+  return m.diagonal();
+}
+Vec3 positiveSizes(const bp::object& o, const char* what) {
+  const Vec3 h = toVec3(o, what);
+  require(h.allFinite() && (h.array() > 0).all(), std::string(what) + " must be > 0");
+  return h;
+}
+np::ndarray cellSize(const Scene& s) { return toNumpy(diagonalOf(s.cell.hSize, "cell_size")); }
+void setCellSize(Scene& s, const bp::object& o) {
+  s.cell.hSize = positiveSizes(o, "cell sizes").asDiagonal();
+  s.detectionInvalid = true;
+}
+np::ndarray cellRefSize(const Scene& s) { return toNumpy(diagonalOf(s.cell.refHSize, "cell_ref_size")); }
+void setCellRefSize(Scene& s, const bp::object& o) { s.cell.refHSize = positiveSizes(o, "cell reference sizes").asDiagonal(); }
+np::ndarray strainRate(const Scene& s) { return toNumpy(diagonalOf(s.cell.velGrad, "strain_rate")); }
+void setStrainRate(Scene& s, const bp::object& o) {
+  const Vec3 r = toVec3(o, "strain rate");
+  require(r.allFinite(), "the strain rate must be finite");
+  s.cell.velGrad = r.asDiagonal();
+}
 np::ndarray strain(const Scene& s) { return toNumpy(s.cell.strain()); }
 
 Real getG(const Scene& s) { return s.material.shearModulus; }
@@ -162,7 +196,7 @@ Real cs(const Scene& s) { return s.material.Cs(); }
 }  // namespace
 
 void exportScene() {
-  bp::class_<Scene, ScenePtr>("Scene", "Periodic orthorhombic cell, bodies (clumps of >= 1 spheres), contacts.")
+  bp::class_<Scene, ScenePtr>("Scene", "Periodic cell (a full 3x3 matrix, as YADE's), bodies (clumps of >= 1 spheres), contacts.")
       .def("add_spheres", &addSpheres, (bp::arg("positions"), bp::arg("radii")))
       .def("add_sphere", +[](Scene& s, const bp::object& p, Real r) { return s.addSphere(toVec3(p, "position"), r); })
       .def("add_clump", &addClump,
@@ -189,10 +223,23 @@ void exportScene() {
       .add_property("member_body", &memberBody)
       .add_property("member_offsets", &memberOffsets)
       .add_property("member_positions", &memberPositions)
-      .add_property("cell_size", &cellSize, &setCellSize)
+      .add_property("cell", &cellMatrix, &setCellMatrix,
+                    "Cell matrix hSize (3x3, columns = cell vectors), as YADE's O.cell.hSize; a singular or "
+                    "inverted matrix is refused.")
+      .add_property("cell_ref", &cellRefMatrix, &setCellRefMatrix, "Cell matrix at zero strain (YADE's refHSize).")
+      .add_property("velocity_gradient", &velocityGradient, &setVelocityGradient,
+                    "Velocity gradient L of the affine field v = L x (YADE's O.cell.velGrad).")
+      .add_property("cell_size", &cellSize, &setCellSize, "Edge lengths of an orthorhombic cell (sets a diagonal cell).")
       .add_property("cell_ref_size", &cellRefSize, &setCellRefSize)
-      .add_property("strain_rate", &strainRate, &setStrainRate)
-      .add_property("strain", &strain, "Logarithmic cell strain since cell_ref_size, compression positive.")
+      .add_property("strain_rate", &strainRate, &setStrainRate, "Diagonal of the velocity gradient (sets a diagonal one).")
+      .add_property("strain", &strain,
+                    "Logarithmic cell strain since cell_ref, Voigt (xx, yy, zz, yz, xz, xy, engineering shears), "
+                    "compression positive.")
+      .add_property("deformation_gradient", +[](const Scene& s) { return toNumpy(s.cell.deformation()); })
+      .add_property("orthorhombic", +[](const Scene& s) { return s.cell.orthorhombic(); },
+                    "True when hSize and the velocity gradient are diagonal (the fast path).")
+      .add_property("cell_widths", +[](const Scene& s) { return toNumpy(s.cell.widths()); },
+                    "Distances between opposite faces of the cell.")
       .add_property("volume", +[](const Scene& s) { return s.cell.volume(); })
       .add_property("shear_modulus", &getG, &setG)
       .add_property("poisson", &getNu, &setNu)

@@ -2,6 +2,7 @@
 #include <boost/python.hpp>
 #include <boost/python/numpy.hpp>
 
+#include "core/Voigt.hpp"
 #include "python/Numpy.hpp"
 
 namespace trueaniso::py {
@@ -46,6 +47,8 @@ np::ndarray toNumpy(const Mat3& m) {
   return a;
 }
 
+np::ndarray toNumpy(const Vec6& v) { return toNumpy(std::vector<Real>(v.data(), v.data() + 6)); }
+
 namespace {
 
 template <class T>
@@ -87,6 +90,28 @@ Vec3 toVec3(const bp::object& o, const std::string& what) {
   const std::vector<Real> v = flat<double>(o, what);
   if (v.size() != 3) throw InputError(what + " must have three components");
   return Vec3(v[0], v[1], v[2]);
+}
+Vec6 toVec6(const bp::object& o, const std::string& what) {
+  const std::vector<Real> v = flat<double>(o, what);
+  if (v.size() != 6) throw InputError(what + " must have six components (xx, yy, zz, yz, xz, xy)");
+  return Eigen::Map<const Vec6>(v.data());
+}
+Mat3 toMatrix3(const bp::object& o, const std::string& what) {
+  const std::vector<Real> v = flat<double>(bp::import("numpy").attr("ravel")(o), what);
+  if (v.size() != 9) throw InputError(what + " must be a 3x3 matrix");
+  Mat3 m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m(i, j) = v[3 * i + j];
+  return m;
+}
+Vec6 toStressVoigt(const bp::object& o, const std::string& what) {
+  const std::vector<Real> v = flat<double>(bp::import("numpy").attr("ravel")(o), what);
+  Vec6 s = Vec6::Zero();
+  if (v.size() == 3) s.head<3>() = Vec3(v[0], v[1], v[2]);
+  else if (v.size() == 6) s = Eigen::Map<const Vec6>(v.data());
+  else if (v.size() == 9) s = voigt::fromTensor(toMatrix3(o, what));
+  else throw InputError(what + " must be 3 normal stresses, 6 Voigt components (xx, yy, zz, yz, xz, xy) or a 3x3 tensor");
+  return s;
 }
 
 }  // namespace trueaniso::py

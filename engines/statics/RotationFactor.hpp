@@ -26,7 +26,7 @@ struct RotationFactor {
   Real zetaRotationH = 0, zetaRotationV = 0;
 };
 
-// Young's moduli of Eq. (40) from A_n + zeta A_s.
+// Young's moduli of Eq. (40) from the normal block of A_n + zeta A_s (normal-shear coupling dropped).
 Vec3 kinematicModuli(const Mat6& normalPart, const Mat6& shearPart, Real zeta);
 
 RotationFactor rotationFactor(const Mat6& normalPart, const Mat6& shearPart, const Vec3& relaxedFree,

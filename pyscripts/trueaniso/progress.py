@@ -40,9 +40,10 @@ class Progress:
 
     # Callbacks for the protocols' progress hooks.
     def servo(self, servo):
-        """For triaxial.reach_state(progress=...): error against the state's stresses."""
-        err = float(np.max(np.abs(np.asarray(servo.stress) - np.asarray(servo.goal_stresses))))
-        self.line(int(servo.steps), err, float(servo.unbalanced), "  [%s]" % servo.status)
+        """For triaxial.reach_state(progress=...): the servo's own error against the state (its
+        principal and shear stresses, engines/control/StressGap.hpp) and the largest shear stress."""
+        self.line(int(servo.steps), float(servo.stress_error), float(servo.unbalanced),
+                  "  |shear| %.3g Pa  [%s]" % (float(servo.max_shear), servo.status))
 
     def probe(self, probe):
         """For triaxial.probe(progress=...): error against the probe's current goal."""
@@ -54,6 +55,7 @@ class Progress:
         from . import engines
         sig = np.diag(engines.stress(scene))
         target = getattr(engine, "target_pressure", None)
-        # Radius expansion servoes the mean stress; the consolidation servo each principal stress.
-        err = abs(sig.mean() - target) if target is not None else np.max(np.abs(sig - np.asarray(engine.target)))
+        # Radius expansion servoes the mean stress; the consolidation servo every principal and
+        # shear stress (its own error, engines/control/StressGap.hpp).
+        err = abs(sig.mean() - target) if target is not None else engine.stress_error
         self.line(steps, float(err), float(engine.unbalanced), "  [%s]" % label)

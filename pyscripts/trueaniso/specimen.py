@@ -7,8 +7,9 @@ Recipe (choices and reasons are in docs/specimens.md):
  2. radius expansion at fixed cell with friction ``mu_prep``, the growth servoed on the mean
     stress, until p = target and the unbalanced force is below ``prep_unbalanced``;
  3. a similarity rescale back to the exact size distribution (Hertz stresses do not change);
- 4. friction set to ``mu_final`` (0.5), the cell servoed to the isotropic target stress until
-    every stress is within ``stress_tolerance`` and the unbalanced force below ``unbalanced``.
+ 4. friction set to ``mu_final`` (0.5), the cell servoed to the isotropic target stress (its
+    shear stresses to zero: the cell shears a little) until every principal stress and every
+    shear stress is within ``stress_tolerance`` and the unbalanced force below ``unbalanced``.
 """
 import math
 import time
@@ -129,9 +130,9 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
 
     # Back to the sampled radii exactly: they were placed at `scale` and grew by grow.scale.
     scene.rescale(1.0 / (scale * grow.scale))
-    scene.cell_ref_size = scene.cell_size
+    scene.cell_ref = scene.cell
     scene.friction = mu_final
-    servo = engines.StressServo()
+    servo = engines.StressServo()  # all six components: the shear stresses go to zero too
     servo.target = np.full(3, pressure)
     servo.gain = gain
     servo.max_strain_rate = rate
@@ -139,7 +140,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
     servo.unbalanced_tolerance = unbalanced
     chain = dem.Chain(scene, damping=damping, controllers=[servo])
     steps_hold = _run_until(chain, servo, max_steps, 2000, "consolidation", progress)
-    scene.strain_rate = np.zeros(3)
+    scene.velocity_gradient = np.zeros((3, 3))
     scene.velocities = np.zeros((scene.num_bodies, 3))
     scene.angular_velocities = np.zeros((scene.num_bodies, 3))
     dem.refresh(scene)  # forces of the positions kept (the integrator moved them last)
@@ -155,11 +156,19 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
 
 
 def state(scene):
-    """The numbers a researcher checks on a specimen."""
+    """The numbers a researcher checks on a specimen: the whole stress (normal and shear
+    components, principal values largest first, the largest shear stress tau_max and the
+    deviatoric q of the principal values), the fabric counts and the cell (hSize, columns = cell
+    vectors)."""
+    from .triaxial import stress_record
     sig = engines.stress(scene)
     z = engines.coordination(scene)
-    return dict(n=scene.num_bodies, void_ratio=engines.void_ratio(scene), Zm=z["Zm"], Z=z["Z"],
-                Nc=z["Nc"], Np0=z["Np0"], Np1=z["Np1"],
-                sigma_x=sig[0, 0], sigma_y=sig[1, 1], sigma_z=sig[2, 2],
-                p=np.trace(sig) / 3.0, unbalanced=engines.unbalanced_force(scene),
-                friction=scene.friction, cell=list(map(float, scene.cell_size)))
+    out = dict(n=scene.num_bodies, void_ratio=engines.void_ratio(scene), Zm=z["Zm"], Z=z["Z"],
+               Nc=z["Nc"], Np0=z["Np0"], Np1=z["Np1"],
+               sigma_x=sig[0, 0], sigma_y=sig[1, 1], sigma_z=sig[2, 2],
+               p=np.trace(sig) / 3.0, unbalanced=engines.unbalanced_force(scene),
+               friction=scene.friction, cell=scene.cell.tolist())
+    out.update(stress_record(scene))
+    s1, s2, s3 = out["sigma_1"], out["sigma_2"], out["sigma_3"]
+    out["q"] = float(np.sqrt(0.5 * ((s1 - s2) ** 2 + (s2 - s3) ** 2 + (s3 - s1) ** 2)))
+    return out

@@ -1,6 +1,7 @@
 """Versioned specimen files: one .npz holding the whole mechanical state and its provenance.
 
-Layout (format "trueaniso-specimen", version 2): arrays for bodies, member spheres, cell and
+Layout (format "trueaniso-specimen", version 3): arrays for bodies, member spheres, cell (the
+3x3 matrix hSize whose columns are the cell vectors, its reference and the velocity gradient) and
 contact history (the tangential forces matter: a probe starts from them), plus a JSON string
 ``meta`` with material, time step, rotation blocking, seed, preparation parameters, the state
 summary and software versions. ``meta["sha256"]`` is a SHA-256 of the whole content: every array
@@ -10,7 +11,9 @@ summary and software versions. ``meta["sha256"]`` is a SHA-256 of the whole cont
 Loading checks format, version, checksum, then every field (``meta_problem``, ``contents_problem``,
 and after the scene is built ``contacts_problem``) before anything is simulated, and refuses a
 file that fails any check with one line naming the field. Version-1 files (whose checksum left the
-metadata out) are refused with the way out: prepare the specimen again.
+metadata out) are refused with the way out: prepare the specimen again. Version-2 files (an
+orthorhombic cell stored as three edge lengths) are read, their checksum verified over the arrays
+they hold, and their cell turned into the diagonal matrix.
 
 A specimen written by prepare_specimen.py has a ``.json`` summary beside it, derived from the
 ``.npz`` (``write_summary``); a missing one is written again from the ``.npz`` (``ensure_summary``),
@@ -30,9 +33,13 @@ from .provenance import versions
 
 FORMAT = "trueaniso-specimen"
 _ARRAYS = ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia",
-           "member_begin", "member_body", "member_offsets", "radii", "cell_size", "cell_ref_size",
-           "strain_rate", "c_member1", "c_member2", "c_shift", "c_normal", "c_normal_force",
+           "member_begin", "member_body", "member_offsets", "radii", "cell", "cell_ref",
+           "velocity_gradient", "c_member1", "c_member2", "c_shift", "c_normal", "c_normal_force",
            "c_shear_force")
+# Version 2 stored an orthorhombic cell: its edge lengths, reference lengths and diagonal strain
+# rates. Such a file is still read (its checksum over these names), as the diagonal matrices.
+_ARRAYS_V2 = tuple({"cell": "cell_size", "cell_ref": "cell_ref_size", "velocity_gradient": "strain_rate"}.get(k, k)
+                   for k in _ARRAYS)
 
 
 class SpecimenFileError(ValueError):
@@ -47,9 +54,9 @@ def _canonical_meta(meta):
                       separators=(",", ":")).encode()
 
 
-def _checksum(arrays, meta):
+def _checksum(arrays, meta, names=_ARRAYS):
     h = hashlib.sha256()
-    for name in _ARRAYS:
+    for name in names:
         a = np.ascontiguousarray(arrays[name])
         h.update(name.encode())
         h.update(str(a.dtype).encode())
@@ -68,7 +75,7 @@ def scene_arrays(scene):
         angular_velocities=scene.angular_velocities, orientations=scene.orientations,
         masses=scene.masses, inertia=scene.inertia, member_begin=scene.member_begin,
         member_body=scene.member_body, member_offsets=scene.member_offsets, radii=scene.radii,
-        cell_size=scene.cell_size, cell_ref_size=scene.cell_ref_size, strain_rate=scene.strain_rate,
+        cell=scene.cell, cell_ref=scene.cell_ref, velocity_gradient=scene.velocity_gradient,
         c_member1=c["member1"][active], c_member2=c["member2"][active], c_shift=c["shift"][active],
         c_normal=c["normal"][active], c_normal_force=c["normal_force"][active],
         c_shear_force=c["shear_force"][active])
@@ -117,15 +124,20 @@ def read(path):
         raise SpecimenFileError("%s is a version-1 specimen file, whose checksum leaves its metadata (material, "
                                 "time step, rotation blocking) unchecked; prepare the specimen again with this "
                                 "trueaniso (prepare_specimen.py --force)" % path)
-    if meta.get("format_version") != FORMAT_VERSION:
-        raise SpecimenFileError("%s has specimen format version %r; this trueaniso reads version %d"
+    if meta.get("format_version") not in (2, FORMAT_VERSION):
+        raise SpecimenFileError("%s has specimen format version %r; this trueaniso reads versions 2 and %d"
                                 % (path, meta.get("format_version"), FORMAT_VERSION))
-    missing = [k for k in _ARRAYS if k not in data]
+    names = _ARRAYS_V2 if meta["format_version"] == 2 else _ARRAYS
+    missing = [k for k in names if k not in data]
     if missing:
         raise SpecimenFileError("corrupt specimen file %s (missing arrays: %s)" % (path, ", ".join(missing)))
-    if not isinstance(meta.get("sha256"), str) or _checksum(data, meta) != meta["sha256"]:
+    if not isinstance(meta.get("sha256"), str) or _checksum(data, meta, names) != meta["sha256"]:
         raise SpecimenFileError("corrupt specimen file %s (checksum mismatch: arrays or metadata were changed "
                                 "after it was written)" % path)
+    if meta["format_version"] == 2:
+        for new, old in (("cell", "cell_size"), ("cell_ref", "cell_ref_size"), ("velocity_gradient", "strain_rate")):
+            v = np.asarray(data.pop(old))
+            data[new] = np.diag(v) if v.shape == (3,) else v  # a wrong shape is named by contents_problem
     problem = meta_problem(meta) or contents_problem(data)
     if problem:
         raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
@@ -194,13 +206,15 @@ def contents_problem(a):
     if not np.array_equal(a["member_body"], np.repeat(np.arange(nb), np.diff(mb))):
         return "inconsistent body/member arrays (member_body does not follow member_begin)"
     shapes = dict(velocities=(nb, 3), angular_velocities=(nb, 3), orientations=(nb, 4), masses=(nb,),
-                  inertia=(nb, 3), cell_size=(3,), cell_ref_size=(3,), strain_rate=(3,))
+                  inertia=(nb, 3))
     for name, shape in shapes.items():
         if a[name].shape != shape:
             return "%s has shape %s, not %s" % (name, a[name].shape, shape)
+    problem = cell_problem(a)
+    if problem:
+        return problem
     for name in ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia", "radii",
-                 "cell_size", "cell_ref_size", "strain_rate", "member_offsets", "c_normal", "c_normal_force",
-                 "c_shear_force"):
+                 "member_offsets", "c_normal", "c_normal_force", "c_shear_force"):
         if not np.issubdtype(a[name].dtype, np.floating) or not np.all(np.isfinite(a[name])):
             return "non-finite values in %s" % name
     if np.any(a["radii"] <= 0):
@@ -209,13 +223,14 @@ def contents_problem(a):
         return "mass <= 0"
     if np.any(a["inertia"] <= 0):
         return "moment of inertia <= 0"
-    if np.any(a["cell_size"] <= 0) or np.any(a["cell_ref_size"] <= 0):
-        return "cell size <= 0"
     if np.any(np.abs(np.linalg.norm(a["orientations"], axis=1) - 1) > 1e-6):
         return "orientations are not unit quaternions"
-    # Two bodies at one place (a copied body): their contact has no normal.
+    # Two bodies at one place (a copied body): their contact has no normal. Compared in the cell's
+    # reduced coordinates (wrapped into [0, 1)), so that periodic images count as one place.
     r_min = float(a["radii"].min())
-    key = np.round(np.mod(a["positions"], a["cell_size"]) / (1e-6 * r_min))
+    h = np.asarray(a["cell"], dtype=float)
+    wrapped = np.mod(a["positions"] @ np.linalg.inv(h).T, 1.0) @ h.T
+    key = np.round(wrapped / (1e-6 * r_min))
     if len(np.unique(key, axis=0)) != nb:
         return "duplicate bodies (two bodies at the same place)"
     nc = a["c_member1"].shape[0]
@@ -258,12 +273,27 @@ def contacts_problem(scene, a):
     pos = np.asarray(scene.member_positions)
     r = np.asarray(scene.radii)
     m1, m2 = a["c_member1"], a["c_member2"]
-    d = pos[m2] + a["c_shift"] * np.asarray(a["cell_size"]) - pos[m1]
+    d = pos[m2] + a["c_shift"] @ np.asarray(a["cell"]).T - pos[m1]  # image of member 2: + hSize shift
     far = np.linalg.norm(d, axis=1) > 1.1 * (r[m1] + r[m2])
     if np.any(far):
         k = int(np.argmax(far))
         return ("contact %d (members %d, %d, shift %s) joins spheres that do not touch"
                 % (k, m1[k], m2[k], a["c_shift"][k].tolist()))
+    return None
+
+
+def cell_problem(a):
+    """What makes the saved cell unusable (its shapes; a singular or inverted matrix), or None."""
+    for name in ("cell", "cell_ref", "velocity_gradient"):
+        if np.shape(a[name]) != (3, 3):
+            return "%s must be a 3x3 matrix" % name
+        if not np.issubdtype(np.asarray(a[name]).dtype, np.floating) or not np.all(np.isfinite(a[name])):
+            return "non-finite values in %s" % name
+    for name in ("cell", "cell_ref"):
+        h = np.asarray(a[name], dtype=float)
+        scale = np.prod(np.linalg.norm(h, axis=0))
+        if not scale > 0 or np.linalg.det(h) <= 1e-6 * scale:
+            return "%s is a singular or inverted cell matrix (det %.3g)" % (name, np.linalg.det(h))
     return None
 
 
@@ -278,8 +308,8 @@ def load(path):
     m = meta["material"]
     s.shear_modulus, s.poisson, s.friction = m["shear_modulus"], m["poisson"], m["friction"]
     s.density = m["density"]
-    s.cell_size = a["cell_size"]
-    s.cell_ref_size = a["cell_ref_size"]
+    s.cell = a["cell"]
+    s.cell_ref = a["cell_ref"]
     if np.all(np.diff(mb) == 1):
         s.add_spheres(a["positions"], a["radii"])
     else:
@@ -290,7 +320,7 @@ def load(path):
     s.orientations = a["orientations"]
     s.velocities = a["velocities"]
     s.angular_velocities = a["angular_velocities"]
-    s.strain_rate = a["strain_rate"]
+    s.velocity_gradient = a["velocity_gradient"]
     problem = contacts_problem(s, a)
     if problem:
         raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))

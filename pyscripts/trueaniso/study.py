@@ -1,7 +1,8 @@
 """Runs true-triaxial states and their probes on a specimen, with results written as they come.
 
 Layout of a results directory (one study: trueaniso/study_dir.py, docs/runs.md):
-  metadata.json    the study's fingerprint, its states (id -> b, sigma_z), the runs that wrote it
+  metadata.json    the study's fingerprint (the loading path included), its states (id -> b,
+                   sigma_z), the runs that wrote it
   probes.csv       one row per state and probe direction, appended as each probe ends
   states/ID.npz    the specimen held at state ID (a checkpoint, with the steps that made it)
   .lock            the lock a run holds while it writes here
@@ -22,9 +23,13 @@ from .progress import EVERY, Progress, chunk_for
 from .refusal import InputError
 from .triaxial import AXES
 
-COLUMNS = ["state", "b", "sigma_z_goal", "sigma_x", "sigma_y", "sigma_z", "q", "probe", "sign",
-           "d_sigma_x", "d_sigma_y", "d_sigma_z", "d_eps_x", "d_eps_y", "d_eps_z", "E", "nu_1", "nu_2",
-           "nu_1_name", "nu_2_name", "gamma", "Zm", "void_ratio", "rotations", "detection", "damping",
+# A row is also the state's record: its six stresses, the principal values and the largest
+# off-diagonal (issue 12). E and nu_* are empty in a shear probe's row, G in a normal probe's.
+COLUMNS = ["path", "state", "b", "sigma_z_goal", "sigma_x", "sigma_y", "sigma_z", "sigma_yz", "sigma_xz",
+           "sigma_xy", "sigma_1", "sigma_2", "sigma_3", "tau_max", "q", "probe", "sign",
+           "d_sigma_x", "d_sigma_y", "d_sigma_z", "d_sigma_yz", "d_sigma_xz", "d_sigma_xy", "d_eps_x", "d_eps_y",
+           "d_eps_z", "d_gamma_yz", "d_gamma_xz", "d_gamma_xy", "E", "nu_1", "nu_2", "nu_1_name", "nu_2_name", "G",
+           "gamma", "Zm", "void_ratio", "rotations", "detection", "damping",
            "probe_steps", "probe_wall_time", "state_steps", "state_wall_time", "state_from"]
 WALL_TIME_COLUMNS = ("probe_wall_time", "state_wall_time")  # the only columns a rerun does not reproduce
 CSV_NAME = "probes.csv"
@@ -47,9 +52,10 @@ def _effective(function, options):
 
 
 def fingerprint(specimen_meta, gamma, restrain_rotations, skip_detection, damping, state_options=None,
-                probe_options=None, recipe=None):
-    """What every row and checkpoint of a study depends on (study_dir compares it on reruns)."""
-    fp = dict(specimen=specimen_meta["sha256"], code=provenance.code_version(), threads=engines.threads(),
+                probe_options=None, recipe=None, path="true-triaxial"):
+    """What every row and checkpoint of a study depends on (study_dir compares it on reruns); the
+    loading path too, which gives a state definition (b, sigma_z) its mean stress."""
+    fp = dict(specimen=specimen_meta["sha256"], code=provenance.code_version(), threads=engines.threads(), path=path,
               state=dict(damping=damping, **_effective(triaxial.reach_state, state_options)),
               probe=dict(gamma=gamma, rotations="restrained" if restrain_rotations else "free",
                          detection="off" if skip_detection else "on", damping=damping,
@@ -60,41 +66,48 @@ def fingerprint(specimen_meta, gamma, restrain_rotations, skip_detection, dampin
 
 
 def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping, state_options,
-           probe_options, recipe):
+           probe_options, recipe, path="true-triaxial"):
     """Every check that needs no work, then (ids, axes, specimen metadata, fingerprint)."""
+    if path not in triaxial.PATHS:
+        raise InputError("unknown path %r: the paths are %s" % (path, ", ".join(triaxial.PATHS)))
     for i, b, sz in states:
-        triaxial.validate_state(b, sz)  # every state checked before any work
+        try:
+            triaxial.validate_path_state(path, b, sz)  # every state checked before any work
+        except ValueError as exc:
+            raise InputError("state %s: %s" % (i, exc)) from None
     ids = [str(i) for i, _, _ in states]
     if len(set(ids)) != len(ids):
         raise InputError("a state is given twice (ids %s)" % ", ".join(sorted({i for i in ids if ids.count(i) > 1})))
     probes = [triaxial.validate_probe(a, gamma) for a in probes]
     if len(set(probes)) != len(probes):
         raise InputError("each probe axis may be given once")
-    axes = "".join(AXES[a] for a in probes)
+    axes = [AXES[a] for a in probes]
     _, spec_meta = specimen_file.read(specimen_path)
     if spec_meta["block_rotations"] and not restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)
     fp = fingerprint(spec_meta, gamma, restrain_rotations, skip_detection, damping, state_options,
-                     probe_options, recipe)
+                     probe_options, recipe, path)
     return ids, axes, spec_meta, fp
 
 
 def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False, skip_detection=False,
-          damping=0.4, state_options=None, probe_options=None, recipe=None):
+          damping=0.4, state_options=None, probe_options=None, recipe=None, path="true-triaxial"):
     """What run_states checks before any work, alone (run_study.py asks before it writes anything):
     the metadata of the study in `out` (None for a new one), or a refusal. The caller holds the lock."""
     assert lock.is_held(out)
     _, _, _, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping,
-                         state_options, probe_options, recipe)
+                         state_options, probe_options, recipe, path)
     return study_dir.check(out, fp, states)
 
 
 def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False,
                skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None,
-               wait=False, force_new=False, progress_every=EVERY, recipe=None, executor=None):
+               wait=False, force_new=False, progress_every=EVERY, recipe=None, path="true-triaxial", executor=None):
     """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering, or
-    ``state_id``). Returns the complete rows of probes.csv after the run.
+    ``state_id``; ``sv<kPa>`` on the cross-anisotropic path). path: one of triaxial.PATHS (the
+    mean stress of each state, triaxial.path_mean_stress). probes: axes 0-5 or x, y, z, yz, xz,
+    xy. Returns the complete rows of probes.csv after the run.
 
     executor: a concurrent.futures executor (e.g. mpi4py.futures.MPIPoolExecutor) whose workers
     each walk whole loading paths (the unit of work: a path's states follow one another). Workers
@@ -104,7 +117,7 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
     the study's thread count), so the values equal a serial run's; rows arrive in path-completion
     order."""
     ids, axes, spec_meta, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection,
-                                      damping, state_options, probe_options, recipe)
+                                      damping, state_options, probe_options, recipe, path)
     record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),
                   states=ids, probes=axes,
                   versions=provenance.versions(),
@@ -129,7 +142,7 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                                              study_dir.WAY_OUT % os.path.join(out, study_dir.SUPERSEDED)))
         study_dir.write_metadata(out, fp, states, axes, record, previous)
         os.makedirs(os.path.join(out, "states"), exist_ok=True)
-        run = _Run(specimen_path, spec_meta, out, fp, axes, csv_path, table, log, progress_every,
+        run = _Run(specimen_path, spec_meta, out, fp, axes, csv_path, table, log, progress_every, path,
                    dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
                         damping=damping, **(probe_options or {})),
                    dict(damping=damping, **(state_options or {})))
@@ -166,7 +179,7 @@ def _path_worker(job):
     rows = []
     run = _Run(job["specimen_path"], job["spec_meta"], job["out"], job["fp"], job["axes"], None,
                results_csv.Table(None, job["columns"], [], None), lambda m: print(m, flush=True), job["every"],
-               job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)))
+               job["loading"], job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)))
     run.done = set(job["done"])
     run.path(job["path"])
     return rows
@@ -175,9 +188,9 @@ def _path_worker(job):
 class _Run:
     """One run's walk over the loading paths (the caller holds the lock)."""
 
-    def __init__(self, specimen_path, spec_meta, out, fp, axes, csv_path, table, log, every, probe_kw, state_kw,
+    def __init__(self, specimen_path, spec_meta, out, fp, axes, csv_path, table, log, every, path, probe_kw, state_kw,
                  sink=None):
-        self.specimen_path, self.spec_meta, self.out, self.fp = specimen_path, spec_meta, out, fp
+        self.specimen_path, self.spec_meta, self.out, self.fp, self.loading = specimen_path, spec_meta, out, fp, path
         self.axes, self.csv_path, self.log, self.every = axes, csv_path, log, every
         self.columns = list(table.columns)
         self.done = {(r["state"], r["probe"]) for r in table.rows}
@@ -187,7 +200,7 @@ class _Run:
     def job(self, path):
         """What a worker needs to walk `path` as this run would (picklable)."""
         return dict(specimen_path=self.specimen_path, spec_meta=self.spec_meta, out=self.out, fp=self.fp,
-                    axes=self.axes, columns=self.columns, every=self.every, probe_kw=self.probe_kw,
+                    axes=self.axes, columns=self.columns, every=self.every, loading=self.loading, probe_kw=self.probe_kw,
                     state_kw=self.state_kw, done=sorted(self.done), path=path)
 
     def append(self, row, columns):
@@ -234,7 +247,7 @@ class _Run:
             what = "the specimen changed since this run started (checksum differs)"
         else:
             ok = (str(p.get("state")) == str(sid) and p.get("b") == b and p.get("sigma_z") == sz
-                  and p.get("specimen") == self.fp["specimen"])
+                  and p.get("specimen") == self.fp["specimen"] and p.get("path", "true-triaxial") == self.loading)
             what = "it is not state %s (b = %g, sigma_z = %g Pa) of this study's specimen" % (sid, b, sz)
         if not ok:
             raise study_dir.StudyMismatch("%s: %s; remove it and rerun" % (path, what))
@@ -249,18 +262,20 @@ class _Run:
         self.log("state %s: b = %.2f, sigma_z = %.1f kPa, from %s ..."
                  % (sid, b, sz / 1e3, "the specimen" if start is None else "state %s" % start))
         progress = Progress("state %s" % sid, self.log, self.every)
-        info = triaxial.reach_state(scene, b, sz, progress=progress.servo, chunk=chunk_for(scene.num_bodies),
-                                    **self.state_kw)
+        info = triaxial.reach_state(scene, b, sz, p=triaxial.path_mean_stress(self.loading, b, sz),
+                                    progress=progress.servo, chunk=chunk_for(scene.num_bodies), **self.state_kw)
         specimen_file.save(ck, scene, seed=self.spec_meta["seed"], summary=specimen.state(scene),
-                           parameters=dict(state=str(sid), b=b, sigma_z=sz, steps=info["steps"],
+                           parameters=dict(state=str(sid), b=b, sigma_z=sz, path=self.loading, steps=info["steps"],
                                            wall_time=info["wall_time"],
                                            start="specimen" if start is None else str(start),
                                            specimen=self.fp["specimen"], code=self.fp["code"]))
-        self.log("state %s: reached in %d steps (%.1f s)" % (sid, info["steps"], info["wall_time"]))
+        self.log("state %s: reached in %d steps (%.1f s); principal stresses %.2f, %.2f, %.2f kPa, largest "
+                 "off-diagonal %.3f kPa" % (sid, info["steps"], info["wall_time"], info["sigma_1"] / 1e3,
+                                            info["sigma_2"] / 1e3, info["sigma_3"] / 1e3, info["tau_max"] / 1e3))
 
     def probe_state(self, sid, b, sz, ck):
         t0 = time.time()
-        hold = engines.true_triaxial_stresses(b, sz)
+        hold = triaxial.path_stresses(self.loading, b, sz)
         scene, meta = self.load(ck, sid, b, sz)
         p = meta["parameters"]
         st = specimen.state(scene)
@@ -272,11 +287,16 @@ class _Run:
                                                                                           largest=500),
                                **self.probe_kw)
             nus = sorted(k for k in r if k.startswith("nu_"))
-            row = dict(state=sid, b=b, sigma_z_goal=sz, sigma_x=st["sigma_x"], sigma_y=st["sigma_y"],
-                       sigma_z=st["sigma_z"], q=engines.deviatoric_q(b, sz), probe=name, sign=r["sign"],
-                       d_sigma_x=r["d_stress"][0], d_sigma_y=r["d_stress"][1], d_sigma_z=r["d_stress"][2],
-                       d_eps_x=r["d_strain"][0], d_eps_y=r["d_strain"][1], d_eps_z=r["d_strain"][2],
-                       E=r["E"], nu_1=r[nus[0]], nu_2=r[nus[1]], nu_1_name=nus[0], nu_2_name=nus[1],
+            ds, de = r["d_stress"], r["d_strain"]
+            row = dict(path=self.loading, state=sid, b=b, sigma_z_goal=sz,
+                       **{k: st[k] for k in ("sigma_x", "sigma_y", "sigma_z", "sigma_yz", "sigma_xz", "sigma_xy",
+                                             "sigma_1", "sigma_2", "sigma_3", "tau_max")},
+                       q=engines.deviatoric_q(b, sz, triaxial.path_mean_stress(self.loading, b, sz)), probe=name,
+                       sign=r["sign"], d_sigma_x=ds[0], d_sigma_y=ds[1], d_sigma_z=ds[2], d_sigma_yz=ds[3],
+                       d_sigma_xz=ds[4], d_sigma_xy=ds[5], d_eps_x=de[0], d_eps_y=de[1], d_eps_z=de[2],
+                       d_gamma_yz=de[3], d_gamma_xz=de[4], d_gamma_xy=de[5],
+                       E=r.get("E", ""), nu_1=r[nus[0]] if nus else "", nu_2=r[nus[1]] if nus else "",
+                       nu_1_name=nus[0] if nus else "", nu_2_name=nus[1] if nus else "", G=r.get("G", ""),
                        gamma=r["gamma"], Zm=st["Zm"], void_ratio=st["void_ratio"], rotations=r["rotations"],
                        detection=r["detection"], damping=r["damping"], probe_steps=r["steps"],
                        probe_wall_time=r["wall_time"], state_steps=p["steps"], state_wall_time=p["wall_time"],
@@ -284,8 +304,12 @@ class _Run:
             row.update(extra)
             self.sink(row, self.columns or COLUMNS + list(extra))
             self.done.add((str(sid), name))
-            self.log("state %s: probe %s  E = %.1f MPa  %s = %.4f  %s = %.4f  (%d steps, %.1f s)"
-                     % (sid, name, r["E"] / 1e6, nus[0], r[nus[0]], nus[1], r[nus[1]], r["steps"], r["wall_time"]))
+            if nus:
+                self.log("state %s: probe %s  E = %.1f MPa  %s = %.4f  %s = %.4f  (%d steps, %.1f s)"
+                         % (sid, name, r["E"] / 1e6, nus[0], r[nus[0]], nus[1], r[nus[1]], r["steps"], r["wall_time"]))
+            else:
+                self.log("state %s: probe %s  G = %.1f MPa  (%d steps, %.1f s)"
+                         % (sid, name, r["G"] / 1e6, r["steps"], r["wall_time"]))
         self.log("state %s: done (%.1f s)" % (sid, time.time() - t0))
 
 

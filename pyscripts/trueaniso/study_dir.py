@@ -162,8 +162,8 @@ def write_metadata(out, fingerprint, states, probes, record, previous=None):
     previous = previous or {}
     table = dict(previous.get("states", {}))
     table.update(states_table(states))
-    axes = previous.get("probes", "")
-    axes += "".join(a for a in probes if a not in axes)
+    axes = list(previous.get("probes", []))  # a list of axis names ("zxy" before shear probes)
+    axes += [a for a in probes if a not in axes]
     runs = list(previous.get("runs", [])) + [_normal(record)]
     meta = dict(layout=LAYOUT, about="a trueaniso study: every row and checkpoint here was made with this "
                                      "fingerprint (docs/runs.md)",

@@ -1,5 +1,7 @@
 """True-triaxial states (paper Table C1) and directional stress probes, composed from the C++
-engines TrueTriaxialServo and StressProbe.
+engines TrueTriaxialServo and StressProbe. The servo holds the shear stresses at zero (the cell's
+axes are the principal axes, as the paper's frictionless walls make them); probes act on a normal
+stress (E_i, nu_ij) or a shear stress (G_ij).
 
 A state is (b, sigma_z) at p = 100 kPa; Eq. (9) gives sigma_x, sigma_y. The 39 states of Table C1
 lie on eight paths from the isotropic state (b = 0, 0.25, 0.5, 0.75, 1; compression and
@@ -68,17 +70,24 @@ def validate_state(b, sigma_z, p=100e3):
 
 def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0,
                 unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
-                stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None):
+                stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
+                control_shear=True, shear=(0.0, 0.0, 0.0)):
     """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
 
-    Holds until every principal stress is within `tolerance` Pa of Eq. (9) and the unbalanced
-    force is below `unbalanced`. Raises StateNotReached if the specimen cannot get there: it
+    Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
+    within `tolerance` of `shear` (sigma_yz, sigma_xz, sigma_xy; zero: the cell's axes are the
+    principal axes) and the unbalanced force is below `unbalanced`. control_shear=False holds the
+    cell's shear strains instead (the orthorhombic servo, whose shear stresses nothing holds; a
+    non-zero `shear` is then refused). Raises StateNotReached if the specimen cannot get there: it
     stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
     strains beyond `max_strain`, or runs `max_steps`.
     """
     validate_state(b, sigma_z, p)
     servo = engines.TrueTriaxialServo()
     servo.set_goal(b, sigma_z, p)
+    servo.control_shear = bool(control_shear)
+    servo.shear_goal = np.asarray(shear, dtype=float)
+    servo.validate()  # shear goals on a path that holds the shear strains: refused before any work
     servo.path_rate = path_rate
     servo.stress_tolerance = tolerance
     servo.unbalanced_tolerance = unbalanced
@@ -96,20 +105,42 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
         chain.run(chunk)
         if progress:
             progress(servo)
-    scene.strain_rate = np.zeros(3)
+    scene.velocity_gradient = np.zeros((3, 3))
     # The integrator moved the bodies after the last force evaluation: forces for the positions
     # held, so that what is measured, saved and probed next is one consistent state.
     dem.refresh(scene)
     info = dict(status=servo.status, steps=int(servo.steps), wall_time=time.time() - t0,
                 stress=servo.stress.tolist(), unbalanced=float(servo.unbalanced), message=servo.message,
-                overshoot=servo.overshoot.tolist(), goal=servo.goal_stresses.tolist(),
-                friction=float(scene.friction), hold_steps=int(servo.holding))
+                overshoot=servo.overshoot.tolist(), goal=servo.final_stress.tolist(),
+                friction=float(scene.friction), hold_steps=int(servo.holding), control_shear=bool(control_shear))
+    info.update(stress_record(scene, servo.final_stress))
     if servo.status == "failed":
         raise StateNotReached(servo.message)
     return info
 
 
-AXES = "xyz"
+def stress_record(scene, goal=None):
+    """What a state record reports of the stress (Pa, compression positive): the six components,
+    the three principal values (largest first), the largest off-diagonal, and with a goal (six
+    Voigt components) the largest principal and shear errors against it (the acceptance of the
+    full-cell issue: both within 0.5 kPa)."""
+    sig = engines.stress(scene)
+    sym = 0.5 * (sig + sig.T)
+    principal = engines.principal_stresses(sym)
+    out = dict(sigma_yz=float(sym[1, 2]), sigma_xz=float(sym[0, 2]), sigma_xy=float(sym[0, 1]),
+               sigma_1=float(principal[0]), sigma_2=float(principal[1]), sigma_3=float(principal[2]),
+               tau_max=float(max(abs(sym[1, 2]), abs(sym[0, 2]), abs(sym[0, 1]))))
+    if goal is not None:
+        goal = np.asarray(goal, dtype=float)
+        g = np.array([[goal[0], goal[5], goal[4]], [goal[5], goal[1], goal[3]], [goal[4], goal[3], goal[2]]])
+        out["principal_error"] = float(np.abs(principal - engines.principal_stresses(g)).max())
+        out["shear_error"] = float(np.abs(np.array([sym[1, 2], sym[0, 2], sym[0, 1]]) - goal[3:]).max())
+    return out
+
+
+AXES = ("x", "y", "z", "yz", "xz", "xy")  # Voigt order: normal probes, then shear probes
+NORMAL_AXES = AXES[:3]
+SHEAR_AXES = AXES[3:]
 
 # The range of gamma (Eq. 12) a study accepts (docs/triaxial.md, "Probe size"): above 1e-5 the
 # probe is no longer a tangent (E grows with the increment: +0.5 % at 1e-5, +4.5 % at 1e-4 on 100
@@ -121,12 +152,13 @@ GAMMA_RANGE = (1e-8, 1e-5)
 
 
 def validate_probe(axis, gamma):
-    """The axis as 0, 1, 2 (from 0-2 or "x", "y", "z"); ValueError for any other axis (True
-    included: a bool is not an axis) and for a gamma that is not a finite positive number."""
-    if isinstance(axis, str) and axis in ("x", "y", "z"):
-        axis = AXES.index(axis)
-    elif isinstance(axis, bool) or not isinstance(axis, (int, np.integer)) or axis not in (0, 1, 2):
-        raise ValueError("probe axis must be x, y or z, not %r" % (axis,))
+    """The axis as 0-5 (from 0-5 or "x", "y", "z", "yz", "xz", "xy"; "zy", "zx", "yx" name the same
+    shears); ValueError for any other axis (True included: a bool is not an axis) and for a gamma
+    that is not a finite positive number."""
+    if isinstance(axis, str) and axis in AXES + ("zy", "zx", "yx"):
+        axis = AXES.index(axis if axis in AXES else axis[::-1])
+    elif isinstance(axis, bool) or not isinstance(axis, (int, np.integer)) or axis not in range(6):
+        raise ValueError("probe axis must be x, y, z, yz, xz or xy, not %r" % (axis,))
     if not (isinstance(gamma, (int, float, np.floating)) and math.isfinite(gamma) and gamma > 0):
         raise ValueError("probe gamma must be a finite number > 0, not %r" % (gamma,))
     return int(axis)
@@ -134,16 +166,26 @@ def validate_probe(axis, gamma):
 
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
-          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, progress=None):
+          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True,
+          hold_other_strains=False, progress=None):
     """One directional probe at a held state; the scene is restored afterwards.
 
-    hold: the state's stresses (Pa) held during the probe on the two other axes.
+    axis: x, y, z (a normal stress: E_i, nu_ij) or yz, xz, xy (a shear stress: G_ij).
+    hold: the state's stresses (Pa) held during the probe on the other components: three normal
+    stresses (the shear stresses then held at zero) or six Voigt components.
+    control_shear=False holds the cell's shear strains instead of the shear stresses (the
+    orthorhombic probe; normal axes only).
+    hold_other_strains=True holds the five other strains at zero instead of their stresses: the
+    modulus is then the stiffness C_kk (static solve's C), not 1/S_kk (docs/cell.md).
     progress: called with the StressProbe after every chunk of steps (the chunk changes no result).
-    Returns a dict with increments, E_i (Eq. 10), nu_ij (Eq. 11), gamma (Eq. 12), steps, time.
+    Returns a dict with the Voigt increments, E_i (Eq. 10) and nu_ij (Eq. 11) or G_ij, gamma
+    (Eq. 12, or the engineering shear strain of a shear probe), steps, time.
     """
     axis = validate_probe(axis, gamma)
     p = engines.StressProbe()
     p.axis, p.sign, p.gamma_target, p.increment = axis, sign, gamma, increment
+    p.control_shear = bool(control_shear)
+    p.hold_other_strains = bool(hold_other_strains)
     p.restrain_rotations = restrain_rotations
     p.gain, p.relative_tolerance, p.unbalanced_tolerance = gain, relative_tolerance, unbalanced
     p.settle_steps, p.ramp_steps, p.max_steps = settle_steps, ramp_steps, max_steps
@@ -167,21 +209,80 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
         dem.refresh(scene)
     if p.stage == "failed":
         raise StateNotReached(p.message)
-    de = p.d_strain
-    out = dict(axis=AXES[axis], sign=sign, E=float(p.young_modulus),
-               d_stress=p.d_stress.tolist(), d_strain=de.tolist(), gamma=float(p.gamma),
+    out = dict(axis=AXES[axis], sign=sign, modulus=float(p.modulus),
+               d_stress=p.d_stress.tolist(), d_strain=p.d_strain.tolist(), gamma=float(p.gamma),
                steps=int(p.steps), relax_steps=int(p.relax_steps), ramp_steps=int(p.ramp_steps_done),
                hold_steps=int(p.hold_steps), wall_time=time.time() - t0,
                # a scene that blocks rotations is restrained whatever was asked
                rotations="restrained" if restrain_rotations or scene.block_rotations else "free",
                detection="off" if skip_detection else "on", damping=damping,
-               detection_calls=int(chain.detection.applied))
-    for j in range(3):
-        if j != axis:
-            out["nu_%s%s" % (AXES[axis], AXES[j])] = float(p.poisson_ratio(j))
+               detection_calls=int(chain.detection.applied), control_shear=bool(control_shear),
+               hold_other_strains=bool(hold_other_strains))
+    if axis < 3:
+        out["E"] = out["modulus"]
+        for j in range(3):
+            if j != axis:
+                out["nu_%s%s" % (AXES[axis], AXES[j])] = float(p.poisson_ratio(j))
+    else:
+        out["G"] = out["modulus"]
     return out
 
 
 def probe_state(scene, hold, axes=(2, 0, 1), **kw):
-    """x, y and z probes from the same state (the probe restores it after each)."""
+    """Probes from the same state (the probe restores it after each): z, x, y by default."""
     return [probe(scene, hold, a, **kw) for a in axes]
+
+
+# Loading paths a study can follow (run_states.py --path). "true-triaxial": the paper's Table C1
+# paths, constant b and p = 100 kPa (Eqs. 8-9). "cross-anisotropic": its Fig. 16 (after Zhou et
+# al. 2026c), sigma_h = sigma_x = sigma_y held at SIGMA_H while sigma_v = sigma_z varies.
+PATHS = ("true-triaxial", "cross-anisotropic")
+SIGMA_H = 100e3
+# The sigma_v of a cross-anisotropic study when none are given (Pa): stress ratios sigma_v/sigma_h
+# from 0.5 to 2.5 on both sides of the isotropic state. The paper does not list the states of
+# Fig. 16's source; this choice spans the ratios of Table C1's extreme states (sigma_1/sigma_3 up to 3).
+CROSS_ANISOTROPIC_SIGMA_V = (50e3, 60e3, 70e3, 80e3, 90e3, 100e3, 120e3, 140e3, 160e3, 180e3, 200e3, 250e3)
+
+
+def path_mean_stress(path, b, sigma_z):
+    """The mean stress p of the state (b, sigma_z) on a path: 100 kPa on the true-triaxial paths;
+    on the cross-anisotropic path (b = 0 there) (2 sigma_h + sigma_v) / 3, which makes Eq. (9)
+    give sigma_x = sigma_y = sigma_h for any sigma_v, so the servo's straight stress path from the
+    isotropic state keeps sigma_h at 100 kPa all the way."""
+    if path == "true-triaxial":
+        return 100e3
+    if path == "cross-anisotropic":
+        return (2.0 * SIGMA_H + sigma_z) / 3.0
+    raise ValueError("unknown path %r: the paths are %s" % (path, ", ".join(PATHS)))
+
+
+def validate_path_state(path, b, sigma_z):
+    """ValueError with the reason for a state that is not on the path (or not a state)."""
+    p = path_mean_stress(path, b, sigma_z)
+    if path == "cross-anisotropic":
+        if b != 0:
+            raise ValueError("a cross-anisotropic state is given by sigma_v alone (b = 0 in its definition), "
+                             "not b = %r" % (b,))
+        if not (isinstance(sigma_z, (int, float)) and math.isfinite(sigma_z) and sigma_z > 0):
+            raise ValueError("sigma_v must be a finite stress > 0 Pa, not %r" % (sigma_z,))
+    return validate_state(b, sigma_z, p)
+
+
+def path_stresses(path, b, sigma_z):
+    """sigma_x, sigma_y, sigma_z (Pa) of the state on its path."""
+    return engines.true_triaxial_stresses(b, sigma_z, path_mean_stress(path, b, sigma_z))
+
+
+def cross_anisotropic_states(sigma_v=CROSS_ANISOTROPIC_SIGMA_V):
+    """[(id, 0, sigma_v)]: ids 'sv<sigma_v in kPa>' (e.g. sv60, sv112.5), exact for any Pa value
+    that is a multiple of 0.1 Pa."""
+    out = []
+    for sv in sigma_v:
+        sv = float(sv)
+        validate_path_state("cross-anisotropic", 0.0, sv)
+        out.append(("sv%s" % ("%.4f" % (sv / 1e3)).rstrip("0").rstrip("."), 0.0, sv))
+    ids = [i for i, _, _ in out]
+    twice = sorted({i for i in ids if ids.count(i) > 1})
+    if twice:
+        raise ValueError("sigma_v of state %s is given twice" % ", ".join(twice))
+    return out

@@ -6,11 +6,12 @@ Hertz-Mindlin law: a thin adapter called every step by a PyRunner.
     yade_adapter.attach(servo, stiffness)        # a PyRunner before NewtonIntegrator
     O.run(...) until yade_adapter.finished()
 
-The adapter measures what our controllers read (YADE's getStress with our sign, the cell's
-log strain, YADE's unbalanced force), calls the controller's C++ update(), and sets
-O.cell.velGrad (YADE applies a new velGrad from the next step on). The stiffness estimate that
-scales the gain is our affine estimate of the imported scene (trueaniso.engines.cell_stiffness),
-constant over the small strains of a state or a probe.
+The adapter measures what our controllers read (YADE's whole getStress tensor with our sign, the
+cell's deformation gradient since the adapter was attached, YADE's unbalanced force), calls the
+controller's C++ update() for the six strain rates, and sets O.cell.velGrad to their symmetric
+tensor (YADE applies a new velGrad from the next step on). The stiffness estimate that scales the
+gain is our affine estimate of the imported scene (trueaniso.engines.cell_stiffness, six
+components), constant over the small strains of a state or a probe.
 """
 import math
 
@@ -19,30 +20,35 @@ import numpy as np
 _ACTIVE = {}
 
 
+def _matrix(m):
+    return np.array([[m[i][j] for j in range(3)] for i in range(3)])
+
+
 class CellAdapter:
     def __init__(self, controller, stiffness, O):
         self.controller = controller
         self.stiffness = np.asarray(stiffness, dtype=float)
         self.O = O
-        self.ref = np.array([O.cell.hSize[k][k] for k in range(3)])
+        self.ref_inverse = np.linalg.inv(_matrix(O.cell.hSize))
         self.calls = 0
 
     def measure(self):
         from yade import utils
         O = self.O
-        stress = -np.diag(np.array(utils.getStress()))
-        h = np.array([O.cell.hSize[k][k] for k in range(3)])
-        strain = -np.log(h / self.ref)
+        stress = -_matrix(utils.getStress())
+        deformation = _matrix(O.cell.hSize) @ self.ref_inverse
         unbalanced = utils.unbalancedForce()
         if not math.isfinite(unbalanced):
             unbalanced = 1.0
-        return stress, strain, unbalanced
+        return stress, deformation, unbalanced
 
     def __call__(self):
         from yade import Matrix3
-        stress, strain, unbalanced = self.measure()
-        rates = self.controller.update(stress, strain, self.stiffness, unbalanced, self.O.dt)
-        self.O.cell.velGrad = Matrix3(rates[0], 0, 0, 0, rates[1], 0, 0, 0, rates[2])
+        from . import engines
+        stress, deformation, unbalanced = self.measure()
+        rates = self.controller.update(stress, deformation, self.stiffness, unbalanced, self.O.dt)
+        L = engines.velocity_gradient(rates)
+        self.O.cell.velGrad = Matrix3(*[float(v) for v in L.ravel()])
         self.calls += 1
         if self.controller.done:
             self.O.pause()

@@ -1,5 +1,9 @@
 """Bridge between YADE's ``O`` and our Scene (runs only inside yade-double).
 
+The whole periodic cell crosses both ways: hSize (columns = cell vectors, off-diagonal terms of
+a sheared cell included), refHSize and the velocity gradient (velGrad, full 3x3), with the
+contacts' image shifts (YADE's cellDist is our shift: the image of id2 is pos2 + hSize cellDist).
+
 Conventions that differ and are converted here:
  - YADE's state.vel is the total velocity; ours is the fluctuation about the cell's affine field
    (v_total = v_fluct + velGrad x). A velGrad set in YADE takes effect at its next step (see
@@ -30,14 +34,20 @@ def _yade():
     return O
 
 
-def _diag_cell(O):
+def _matrix(m):
+    return np.array([[m[i][j] for j in range(3)] for i in range(3)])
+
+
+def _cell(O):
+    """YADE's hSize (3x3, sheared or not), refused if the scene is not periodic."""
     if not O.periodic:
         raise BridgeError("the YADE scene is not periodic (O.periodic = False)")
-    h = np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)])
-    off = h - np.diag(np.diag(h))
-    if np.abs(off).max() > 1e-12 * np.abs(np.diag(h)).max():
-        raise BridgeError("the YADE cell is not orthorhombic (hSize has off-diagonal terms)")
-    return np.diag(h).copy()
+    return _matrix(O.cell.hSize)
+
+
+def _yade_matrix(m):
+    from yade import Matrix3
+    return Matrix3(*[float(v) for v in np.asarray(m, dtype=float).ravel()])
 
 
 def scene_from_yade(O=None, import_contacts=True):
@@ -47,7 +57,7 @@ def scene_from_yade(O=None, import_contacts=True):
     """
     O = O or _yade()
     from yade import Sphere
-    size = _diag_cell(O)
+    h = _cell(O)
     bodies = [b for b in O.bodies if b is not None]
     spheres = [b for b in bodies if isinstance(b.shape, Sphere) and not b.isClumpMember and not b.isClump]
     if len(spheres) != len(bodies):
@@ -61,16 +71,22 @@ def scene_from_yade(O=None, import_contacts=True):
     s.poisson = poisson
     s.density = density
     s.friction = math.tan(friction_angle)
-    s.cell_size = size
-    ref = np.array([O.cell.refSize[k] for k in range(3)])
-    s.cell_ref_size = ref if np.all(ref > 0) else size
+    try:
+        s.cell = h  # a singular or inverted hSize is refused here, with the engines' message
+    except ValueError as exc:
+        raise BridgeError("the YADE cell cannot be imported: %s" % exc) from None
+    ref = _matrix(O.cell.refHSize)
+    try:
+        s.cell_ref = ref
+    except ValueError:
+        s.cell_ref = h  # no usable reference: strains count from now
     pos = np.array([[b.state.pos[k] for k in range(3)] for b in spheres])
     s.add_spheres(pos, np.array([b.shape.radius for b in spheres]))
     _check_homo_deform(O)
     grad = _current_velocity_gradient(O)
     vel = np.array([[b.state.vel[k] for k in range(3)] for b in spheres])
     s.velocities = vel - pos @ grad.T  # fluctuations about the field the bodies move with now
-    s.strain_rate = _scheduled_strain_rate(O)  # the rate YADE's next step would use
+    s.velocity_gradient = _scheduled_velocity_gradient(O)  # the one YADE's next step would use
     s.angular_velocities = np.array([[b.state.angVel[k] for k in range(3)] for b in spheres])
     s.dt = O.dt
     ids = [b.id for b in spheres]
@@ -125,11 +141,10 @@ def _current_velocity_gradient(O):
     return np.array([[O.cell.velGrad[i][j] for j in range(3)] for i in range(3)])
 
 
-def _scheduled_strain_rate(O):
-    """The diagonal velGrad YADE's next step uses: setting O.cell.velGrad only schedules it
+def _scheduled_velocity_gradient(O):
+    """The velGrad YADE's next step uses (full 3x3): setting O.cell.velGrad only schedules it
     (nextVelGrad) and YADE's NewtonIntegrator adopts it at the next step."""
-    g = O.cell.nextVelGrad if O.cell.velGradChanged else O.cell.velGrad
-    return np.array([g[k][k] for k in range(3)])
+    return _matrix(O.cell.nextVelGrad if O.cell.velGradChanged else O.cell.velGrad)
 
 
 def write_to_yade(scene, O=None, ids=None):
@@ -143,16 +158,17 @@ def write_to_yade(scene, O=None, ids=None):
     moving one step later than its bodies (a lag of rate * dt of strain, ~1e-9 in a probe).
     """
     O = O or _yade()
-    from yade import Matrix3, Vector3
+    from yade import Vector3
     _check_homo_deform(O)
     ids = ids if ids is not None else list(range(scene.num_bodies))
     if len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
     current = _current_velocity_gradient(O)
-    h = scene.cell_size
-    O.cell.hSize = Matrix3(h[0], 0, 0, 0, h[1], 0, 0, 0, h[2])
-    rate = scene.strain_rate
-    O.cell.velGrad = Matrix3(rate[0], 0, 0, 0, rate[1], 0, 0, 0, rate[2])
+    h = scene.cell
+    if O.periodic:
+        _remap_cell_dist(O, _cell(O), h)
+    O.cell.hSize = _yade_matrix(h)
+    O.cell.velGrad = _yade_matrix(scene.velocity_gradient)
     pos, vel, ang, rad = scene.positions, scene.velocities, scene.angular_velocities, scene.radii
     total = vel + pos @ current.T
     for k, i in enumerate(ids):
@@ -161,6 +177,21 @@ def write_to_yade(scene, O=None, ids=None):
         b.state.vel = Vector3(*total[k])
         b.state.angVel = Vector3(*ang[k])
         b.shape.radius = float(rad[k])
+
+
+def _remap_cell_dist(O, old, new):
+    """Our detection may have flipped the cell (new = old M, M an integer matrix of determinant 1:
+    the same periodic medium, core/Cell.hpp). YADE's interactions then keep their identity with
+    cellDist -> M^-1 cellDist, the same image offset; any other change of cell leaves them alone."""
+    M = np.linalg.solve(old, new)
+    Mi = np.rint(M)
+    if np.allclose(Mi, np.eye(3)) or not np.allclose(M, Mi, atol=1e-9) or round(np.linalg.det(Mi)) != 1:
+        return
+    from yade import Vector3i
+    inverse = np.rint(np.linalg.inv(Mi)).astype(int)
+    for I in O.interactions:
+        d = inverse @ np.array([I.cellDist[k] for k in range(3)])
+        I.cellDist = Vector3i(*[int(v) for v in d])
 
 
 def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False):
@@ -175,13 +206,12 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     import yade
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
                       InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
-                      Law2_ScGeom_MindlinPhys_Mindlin, Matrix3, NewtonIntegrator, Vector3, utils)
+                      Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator, Vector3, utils)
     if scene.has_clumps:
         raise BridgeError("yade_scene_from handles sphere scenes only")
     O.reset()
     O.periodic = True
-    h = scene.cell_size
-    O.cell.hSize = Matrix3(h[0], 0, 0, 0, h[1], 0, 0, 0, h[2])
+    O.cell.hSize = _yade_matrix(scene.cell)
     G, nu = scene.shear_modulus, scene.poisson
     mat = O.materials.append(FrictMat(young=2.0 * G * (1.0 + nu), poisson=nu, density=scene.density,
                                       frictionAngle=math.atan(scene.friction)))

@@ -23,7 +23,7 @@ inline std::shared_ptr<Scene> twoSpheres(Real r1, Real r2, Real delta, Real mu =
   auto s = std::make_shared<Scene>();
   s->material = paperMaterial(mu);
   const Real box = 10.0 * (r1 + r2);
-  s->cell.size = s->cell.refSize = Vec3::Constant(box);
+  s->cell.setBox(Vec3::Constant(box));
   const Vec3 c = Vec3::Constant(0.5 * box);
   s->addSphere(c, r1);
   s->addSphere(c + Vec3(r1 + r2 - delta, 0, 0), r2);

@@ -33,7 +33,7 @@ struct BruteContact {
 // Every touching member pair of different bodies, brute force O(m^2), minimum image.
 inline std::vector<BruteContact> bruteContacts(const Scene& s) {
   std::vector<BruteContact> out;
-  const Vec3 h = s.cell.size;
+  const Vec3 h = s.cell.hSize.diagonal();  // orthorhombic scenes
   const Real Estar = s.material.contactModulus();
   const Members& M = s.members;
   for (int i = 0; i < M.size(); ++i)
@@ -67,7 +67,7 @@ inline std::shared_ptr<Scene> handSpheres() {
   auto s = std::make_shared<Scene>();
   s->material = paperMaterial();
   const Real h = 2e-3;
-  s->cell.size = s->cell.refSize = Vec3::Constant(h);
+  s->cell.setBox(Vec3::Constant(h));
   const Real rA = 1.0e-4, rB = 1.2e-4, rC = 0.9e-4, rD = 1.1e-4, rE = 1.0e-4, rF = 0.8e-4;
   const Real dAB = rA + rB - 2e-7, dAC = rA + rC - 1e-7, dBC = rB + rC - 3e-7;
   const Real dCD = rC + rD - 1.5e-7, dDF = rD + rF - 0.5e-7;
@@ -97,7 +97,7 @@ inline Real clumpMass(const Material& m, const std::vector<Real>& radii) {
 inline std::shared_ptr<Scene> twoClumps() {
   auto s = std::make_shared<Scene>();
   s->material = paperMaterial();
-  s->cell.size = s->cell.refSize = Vec3::Constant(2e-3);
+  s->cell.setBox(Vec3::Constant(2e-3));
   const Real r = 1e-4, d = 0.8e-4, r3 = 0.7e-4;
   const std::vector<Vec3> offsets{Vec3(-d, 0, 0), Vec3(d, 0, 0)};
   const std::vector<Real> radii{r, r};
@@ -122,7 +122,7 @@ inline std::shared_ptr<Scene> randomGas(int n, Real phi, unsigned seed, bool dim
   Real vol = 0;
   for (Real& x : radii) { x = r * (0.8 + 0.4 * U(gen)); vol += (dimers ? 2 : 1) * 4.0 / 3.0 * M_PI * x * x * x; }
   const Real side = std::cbrt(vol / phi);
-  s->cell.size = s->cell.refSize = Vec3::Constant(side);
+  s->cell.setBox(Vec3::Constant(side));
   for (int i = 0; i < n; ++i) {
     const Vec3 p = Vec3(U(gen), U(gen), U(gen)) * side;
     if (!dimers) { s->addSphere(p, radii[i]); continue; }

@@ -5,57 +5,94 @@
 #include "control/CellServoLaw.hpp"
 #include "control/StressProbe.hpp"
 #include "control/TrueTriaxialServo.hpp"
+#include "theory/Orthotropic.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 
 using namespace trueaniso;
 
 namespace {
 
-// A linear elastic cell: stress = sigma0 + C (strain - strain0), compression positive, with a
-// non-symmetric normal block (as a prestressed tangent) and the cell's log strain advanced by the
-// controller's strain rates (extension positive: d strain = -rate dt). The controllers are told an
-// affine stiffness `estimate` above the true diagonal, as the engines' affine estimate is.
+// A linear elastic cell: stress = sigma0 + C strain (Voigt, compression positive), with a 6x6 C
+// that is not symmetric in its normal block (as a prestressed tangent) and couples normal and
+// shear components (as a random packing's does), a starting shear stress of a few kPa (as an
+// orthorhombic specimen carries), and the cell's deformation gradient advanced by the
+// controller's strain rates as the integrator does, F -> (I + dt L) F. The strain is the log strain
+// of F. The controllers are told an affine stiffness `estimate` above the true diagonal, as the
+// engines' affine estimate is.
 struct LinearCell {
-  Mat3 C;
-  Vec3 sigma0 = Vec3::Constant(100e3);
-  Vec3 strain = Vec3::Zero();
+  Mat6 C;
+  Vec6 sigma0 = (Vec6() << 100e3, 100e3, 100e3, 2.4e3, -1.1e3, 0.7e3).finished();
+  Mat3 F = Mat3::Identity();
   Real estimateFactor = 1.5;
   Real unbalanced = 1e-6;
   Real dt = 1e-7;
 
-  LinearCell() { C << 300e6, 80e6, 70e6, 90e6, 320e6, 60e6, 75e6, 65e6, 420e6; }
+  LinearCell() {
+    C << 300e6, 80e6, 70e6, 6e6, -4e6, 3e6,
+         90e6, 320e6, 60e6, -5e6, 2e6, 4e6,
+         75e6, 65e6, 420e6, 3e6, 5e6, -2e6,
+         4e6, -3e6, 5e6, 110e6, 4e6, -3e6,
+         -2e6, 3e6, 4e6, 3e6, 120e6, 2e6,
+         3e6, 2e6, -4e6, -2e6, 3e6, 130e6;
+  }
+  Vec6 strain() const { return strainBetween(Mat3::Identity(), F); }
   CellMeasurement measure() const {
     CellMeasurement m;
-    m.stress = sigma0 + C * strain;
-    m.strain = strain;
+    m.stress = sigma0 + C * strain();
+    m.deformation = F;
     m.stiffness = estimateFactor * C.diagonal();
     m.unbalanced = unbalanced;
     return m;
   }
-  void advance(const Vec3& rate) { strain -= rate * dt; }
+  void advance(const Vec6& rates) { F = (Mat3::Identity() + dt * CellServoLaw::velocityGradient(rates)) * F; }
 };
+
+Vec6 normalOnly(const Vec3& s) {
+  Vec6 v = Vec6::Zero();
+  v.head<3>() = s;
+  return v;
+}
 
 }  // namespace
 
 // One step of the law closes `gain` of the error through the stiffness estimate, with the sign of
-// a compression-positive stress and an extension-positive rate; the cap holds in both directions.
+// a compression-positive stress and an extension-positive rate, on every component under stress
+// control (shears too); the cap holds in both directions; a component under strain control takes
+// its goal as its rate. The velocity gradient is the symmetric tensor of the engineering rates.
 TEST(CellServoLaw, ClosesAFractionOfTheErrorAndCapsTheRate) {
   CellServoLaw law{0.1, 5.0};
-  const Vec3 K(1e8, 2e8, 4e8), stress(100e3, 100e3, 100e3), target(101e3, 99e3, 100e3);
+  const Vec6 K = (Vec6() << 1e8, 2e8, 4e8, 5e7, 5e7, 5e7).finished();
+  const Vec6 stress = (Vec6() << 100e3, 100e3, 100e3, 2e3, 0, 0).finished();
+  const Vec6 target = (Vec6() << 101e3, 99e3, 100e3, 0, 0, 0).finished();
   const Real dt = 1e-6;
-  const Vec3 r = law.rates(target, stress, K, dt);
-  EXPECT_NEAR(r.x(), -0.1 * 1e3 / (1e8 * dt), 1e-12);  // more compression wanted: the cell shrinks
-  EXPECT_NEAR(r.y(), +0.1 * 1e3 / (2e8 * dt), 1e-12);
-  EXPECT_EQ(r.z(), 0.0);
-  const Vec3 capped = law.rates(Vec3::Constant(1e9), stress, K, dt);
-  EXPECT_EQ(capped, Vec3::Constant(-5.0));
-  const Vec3 unknownK = law.rates(target, stress, Vec3::Zero(), dt);  // no contact yet: full rate
-  EXPECT_EQ(unknownK, Vec3(-5.0, 5.0, 5.0));
+  const Vec6 r = law.rates(target, kAllComponents, stress, K, dt);
+  EXPECT_NEAR(r[0], -0.1 * 1e3 / (1e8 * dt), 1e-12);  // more compression wanted: the cell shrinks
+  EXPECT_NEAR(r[1], +0.1 * 1e3 / (2e8 * dt), 1e-12);
+  EXPECT_EQ(r[2], 0.0);
+  EXPECT_NEAR(r[3], +0.1 * 2e3 / (5e7 * dt), 1e-12);  // too much sigma_yz: gamma_yz must fall
+  EXPECT_EQ(r[4], 0.0);
+  const Vec6 capped = law.rates(Vec6::Constant(1e9), kAllComponents, stress, K, dt);
+  EXPECT_EQ(capped, Vec6::Constant(-5.0));
+  const Vec6 unknownK = law.rates(target, kAllComponents, stress, Vec6::Zero(), dt);  // no contact yet
+  EXPECT_EQ(unknownK, (Vec6() << -5.0, 5.0, 5.0, 5.0, 5.0, 5.0).finished());
+  Vec6 mixed = target;
+  mixed.tail<3>() << 0.25, 0.0, -0.5;  // strain rates of the strain-controlled shears
+  const Vec6 m = law.rates(mixed, kNormalComponents, stress, K, dt);
+  EXPECT_EQ(m.head<3>(), r.head<3>());
+  EXPECT_EQ(Vec3(m.tail<3>()), Vec3(0.25, 0.0, -0.5));
+  const Mat3 L = CellServoLaw::velocityGradient(m);
+  EXPECT_EQ(L, L.transpose());
+  EXPECT_EQ(L(1, 2), 0.125);
+  EXPECT_EQ(L(0, 1), -0.25);
   EXPECT_THROW((CellServoLaw{0.0, 1.0}.validate()), InputError);
   EXPECT_THROW((CellServoLaw{0.5, -1.0}.validate()), InputError);
 }
 
-// State 21 of Table C1 (b = 0.5, sigma_z = 140 kPa) from the isotropic state: reached, every stress
-// within the tolerance, the goal moving along the straight path of constant b and p, no overshoot
+// State 21 of Table C1 (b = 0.5, sigma_z = 140 kPa) from the isotropic state carrying shear
+// stresses of up to 2.4 kPa: reached, every principal stress and every shear stress within the
+// tolerance, the normal goals moving along the straight path of constant b and p, no overshoot
 // beyond the tolerance (the 0.5 kPa), and the number of steps the path rate implies.
 TEST(TrueTriaxialServo, ReachesState21AlongTheConstantBAndPPath) {
   LinearCell cell;
@@ -71,19 +108,56 @@ TEST(TrueTriaxialServo, ReachesState21AlongTheConstantBAndPPath) {
          n < 1000000) {
     cell.advance(servo.update(cell.measure(), cell.dt));
     ++n;
-    const Vec3& t = servo.target;
-    if (std::abs(t.z() - t.y()) > 1e3) worstB = std::max(worstB, std::abs((t.x() - t.y()) / (t.z() - t.y()) - 0.5));
-    worstP = std::max(worstP, std::abs(t.sum() / 3 - 100e3));
+    const Vec6& t = servo.target;
+    if (std::abs(t[2] - t[1]) > 1e3) worstB = std::max(worstB, std::abs((t[0] - t[1]) / (t[2] - t[1]) - 0.5));
+    worstP = std::max(worstP, std::abs(t.head<3>().sum() / 3 - 100e3));
   }
   ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Reached) << servo.message;
-  const Vec3 s = cell.measure().stress;
-  EXPECT_LT((s - goal).cwiseAbs().maxCoeff(), servo.stressTolerance);
+  const Vec6 s = cell.measure().stress;
+  // Independent check of the acceptance: principal values of the measured tensor (Eigen's solver
+  // on the full tensor, not StressGap) against Eq. (9), and the shears against zero.
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(voigt::stressTensor(s));
+  Vec3 principal = eig.eigenvalues();
+  std::sort(principal.data(), principal.data() + 3);
+  Vec3 sortedGoal = goal;
+  std::sort(sortedGoal.data(), sortedGoal.data() + 3);
+  EXPECT_LT((principal - sortedGoal).cwiseAbs().maxCoeff(), servo.stressTolerance);
+  EXPECT_LT(s.tail<3>().cwiseAbs().maxCoeff(), servo.stressTolerance);
   EXPECT_LT(worstB, 1e-9);  // the goal stays on the b = 0.5 line ...
   EXPECT_LT(worstP, 1e-6);  // ... at p = 100 kPa (round-off of the path interpolation only)
   EXPECT_LT(servo.overshoot.maxCoeff(), servo.stressTolerance);
   // 40 kPa at 2 Pa per step: the goal needs 20,000 steps; holding adds the settle steps and the lag.
   EXPECT_GE(servo.steps, 20000);
   EXPECT_LT(servo.steps, 40000);
+}
+
+// With the shear stresses left out (controlShear off: the cell's shear strains held, the
+// orthorhombic servo of before), the normal stresses still reach their goals but nothing holds the
+// shear stresses: they stay at the start's 2.4 kPa plus what the coupling adds. That is the
+// issue's defect, and why the full servo is the default; a shear goal there is refused.
+TEST(TrueTriaxialServo, WithoutShearControlTheShearStressesStayAndShearGoalsAreRefused) {
+  LinearCell cell;
+  TrueTriaxialServo servo;
+  servo.goal = TrueTriaxialState{0.5, 140e3, 100e3};
+  servo.law = CellServoLaw{0.05, 1e3};
+  servo.controlShear = false;
+  long n = 0;
+  while (servo.status != TrueTriaxialServo::Status::Reached && servo.status != TrueTriaxialServo::Status::Failed &&
+         n < 1000000) {
+    cell.advance(servo.update(cell.measure(), cell.dt));
+    ++n;
+  }
+  ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Reached) << servo.message;
+  const Vec6 s = cell.measure().stress;
+  EXPECT_LT((s.head<3>() - servo.goal.stresses()).cwiseAbs().maxCoeff(), servo.stressTolerance);
+  EXPECT_GT(std::abs(s[3]), 2e3);
+  EXPECT_EQ(cell.F(1, 2), 0.0);  // no shear strain was applied
+  TrueTriaxialServo bad;
+  bad.controlShear = false;
+  bad.shearGoal = Vec3(0, 1e3, 0);
+  EXPECT_THROW(bad.validate(), InputError);
+  bad.controlShear = true;
+  EXPECT_NO_THROW(bad.validate());
 }
 
 // A specimen that cannot carry the state (its stress saturates below the goal) fails with a message
@@ -98,7 +172,7 @@ TEST(TrueTriaxialServo, FailsCleanlyWhenTheSpecimenCannotFollow) {
   while (servo.status != TrueTriaxialServo::Status::Failed && servo.status != TrueTriaxialServo::Status::Reached &&
          n < 1000000) {
     CellMeasurement m = cell.measure();
-    m.stress.z() = std::min(m.stress.z(), 120e3);  // the specimen yields at 120 kPa
+    m.stress[2] = std::min(m.stress[2], 120e3);  // the specimen yields at 120 kPa
     cell.advance(servo.update(m, cell.dt));
     ++n;
   }
@@ -124,29 +198,67 @@ TEST(TrueTriaxialServo, StartSetsTheLoadingFriction) {
   EXPECT_THROW(servo.start(s), InputError);
 }
 
-// The probe on each axis of the synthetic cell: with the two other stresses held, E_i = 1/S_ii and
-// nu_ij = -S_ji/S_ii of the known compliance S = C^-1 (Eqs. 10-11). The stresses are held to a
-// relative tolerance of 1e-6 of the increment, which bounds the error of E_i and nu_ij at ~1e-5.
+namespace {
+
+StressProbe runProbe(int axis, bool controlShear, int sign = 1) {
+  LinearCell cell;
+  StressProbe probe;
+  probe.axis = axis;
+  probe.sign = sign;
+  probe.controlShear = controlShear;
+  probe.relativeTolerance = 1e-6;
+  probe.law = CellServoLaw{0.05, 1e3};
+  probe.begin(cell.sigma0);
+  long n = 0;
+  while (probe.stage != StressProbe::Stage::Done && probe.stage != StressProbe::Stage::Failed && n < 200000) {
+    cell.advance(probe.update(cell.measure(), cell.dt));
+    ++n;
+  }
+  return probe;
+}
+
+}  // namespace
+
+// The probe on each of the six components of the synthetic cell, every other stress held:
+// E_i = 1/S_ii and nu_ij = -S_ji/S_ii (Eqs. 10-11), G_ij = 1/S_kk, of the known compliance
+// S = C^-1 of the whole 6x6; theory/Orthotropic gives the same from C. The stresses are held to
+// 1e-6 of the increment, which bounds the error of the moduli at ~1e-5.
 TEST(StressProbe, MeasuresTheComplianceOfALinearCell) {
   LinearCell cell0;
-  const Mat3 S = cell0.C.inverse();
-  for (int axis = 0; axis < 3; ++axis) {
-    LinearCell cell;
-    StressProbe probe;
-    probe.axis = axis;
-    probe.relativeTolerance = 1e-6;
-    probe.law = CellServoLaw{0.05, 1e3};
-    probe.begin(cell.sigma0);
-    long n = 0;
-    while (probe.stage != StressProbe::Stage::Done && probe.stage != StressProbe::Stage::Failed && n < 200000) {
-      cell.advance(probe.update(cell.measure(), cell.dt));
-      ++n;
-    }
+  const Mat6 S = cell0.C.inverse();
+  const OrthotropicModuli moduli = orthotropicModuli(cell0.C);
+  for (int axis = 0; axis < 6; ++axis) {
+    const StressProbe probe = runProbe(axis, true);
     ASSERT_EQ(probe.stage, StressProbe::Stage::Done) << probe.message;
     EXPECT_GE(probe.gamma, probe.gammaTarget);
-    EXPECT_NEAR(probe.youngModulus() * S(axis, axis), 1.0, 1e-5) << "axis " << axis;
+    EXPECT_NEAR(probe.modulus() * S(axis, axis), 1.0, 1e-5) << "axis " << axis;
+    EXPECT_NEAR(probe.modulus() / (axis < 3 ? moduli.E[axis] : moduli.G[axis - 3]), 1.0, 1e-5) << "axis " << axis;
+    if (axis >= 3) {
+      // gamma of a shear probe is its engineering shear strain increment.
+      EXPECT_NEAR(probe.gamma, std::abs(probe.dStrain[axis]), 1e-18);
+      continue;
+    }
     for (int j = 0; j < 3; ++j)
-      if (j != axis) EXPECT_NEAR(probe.poissonRatio(j), -S(j, axis) / S(axis, axis), 1e-5) << axis << j;
+      if (j != axis) {
+        EXPECT_NEAR(probe.poissonRatio(j), -S(j, axis) / S(axis, axis), 1e-5) << axis << j;
+        EXPECT_NEAR(probe.poissonRatio(j), moduli.nu(axis, j), 1e-5) << axis << j;
+      }
+  }
+}
+
+// With controlShear off, the probe holds the cell's shear strains instead (the orthorhombic
+// probe): E_i is then that of the normal block alone, 1/(N^-1)_ii, which differs from 1/S_ii by
+// the couplings (here by ~1e-4, above the probe's 1e-5): the two definitions are told apart.
+TEST(StressProbe, HoldingShearStrainsGivesTheNormalBlockModuli) {
+  LinearCell cell0;
+  const Mat3 N = cell0.C.topLeftCorner<3, 3>().inverse();
+  const Mat6 S = cell0.C.inverse();
+  for (int axis = 0; axis < 3; ++axis) {
+    const StressProbe probe = runProbe(axis, false);
+    ASSERT_EQ(probe.stage, StressProbe::Stage::Done) << probe.message;
+    EXPECT_NEAR(probe.modulus() * N(axis, axis), 1.0, 1e-5) << "axis " << axis;
+    EXPECT_GT(std::abs(N(axis, axis) / S(axis, axis) - 1.0), 3e-5) << "axis " << axis;
+    EXPECT_EQ(probe.dStrain.tail<3>(), Vec3::Zero());
   }
 }
 
@@ -166,11 +278,15 @@ TEST(StressProbe, FailsCleanlyAndRefusesBadParameters) {
   EXPECT_EQ(probe.stage, StressProbe::Stage::Failed);
   EXPECT_NE(probe.message.find("did not reach equilibrium"), std::string::npos);
   EXPECT_LE(n, 3001);
-  for (auto bad : {3, -1}) {
+  for (auto bad : {6, -1}) {
     StressProbe p;
     p.axis = bad;
     EXPECT_THROW(p.begin(cell.sigma0), InputError);
   }
+  StressProbe shearWithoutControl;
+  shearWithoutControl.axis = 3;
+  shearWithoutControl.controlShear = false;
+  EXPECT_THROW(shearWithoutControl.begin(cell.sigma0), InputError);
   StressProbe p;
   p.sign = 0;
   EXPECT_THROW(p.begin(cell.sigma0), InputError);
@@ -178,5 +294,8 @@ TEST(StressProbe, FailsCleanlyAndRefusesBadParameters) {
   p.gammaTarget = std::numeric_limits<Real>::infinity();
   EXPECT_THROW(p.begin(cell.sigma0), InputError);
   p.gammaTarget = 1e-6;
-  EXPECT_THROW(p.begin(Vec3(100e3, -1.0, 100e3)), InputError);
+  EXPECT_THROW(p.begin(normalOnly(Vec3(100e3, -1.0, 100e3))), InputError);
+  Vec6 nanShear = cell.sigma0;
+  nanShear[4] = std::nan("");
+  EXPECT_THROW(p.begin(nanShear), InputError);
 }

@@ -31,7 +31,7 @@ std::shared_ptr<Scene> randomGas(int n, Real phi, unsigned seed, Real r = 1e-4) 
   Real vol = 0;
   for (Real& x : radii) { x = r * (0.8 + 0.4 * U(gen)); vol += 4.0 / 3.0 * M_PI * x * x * x; }
   const Real side = std::cbrt(vol / phi);
-  s->cell.size = s->cell.refSize = Vec3::Constant(side);
+  s->cell.setBox(Vec3::Constant(side));
   for (int i = 0; i < n; ++i) s->addSphere(Vec3(U(gen), U(gen), U(gen)) * side, radii[i]);
   return s;
 }
@@ -56,7 +56,7 @@ TEST(ContactDetection, FindsExactlyTheOverlappingPairs) {
   auto s = randomGas(400, 0.55, 7);
   Driver drv(s);
   drv.evaluate();
-  const Vec3 h = s->cell.size;
+  const Vec3 h = s->cell.hSize.diagonal();
   long brute = 0;
   for (int i = 0; i < s->bodies.size(); ++i)
     for (int j = i + 1; j < s->bodies.size(); ++j) {
@@ -111,7 +111,7 @@ TEST(Stress, SimpleCubicClosedForm) {
   const int n = 4;
   auto s = std::make_shared<Scene>();
   s->material = paperMaterial();
-  s->cell.size = s->cell.refSize = Vec3::Constant(n * a);
+  s->cell.setBox(Vec3::Constant(n * a));
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
       for (int k = 0; k < n; ++k) s->addSphere(Vec3(i + 0.5, j + 0.5, k + 0.5) * a, r);
@@ -132,7 +132,7 @@ TEST(Stress, UnbalancedForceFollowsYadeDefinition) {
   auto s = std::make_shared<Scene>();
   s->material = paperMaterial();
   const Real r = 1e-4, delta = 1e-6;
-  s->cell.size = s->cell.refSize = Vec3::Constant(20 * r);
+  s->cell.setBox(Vec3::Constant(20 * r));
   s->addSphere(Vec3(5 * r, 10 * r, 10 * r), r);
   s->addSphere(Vec3(7 * r - delta, 10 * r, 10 * r), r);
   s->addSphere(Vec3(9 * r - 2 * delta, 10 * r, 10 * r), r);
@@ -187,7 +187,7 @@ TEST(Scene, RejectsBadInput) {
   EXPECT_THROW(s.addSphere(Vec3::Zero(), 0.0), InputError);
   EXPECT_THROW(s.addSphere(Vec3::Zero(), -1.0), InputError);
   EXPECT_THROW(s.validate(), InputError);  // empty
-  s.cell.size = Vec3::Constant(1e-4);
+  s.cell.setBox(Vec3::Constant(1e-4));
   s.addSphere(Vec3::Zero(), 1e-4);
   EXPECT_THROW(s.validate(), InputError);  // solid volume exceeds the cell
 }
@@ -209,7 +209,7 @@ TEST(ContactForces, SumsOnlyTheThreadsThatRan) {
   forces.apply(*s);  // two threads: thread 1's buffer now holds this step's share
   ASSERT_GT(s->contacts.size(), 300);
   for (Vec3& p : s->bodies.pos) p *= 1.0 + 1e-4;  // other forces next time
-  s->cell.size *= 1.0 + 1e-4;
+  s->cell.hSize *= 1.0 + 1e-4;
   s->members.pos = s->bodies.pos;
   ContactForces serial;
   Scene reference = *s;
@@ -248,7 +248,7 @@ TEST(ContactRefresh, IsExactAtTheSamePositions) {
   s->dt = 1e-8;
   Chain chain(s, 0.2);
   for (int k = 0; k < 50; ++k) {
-    s->cell.strainRate = Vec3(-1.0, -2.0, -3.0);
+    s->cell.velGrad = Vec3(-1.0, -2.0, -3.0).asDiagonal();
     chain.sim.run(1);  // sheared contacts: tangential forces with history
   }
   refreshContacts(*s);

@@ -221,7 +221,7 @@ TEST(Fabric, RefusesContactsNotEvaluatedHere) {
 TEST(Fabric, NoContactsGiveNaNNotACrash) {
   auto s = std::make_shared<Scene>();
   s->material = paperMaterial();
-  s->cell.size = s->cell.refSize = Vec3::Constant(1e-3);
+  s->cell.setBox(Vec3::Constant(1e-3));
   s->addSphere(Vec3::Constant(5e-4), 1e-4);
   evaluateContacts(*s);
   const Fabric f = fabric(*s);

@@ -51,7 +51,7 @@ std::shared_ptr<Scene> simpleCubic(Real* spacing, Real* radius) {
     delta = std::pow(sigma * a * a / (4.0 / 3.0 * Estar * std::sqrt(0.5 * r)), 2.0 / 3.0);
   }
   const Real r = 0.5 * (a + delta);
-  s->cell.size = s->cell.refSize = Vec3::Constant(4 * a);
+  s->cell.setBox(Vec3::Constant(4 * a));
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j)
       for (int k = 0; k < 4; ++k) s->addSphere(Vec3(i, j, k) * a, r);
@@ -85,8 +85,15 @@ TEST(Micromechanics, AxialComponentsEqualAffineStiffness) {
   evaluateContacts(*s);
   const Fabric f = fabric(*s);
   const Mat9 C = stiffnessTensor(f.B, f.M, f.contactDensityCount(), s->material.Cn(), s->material.Cs(), 1.0);
-  const Vec3 affine = affineAxialStiffness(*s);
+  const Vec6 affine = affineStiffness(*s);
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(C(4 * k, 4 * k), affine[k], 1e-12 * affine[k]);
+  // The shear components: the minor-symmetrised C_ijij of the engineering shear strain
+  // (docs/statics.md section 5), (C_ijij + C_jiji + C_ijji + C_jiij) / 4.
+  for (int I = 3; I < 6; ++I) {
+    const int i = voigt::kRow[I], j = voigt::kCol[I], ij = pairIndex(i, j), ji = pairIndex(j, i);
+    const Real minor = 0.25 * (C(ij, ij) + C(ji, ji) + C(ij, ji) + C(ji, ij));
+    EXPECT_NEAR(minor, affine[I], 1e-12 * affine[I]) << "Voigt " << I;
+  }
 }
 
 // Appendix A written out from B and M as printed (A1-A9), against the symmetrisation of the

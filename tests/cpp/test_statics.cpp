@@ -10,6 +10,7 @@
 #include <random>
 
 #include "Drivers.hpp"
+#include "Lattices.hpp"
 #include "dynamics/NewtonIntegrator.hpp"
 #include "dynamics/Simulation.hpp"
 #include "dynamics/TimeStepper.hpp"
@@ -26,80 +27,6 @@ using namespace trueaniso::testing;
 
 namespace {
 
-constexpr Real kR = 1e-4;  // sphere radius of the lattices (m)
-
-// n^3 simple cubic lattice of spheres of radius r, spacing a_k = 2 r - delta_k along axis k.
-std::shared_ptr<Scene> simpleCubic(int n, const Vec3& delta, Real r = kR) {
-  auto s = std::make_shared<Scene>();
-  s->material = paperMaterial();
-  const Vec3 a = Vec3::Constant(2 * r) - delta;
-  s->cell.size = s->cell.refSize = n * a;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k) s->addSphere(Vec3(i + 0.5, j + 0.5, k + 0.5).cwiseProduct(a), r);
-  return s;
-}
-
-// n^3 conventional FCC cells (4 spheres each), nearest-neighbour distance l = 2 r - delta.
-std::shared_ptr<Scene> fcc(int n, Real delta, Real r = kR) {
-  auto s = std::make_shared<Scene>();
-  s->material = paperMaterial();
-  const Real A = std::sqrt(2.0) * (2 * r - delta);
-  s->cell.size = s->cell.refSize = Vec3::Constant(n * A);
-  const Vec3 basis[4] = {Vec3(0, 0, 0), Vec3(0.5, 0.5, 0), Vec3(0.5, 0, 0.5), Vec3(0, 0.5, 0.5)};
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k)
-        for (const Vec3& b : basis) s->addSphere((Vec3(i, j, k) + b + Vec3::Constant(0.25)) * A, r);
-  return s;
-}
-
-// Hertz-Mindlin of two equal spheres at overlap delta: N from Hertz, k_n and k_s from the paper's
-// Eqs. (5)-(6) with rbar = r (independent of the 1.5 N/delta the code uses).
-struct ContactLaw {
-  Real N, kn, ks;
-};
-ContactLaw law(const Material& m, Real delta, Real r = kR) {
-  const Real N = HertzMindlin(m).normalForce(delta, r);
-  return {N, m.Cn() * std::cbrt(r * N), m.Cs() * std::cbrt(r * N)};
-}
-
-// Closed form of an orthorhombic simple cubic lattice (docs/statics.md, "Simple cubic"): every
-// sphere is an inversion centre, so translations stay affine; the rotations are uniform and
-// set by moment balance, a series combination of the two shear springs of each shear plane.
-Mat6 simpleCubicStiffness(const Material& m, const Vec3& delta, bool rotations, Real r = kR) {
-  const Vec3 a = Vec3::Constant(2 * r) - delta;
-  const Real V1 = a.prod();
-  Vec3 kn, ks, sigma;
-  for (int k = 0; k < 3; ++k) {
-    const ContactLaw c = law(m, delta[k], r);
-    kn[k] = c.kn;
-    ks[k] = c.ks * a[k] * a[k];  // k_s a^2: shear spring times lever
-    sigma[k] = c.N * a[k] / V1;
-  }
-  Mat6 C = Mat6::Zero();
-  for (int k = 0; k < 3; ++k)
-    for (int j = 0; j < 3; ++j) C(k, j) = k == j ? kn[k] * a[k] * a[k] / V1 : sigma[k];
-  const int planes[3][2] = {{1, 2}, {0, 2}, {0, 1}};  // yz, xz, xy
-  for (int I = 0; I < 3; ++I) {
-    const Real k1 = ks[planes[I][0]], k2 = ks[planes[I][1]];
-    const Real spring = rotations ? k1 * k2 / ((k1 + k2) * V1) : (k1 + k2) / (4 * V1);
-    C(3 + I, 3 + I) = spring - 0.5 * (sigma[planes[I][0]] + sigma[planes[I][1]]);
-  }
-  return C;
-}
-
-// Closed form of an FCC lattice at uniform overlap (docs/statics.md, "FCC").
-Mat6 fccStiffness(const Material& m, Real delta, Real r = kR) {
-  const ContactLaw c = law(m, delta, r);
-  const Real l = 2 * r - delta, f = std::sqrt(2.0) / l, g = c.N / l;
-  Mat6 C = Mat6::Zero();
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) C(i, j) = i == j ? f * (c.kn + c.ks - g) : f * (0.5 * (c.kn - c.ks) + 2.5 * g);
-  for (int I = 3; I < 6; ++I) C(I, I) = f * (0.5 * (c.kn + c.ks) - 1.5 * g);
-  return C;
-}
-
 Real relativeError(const Mat6& a, const Mat6& b) { return (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff(); }
 
 // ---- finite differences of the dynamic force loop -------------------------------------------
@@ -115,7 +42,7 @@ Response respond(const Scene& held, const Eigen::VectorXd& q, const Vec3& e, Rea
   Scene s = held;
   s.dt = h;
   s.blockRotations = false;
-  s.cell.strainRate = e;
+  s.cell.velGrad = e.asDiagonal();
   const Vec3 stretch = Vec3::Ones() + h * e;
   for (int b = 0; b < s.bodies.size(); ++b) {
     s.bodies.vel[b] = q.segment<3>(6 * b);
@@ -125,7 +52,7 @@ Response respond(const Scene& held, const Eigen::VectorXd& q, const Vec3& e, Rea
     if (w.norm() > 0)
       s.bodies.orientation[b] = (Quat(Eigen::AngleAxisd(w.norm() * h, w.normalized())) * s.bodies.orientation[b]).normalized();
   }
-  s.cell.size = s.cell.size.cwiseProduct(stretch);
+  s.cell.hSize = stretch.asDiagonal() * s.cell.hSize;
   s.refreshMembers();
   ContactForces().apply(s);
   Response r;
@@ -172,14 +99,14 @@ Eigen::VectorXd randomIncrement(int bodies, Real length, Real angle, unsigned se
 Scene heldPair(bool clumps) {
   Scene s;
   s.material = paperMaterial();
-  s.cell.size = s.cell.refSize = Vec3(8, 9, 10) * kR;
+  s.cell.setBox(Vec3(8, 9, 10) * kR);
   const Vec3 c1(0.5 * kR, 4 * kR, 5 * kR);
   Vec3 dir = Vec3(-1.0, 0.3, -0.2).normalized();  // body 2 sits across x = 0, in the image
   if (!clumps) {
     // Radii r and 0.9 r, overlap 2e-6 = 0.02 r (large, so that the initial-force terms are
     // well above the finite differences' error).
     s.addSphere(c1, kR);
-    s.addSphere(c1 + (1.9 * kR - 2e-6) * dir + Vec3(s.cell.size.x(), 0, 0), 0.9 * kR);
+    s.addSphere(c1 + (1.9 * kR - 2e-6) * dir + Vec3(s.cell.hSize(0, 0), 0, 0), 0.9 * kR);
   } else {
     // Two 2-member clumps; member radii r and 0.7 r, offsets along the clump axis.
     const std::vector<Vec3> off = {Vec3(0.5 * kR, 0, 0), Vec3(-0.6 * kR, 0, 0)};
@@ -190,7 +117,7 @@ Scene heldPair(bool clumps) {
     // Put clump 2's first member in contact with clump 1's first member.
     const Vec3 m1 = c1 + q1 * off[0];
     const Vec3 m2 = m1 + (2 * kR - 2e-6) * dir;
-    s.addClump(m2 - q2 * off[0] + Vec3(s.cell.size.x(), 0, 0), q2, off, rad, 1e-9, Vec3(1e-17, 2e-17, 2e-17));
+    s.addClump(m2 - q2 * off[0] + Vec3(s.cell.hSize(0, 0), 0, 0), q2, off, rad, 1e-9, Vec3(1e-17, 2e-17, 2e-17));
   }
   s.refreshMembers();
   return heldState(s);

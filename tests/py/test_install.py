@@ -51,7 +51,7 @@ def test_cpp_user_builds_against_installed_headers_and_library(prefix, tmp_path)
 #include <cstdio>
 int main() {
   trueaniso::Scene s;
-  s.cell.size = s.cell.refSize = trueaniso::Vec3::Constant(1e-3);
+  s.cell.setBox(trueaniso::Vec3::Constant(1e-3));
   s.addSphere(trueaniso::Vec3(0.4e-3, 0.5e-3, 0.5e-3), 1e-4);
   s.addSphere(trueaniso::Vec3(0.5999e-3, 0.5e-3, 0.5e-3), 1e-4);
   trueaniso::refreshContacts(s);

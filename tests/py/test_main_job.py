@@ -46,7 +46,16 @@ def test_first_run_writes_everything_and_reports_progress(first):
     for label in ("specimen: step", "state 5: step", "state 5 probe z: step"):
         assert label in proc.stdout, label
     line = next(x for x in proc.stdout.splitlines() if x.startswith("state 5: step"))
-    assert "stress error" in line and "unbalanced" in line
+    assert "stress error" in line and "unbalanced" in line and "|shear|" in line
+    # specimen_state.json reports the whole stress (full-cell issue): the principal values of its
+    # six components (numpy here) and the largest off-diagonal, within 0.5 kPa of 100 kPa and of 0
+    st = json.loads((out / "specimen_state.json").read_text())
+    s = np.array([[st["sigma_x"], st["sigma_xy"], st["sigma_xz"]], [st["sigma_xy"], st["sigma_y"], st["sigma_yz"]],
+                  [st["sigma_xz"], st["sigma_yz"], st["sigma_z"]]])
+    principal = np.sort(np.linalg.eigvalsh(s))[::-1]
+    np.testing.assert_allclose([st["sigma_1"], st["sigma_2"], st["sigma_3"]], principal, rtol=1e-12)
+    np.testing.assert_allclose(principal, 100e3, atol=500.0)
+    assert st["tau_max"] == np.abs([st["sigma_yz"], st["sigma_xz"], st["sigma_xy"]]).max() < 500.0
 
 
 def test_rerun_in_a_row_does_nothing_new(first, tmp_path):

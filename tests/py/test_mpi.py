@@ -57,10 +57,10 @@ def test_interrupted_mpi_run_resumes_to_the_same_values(serial, specimen_100, tm
     p = subprocess.Popen(mpi_cmd(specimen_100, out, ranks=3), env=mpi_env(), stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.time() + 300
-    while p.poll() is None and time.time() < deadline:  # interrupt once the first path has ended
-        if (out / "probes.csv").exists() and (out / "probes.csv").stat().st_size > 0:
+    while p.poll() is None and time.time() < deadline:  # interrupt once a worker has written a checkpoint
+        if (out / "states").is_dir() and any(n.endswith(".npz") for n in os.listdir(out / "states")):
             break
-        time.sleep(0.05)
+        time.sleep(0.02)
     os.killpg(p.pid, signal.SIGINT)  # Ctrl-C on mpiexec: it stops every rank
     p.wait(timeout=120)
     done = len(values(out)) if (out / "probes.csv").exists() else 0

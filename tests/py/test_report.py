@@ -111,3 +111,22 @@ def test_report_refuses_a_wrong_material_and_bad_input(small_table, tmp_path):
     proc = run(str(tmp_path / "missing.csv"))
     assert proc.returncode == 2 and "does not exist" in proc.stderr
     assert not (tmp_path / "r" / "report.md").exists()
+
+
+def test_shear_probe_rows_leave_the_axial_chain_alone(small_table, tmp_path):
+    """Rows of shear probes (yz, xz, xy: G_ij, no E_i) are skipped, not read as axial probes
+    ("yz" is a substring of "xyz": a test on `in "xyz"` took it for y)."""
+    with open(small_table) as f:
+        rows = list(csv.reader(f))
+    k = rows[0].index("probe")
+    extra = []
+    for r in rows[1:]:
+        if r[k] == "x":
+            for shear in ("yz", "xz", "xy"):
+                extra.append(r[:k] + [shear] + r[k + 1:])
+    path = tmp_path / "probes.csv"
+    with open(path, "w", newline="") as f:
+        csv.writer(f).writerows(rows + extra)
+    _, plain = report.build(small_table, str(tmp_path / "a"), log=lambda m: None)
+    _, mixed = report.build(str(path), str(tmp_path / "b"), log=lambda m: None)
+    assert mixed["free"]["table2"] == plain["free"]["table2"] and mixed["free"]["zeta"] == plain["free"]["zeta"]

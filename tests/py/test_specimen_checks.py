@@ -57,7 +57,8 @@ def _huge_shift(a):
     (lambda m: m["material"].update(poisson=float("nan")), None, "material.poisson"),
     (lambda m: m.update(dt=float("nan")), None, "dt must be a finite number"),  # before: 'cell sizes must be > 0'
     (lambda m: m.update(block_rotations="yes"), None, "block_rotations must be true or false"),
-    (None, nan_at_first("strain_rate"), "non-finite values in strain_rate"),  # before: failed mid-run
+    (None, nan_at_first("velocity_gradient"), "non-finite values in velocity_gradient"),  # before: failed mid-run
+    (None, lambda a: a.update(cell=a["cell"] @ np.diag([1.0, 1.0, -1.0])), "singular or inverted cell"),
     (None, nan_at_first("c_normal"), "non-finite values in c_normal"),  # before: failed mid-run
     (None, _duplicate_body, "duplicate bodies"),  # before: failed mid-run, misleading message
     (None, _self_contact, "with itself"),  # before: silently replaced
@@ -120,3 +121,29 @@ def test_save_refuses_what_load_would_refuse(specimen_100, tmp_path):
     with pytest.raises(specimen_file.SpecimenFileError, match="seed must be an integer >= 0"):
         specimen_file.save(str(tmp_path / "x.npz"), scene, seed=-1, parameters=meta["parameters"])
     assert not os.path.exists(tmp_path / "x.npz")
+
+
+def test_version_2_files_are_read_as_diagonal_cells(specimen_100, tmp_path):
+    """Version 2 stored an orthorhombic cell as edge lengths (cell_size, cell_ref_size,
+    strain_rate); such a file, its checksum verified over those arrays, loads with the diagonal
+    matrices. Written here from a version-3 file by renaming (the specimen's tiny shear dropped),
+    and edited afterwards it fails the checksum as any file does."""
+    with np.load(specimen_100) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays.pop("meta")))
+    diag = {"cell": "cell_size", "cell_ref": "cell_ref_size", "velocity_gradient": "strain_rate"}
+    for new, old in diag.items():
+        arrays[old] = np.diag(arrays.pop(new)).copy()
+    meta["format_version"] = 2
+    meta["sha256"] = specimen_file._checksum(arrays, meta, specimen_file._ARRAYS_V2)
+    v2 = tmp_path / "v2.npz"
+    np.savez(v2, meta=np.array(json.dumps(meta)), **arrays)
+    scene, loaded = specimen_file.load(str(v2))
+    assert loaded["format_version"] == 2
+    np.testing.assert_array_equal(scene.cell, np.diag(arrays["cell_size"]))
+    np.testing.assert_array_equal(scene.cell_ref, np.diag(arrays["cell_ref_size"]))
+    assert scene.orthorhombic
+    arrays["cell_size"] = arrays["cell_size"] * 1.001
+    np.savez(v2, meta=np.array(json.dumps(meta)), **arrays)
+    with pytest.raises(specimen_file.SpecimenFileError, match="checksum mismatch"):
+        specimen_file.load(str(v2))

@@ -93,7 +93,9 @@ def test_save_replaces_atomically(saved, tmp_path):
 @pytest.mark.parametrize("edit,message", [
     (lambda a: a.update(radii=np.where(np.arange(a["radii"].size) == 3, 0.0, a["radii"])), "radius <= 0"),
     (lambda a: a.update(positions=a["positions"][:0], member_begin=a["member_begin"][:1]), "no bodies"),
-    (lambda a: a.update(cell_size=np.array([1e-3, 0.0, 1e-3])), "cell size <= 0"),
+    (lambda a: a.update(cell=a["cell"] * np.array([1.0, 0.0, 1.0])), "singular or inverted cell"),
+    (lambda a: a.update(cell=a["cell"] * np.array([1.0, 1.0, -1.0])), "singular or inverted cell"),
+    (lambda a: a.update(velocity_gradient=np.zeros(3)), "3x3"),
     (lambda a: a.update(positions=np.where(a["positions"] > 0, np.nan, a["positions"])), "non-finite"),
     (lambda a: a.update(c_member2=a["c_member2"] + 10**6), "out of range"),
 ])

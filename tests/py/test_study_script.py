@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from trueaniso import specimen, specimen_file, study
@@ -52,6 +53,14 @@ def test_one_row_per_state_and_probe(finished):
         goal = {"1": (100e3, 100e3, 100e3), "2": (95e3, 95e3, 110e3)}[x["state"]]
         for k, g in zip(("sigma_x", "sigma_y", "sigma_z"), goal):
             assert abs(float(x[k]) - g) <= 500.0  # the issue's 0.5 kPa, measured before the probe
+        # the row is the state's record (full-cell issue): principal values and the largest
+        # off-diagonal, recomputed here by numpy from the row's six stresses, all within 0.5 kPa
+        s = {k: float(x["sigma_" + k]) for k in ("x", "y", "z", "yz", "xz", "xy")}
+        tensor = np.array([[s["x"], s["xy"], s["xz"]], [s["xy"], s["y"], s["yz"]], [s["xz"], s["yz"], s["z"]]])
+        principal = np.sort(np.linalg.eigvalsh(tensor))[::-1]
+        np.testing.assert_allclose([float(x["sigma_%d" % k]) for k in (1, 2, 3)], principal, rtol=1e-12)
+        np.testing.assert_allclose(principal, sorted(goal, reverse=True), atol=500.0)
+        assert float(x["tau_max"]) == max(abs(s["yz"]), abs(s["xz"]), abs(s["xy"])) < 500.0
 
 
 def test_metadata_says_what_produced_the_rows(finished, small_specimen):
@@ -60,7 +69,7 @@ def test_metadata_says_what_produced_the_rows(finished, small_specimen):
     assert fp["specimen"] == specimen_file.read(str(small_specimen))[1]["sha256"]
     assert meta["runs"][-1]["specimen"]["seed"] == 6
     assert meta["versions"]["threads"] >= 1 and "git" in meta["versions"] and fp["code"].startswith("src-")
-    assert fp["probe"]["gamma"] == 1e-6 and meta["probes"] == "zx"
+    assert fp["probe"]["gamma"] == 1e-6 and meta["probes"] == ["z", "x"] and fp["path"] == "true-triaxial"
     assert fp["state"]["tolerance"] == 100.0 and fp["state"]["unbalanced"] == 1e-4 and fp["state"]["friction"] == 0.5
     assert "relative_tolerance" in fp["probe"]
     assert sorted(meta["states"]) == ["1", "2"] and meta["states"]["2"] == dict(b=0.0, sigma_z=110e3)

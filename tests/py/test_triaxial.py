@@ -105,12 +105,13 @@ def test_probe_is_linear(specimen300, axis):
     assert up["gamma"] >= 1e-6 and half["gamma"] >= 0.5e-6
     assert down["E"] == pytest.approx(up["E"], rel=1e-2)
     assert half["E"] == pytest.approx(up["E"], rel=1e-2)
-    # the other two stresses were held: their increments are tiny against the probe's
+    # the five other stresses (two normal, three shear) were held: their increments are tiny
+    # against the probe's
     ds = np.abs(up["d_stress"])
     others = [j for j in range(3) if j != axis]
-    assert ds[others[0]] < 5e-3 * ds[axis] and ds[others[1]] < 5e-3 * ds[axis]
-    # Eq. (12) from the reported strain increments, written out here independently
-    ex, ey, ez = up["d_strain"]
+    assert all(ds[j] < 5e-3 * ds[axis] for j in range(6) if j != axis), ds
+    # Eq. (12) from the reported normal strain increments, written out here independently
+    ex, ey, ez = up["d_strain"][:3]
     gamma12 = math.sqrt(((ex - ey) ** 2 + (ex - ez) ** 2 + (ey - ez) ** 2) / 2)
     assert up["gamma"] == pytest.approx(gamma12, rel=1e-12)
     # and Eqs. (10)-(11): E_i = d sigma_i / d eps_i, nu_ij = -d eps_j / d eps_i
@@ -134,8 +135,8 @@ def test_probe_without_detection_matches(specimen300):
 
 def _state(scene):
     out = dict(positions=scene.positions, velocities=scene.velocities,
-               angular_velocities=scene.angular_velocities, cell=np.array(scene.cell_size),
-               strain_rate=np.array(scene.strain_rate), friction=scene.friction,
+               angular_velocities=scene.angular_velocities, cell=np.array(scene.cell),
+               velocity_gradient=np.array(scene.velocity_gradient), friction=scene.friction,
                block_rotations=scene.block_rotations)
     for k, v in scene.contact_arrays().items():
         out["contact_" + k] = np.asarray(v, dtype=float)
@@ -159,7 +160,7 @@ def test_probe_restores_the_state(specimen300, restrain):
 
 
 @pytest.mark.parametrize("axis,gamma,message", [
-    ("w", 1e-6, "axis"), (True, 1e-6, "axis"), (3, 1e-6, "axis"), (1.0, 1e-6, "axis"),
+    ("w", 1e-6, "axis"), (True, 1e-6, "axis"), (6, 1e-6, "axis"), (1.0, 1e-6, "axis"), ("yy", 1e-6, "axis"),
     ("z", 0.0, "gamma"), ("z", -1e-6, "gamma"), ("z", float("nan"), "gamma"), ("z", float("inf"), "gamma"),
 ])
 def test_probe_bad_input(specimen300, axis, gamma, message):
@@ -176,7 +177,7 @@ def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, si
 
     def watch(servo):
         if servo.status in ("holding", "reached"):
-            held.append(np.abs(np.asarray(servo.stress) - goal).max())
+            held.append(servo.stress_error)  # principal and shear stresses against the state
     info = triaxial.reach_state(s, b, sz, chunk=200, progress=watch)
     assert info["friction"] == 0.5 and s.friction == 0.5
     # the held state's contacts belong to its positions: a refresh (as every probe and every
@@ -186,6 +187,13 @@ def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, si
     for k, v in held_state.items():
         np.testing.assert_array_equal(_state(s)[k], v, err_msg=k)
     np.testing.assert_allclose(np.diag(engines.stress(s)), goal, atol=500.0)
+    # the principal stresses are the goal's and the shear stresses zero, to the 0.5 kPa of the issue
+    # (principal values computed here by numpy, independently of the engines)
+    sig = engines.stress(s)
+    principal = np.sort(np.linalg.eigvalsh(0.5 * (sig + sig.T)))
+    np.testing.assert_allclose(principal, np.sort(goal), atol=500.0)
+    assert max(abs(sig[1, 2]), abs(sig[0, 2]), abs(sig[0, 1])) < 500.0
+    assert info["principal_error"] < 500.0 and info["shear_error"] < 500.0
     assert max(info["overshoot"]) < 500.0  # never past the goal by more than the tolerance
     assert info["unbalanced"] < 1e-4
     # no oscillation: the goal stops at the state with the stresses up to ~1 kPa behind (the
@@ -210,3 +218,15 @@ def test_state_that_never_settles_is_reported(specimen300):
     s = specimen300.copy()
     with pytest.raises(triaxial.StateNotReached, match="without settling"):
         triaxial.reach_state(s, 0.0, 100e3, unbalanced=1e-30, hold_steps=2000, chunk=500)
+
+
+def test_shear_goal_on_a_path_that_fixes_the_shear_is_refused(specimen300):
+    """Bad input of the full-cell issue: a shear stress goal on a path that holds the cell's shear
+    strains (control_shear=False) is refused with one clear message before any step runs."""
+    s = specimen300.copy()
+    step = s.step
+    with pytest.raises(ValueError, match="holds the cell's shear strains"):
+        triaxial.reach_state(s, 0.5, 120e3, control_shear=False, shear=(0.0, 1e3, 0.0))
+    assert s.step == step
+    with pytest.raises(ValueError, match="shear probe needs the shear stresses under control"):
+        triaxial.probe(s, [100e3] * 3, "yz", control_shear=False)

@@ -1,6 +1,7 @@
 """YADE habits (issue 11 items 2 and 3): a real yade-batch run of a two-line table through
 run_states.py; importing a script inside a YADE session runs nothing; our table reader and
 YADE's agree on YADE's conventions (editor line numbers, '#', '=', '!' columns, evaluated values)."""
+import csv
 import json
 import os
 import shutil
@@ -29,8 +30,8 @@ def test_yade_batch_runs_a_two_line_table(specimen_100, tmp_path):
     assert proc.returncode == 0 and len(logs) == 2, proc.stdout[-2000:] + "\n".join(logs.values())
     assert "done    (exit status 0)" in proc.stdout and "failed" not in proc.stdout, proc.stdout[-2000:]
     with open(tmp_path / "study" / "probes.csv") as f:
-        rows = [line.split(",")[:8] for line in f.read().splitlines()[1:]]
-    assert sorted((r[0], r[7]) for r in rows) == [("1", "z"), ("6", "z")]
+        rows = list(csv.DictReader(f))
+    assert sorted((r["state"], r["probe"]) for r in rows) == [("1", "z"), ("6", "z")]
     meta = json.loads((tmp_path / "study" / "metadata.json").read_text())
     assert sorted(run["table"] for run in meta["runs"]) == ["states.table:3", "states.table:5"]
     assert meta["fingerprint"]["threads"] == 1  # yade-batch's --job-threads reached the engines

@@ -1,4 +1,5 @@
 """Side by side with YADE 2023.02a (Law2_ScGeom_MindlinPhys_Mindlin) in yade-double."""
+import numpy as np
 import pytest
 
 from trueaniso import specimen, specimen_file
@@ -38,6 +39,23 @@ def test_stress_of_yade_packing_matches_get_stress(yade_json):
     assert r["ours_unbalanced"] == pytest.approx(r["yade_unbalanced"], rel=1e-6)
 
 
+def test_stress_of_a_sheared_yade_cell_matches(yade_json):
+    """The full-cell issue's peer: a YADE cell sheared through a general velGrad (hSize with
+    off-diagonal terms, stress with shear components) at 100 kPa, imported through the bridge:
+    every component of our Love-Weber tensor against utils.getStress(), to 1e-6 of 100 kPa
+    (measured 1e-3 Pa, 1e-8 of it)."""
+    r = yade_json("peer_stress", "300", "15", "100e3")
+    h = np.array(r["hSize"])
+    assert np.abs(h - np.diag(np.diag(h))).max() > 0.04 * h[0, 0]  # sheared by several per cent
+    np.testing.assert_array_equal(np.array(r["ours_cell"]), h)  # the matrix copied as it is
+    assert not r["ours_orthorhombic"]
+    yade = np.array(r["yade_stress"])
+    assert -np.trace(yade) / 3 > 100e3 and np.abs(yade[0, 2]) > 5e3  # loaded, with shear stress
+    assert r["contacts_ours"] == r["contacts_yade"] > 300
+    assert r["image_contacts"] > 50  # contacts across the sheared faces take part
+    assert r["max_abs_error"] < 1e-6 * 100e3
+
+
 def test_probe_matches_yade_user_probe_and_adapter(yade_json, specimen_path):
     r = yade_json("peer_probe", specimen_path)
     # issue 3: a probe done the YADE way (PeriTriaxController, Mindlin law) within 2 % of ours
@@ -64,6 +82,9 @@ def test_bridge_round_trip(yade_json, specimen_path):
     assert r["stress_rel"] < 1e-9          # tangential forces carried through YADE's interactions
     assert r["yade_stress_rel"] < 1e-6     # YADE's getStress right after import agrees
     assert r["written_positions"] == 0 and r["written_cell"] == 0
+    # the cell written is sheared (200 steps at 10 /s in yz: ~6e-5 of the edge) and YADE holds it
+    assert r["written_cell_yz"] == r["written_cell_yz_expected"] > 2e-5 * 1e-3
+    assert r["reread_velocity_gradient"] == 0  # the full velGrad (its yz term included) reads back
     # what was written reads back: fluctuating velocities (YADE holds totals) and strain rate
     assert r["reread_positions"] == 0 and r["reread_strain_rate"] == [0, 0, 0]
     assert r["reread_velocities"] <= 1e-12 * r["velocity_scale"]

@@ -19,7 +19,7 @@ scene, _ = specimen_file.load(path)
 yade_bridge.yade_scene_from(scene, O)
 held = -np.diag(np.array(utils.getStress()))
 pos0 = np.array([list(b.state.pos) for b in O.bodies])
-h0 = [O.cell.hSize[k][k] for k in range(3)]
+h0 = np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)])
 O.saveTmp("held")
 res = dict(ours={}, adapter={})
 for axis in (2, 0):
@@ -34,7 +34,8 @@ for axis in (2, 0):
     yade_adapter.detach(O)
     O.loadTmp("held")
     res["pos_diff_" + "xyz"[axis]] = float(np.abs(np.array([list(b.state.pos) for b in O.bodies]) - pos0).max())
-    res["cell_diff_" + "xyz"[axis]] = max(abs(O.cell.hSize[k][k] - h0[k]) for k in range(3))
+    res["cell_diff_" + "xyz"[axis]] = float(np.abs(np.array([[O.cell.hSize[i][j] for j in range(3)]
+                                                             for i in range(3)]) - h0).max())
     res["mu_after_" + "xyz"[axis]] = max(I.phys.tangensOfFrictionAngle for I in O.interactions if I.isReal)
     res["ours"]["xyz"[axis]] = float(triaxial.probe(scene, held, axis)["E"])
 with open(out, "w") as f:

@@ -41,9 +41,11 @@ res.update(n=len(ids), yade_stress=yade_stress.tolist(), ours_stress=ours.tolist
            stress_error=float(np.abs(ours - yade_stress).max()), friction=scene.friction,
            shear_modulus=scene.shear_modulus)
 
-# The probe: both sides hold our measured stresses and add our probe's increment on z.
+# The probe: both sides hold our measured stresses and add our probe's increment on z. YADE's
+# PeriTriaxController holds the cell's shear strains (this packing carries ~10 kPa of shear stress,
+# which it never controlled), so ours does the same here (control_shear=False): the same probe.
 hold = np.diag(ours).copy()
-mine = triaxial.probe(scene, hold, "z", damping=O.engines[-1].damping)
+mine = triaxial.probe(scene, hold, "z", damping=O.engines[-1].damping, control_shear=False)
 # YADE's side: its consolidation engines off, a fixed step, friction 1e23 (sliding suppressed).
 O.engines = [e for e in O.engines if not isinstance(e, (PeriTriaxController, GlobalStiffnessTimeStepper))]
 yade_adapter.set_friction(O, 1e23)

@@ -1,4 +1,6 @@
-"""The same specimen state probed on z three ways:
+"""The same specimen state probed on z three ways, each holding the cell's shear strains as YADE's
+PeriTriaxController does (control_shear=False; the full-cell probe holds the shear stresses
+instead, compared with the adapter in adapter_probe_restore.py):
  ours   - our StressProbe on our stepper;
  yade   - as a YADE user would: YADE's Mindlin law and NewtonIntegrator, friction 1e23, the
           state relaxed then the z stress raised by the same increment with PeriTriaxController;
@@ -25,7 +27,7 @@ hold = np.diag(engines.stress(scene)).copy()
 damping = 0.4
 
 # ours
-ours = triaxial.probe(scene, hold, "z", damping=damping)
+ours = triaxial.probe(scene, hold, "z", damping=damping, control_shear=False)
 inc = ours["d_stress"][2]
 
 
@@ -45,6 +47,7 @@ s = yade_state()
 t0 = time.time()
 probe = engines.StressProbe()
 probe.axis, probe.sign = 2, 1
+probe.control_shear = False
 probe.max_strain_rate = 10.0
 probe.begin(hold)
 yade_adapter.attach(probe, engines.cell_stiffness(s))

@@ -1,7 +1,9 @@
 """A packing made in YADE (makeCloud, then the cell squeezed through O.cell.velGrad until the mean
-stress from utils.getStress() reaches 50 kPa, Hertz-Mindlin law) imported through
-the bridge: our Love-Weber stress against YADE's utils.getStress() on the same configuration.
-Usage: yade-double -n -x peer_stress.py N OUT.json
+stress from utils.getStress() reaches P, Hertz-Mindlin law) imported through the bridge: our
+Love-Weber stress against YADE's utils.getStress() on the same configuration, the whole tensor.
+With SHEAR_RATE > 0 the velGrad also shears the cell (xz and yz at that rate, xy at half of it, and
+a spin), so that hSize ends with off-diagonal terms and the stress with shear components.
+Usage: yade-double -n -x peer_stress.py N [SHEAR_RATE [P]] OUT.json   (defaults 0 and 50 kPa)
 """
 import json
 import os
@@ -18,12 +20,15 @@ from yade_scenes import mindlin_cloud  # noqa: E402
 
 n = int(sys.argv[1])
 out = sys.argv[-1]
+shear = float(sys.argv[2]) if len(sys.argv) > 3 else 0.0
+pressure = float(sys.argv[3]) if len(sys.argv) > 4 else 50e3
 mindlin_cloud(n, seed=1, solid_fraction=0.35, extra_engines=[GlobalStiffnessTimeStepper(timestepSafetyCoefficient=0.5)])
 newton = O.engines[-1]
 O.dt = 1e-8
 rate = 30.0  # 1/s: inertial number ~1e-3 at 50 kPa for these grains
-O.cell.velGrad = Matrix3(-rate, 0, 0, 0, -rate, 0, 0, 0, -rate)
-while -np.trace(np.array(utils.getStress())) / 3 < 50e3 and O.iter < 400000:
+# a general velocity gradient when shearing: x moves with z and y, y with z, plus a spin about z
+O.cell.velGrad = Matrix3(-rate, 0.5 * shear + 0.2 * shear, shear, -0.2 * shear, -rate, shear, 0, 0, -rate)
+while -np.trace(np.array(utils.getStress())) / 3 < pressure and O.iter < 400000:
     O.run(500, True)
 
 # Forces at the current positions, at rest. YADE applies a new velGrad at the end of the next
@@ -51,7 +56,11 @@ yade_N = np.sort([I.phys.normalForce.norm() for I in O.interactions if I.isReal]
 rel = np.linalg.norm(ours + yade_stress) / np.linalg.norm(yade_stress)
 with open(out, "w") as f:
     json.dump(dict(n=len(ids), yade_iter=O.iter, yade_stress=yade_stress.tolist(), ours_stress=ours.tolist(),
-                   rel_stress=float(rel), contacts_yade=len(yade_N), contacts_ours=len(ours_N),
+                   rel_stress=float(rel), max_abs_error=float(np.abs(ours + yade_stress).max()),
+                   hSize=np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)]).tolist(),
+                   ours_cell=np.asarray(scene.cell).tolist(), ours_orthorhombic=bool(scene.orthorhombic),
+                   image_contacts=int(np.count_nonzero(np.any(scene.contact_arrays()["shift"] != 0, axis=1)
+                                                       & (scene.contact_arrays()["normal_force"] > 0))), contacts_yade=len(yade_N), contacts_ours=len(ours_N),
                    max_rel_normal_force=float(np.max(np.abs(ours_N - yade_N) / yade_N)) if len(ours_N) == len(yade_N) else None,
                    shear_share=float(np.mean([I.phys.shearForce.norm() / I.phys.normalForce.norm()
                                               for I in O.interactions if I.isReal])),
