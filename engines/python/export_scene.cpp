@@ -184,6 +184,8 @@ void exportScene() {
       .add_property("torques", &getBodyVec<&Bodies::torque>)
       .add_property("orientations", &orientations, &setOrientations)
       .add_property("masses", &masses)
+      .add_property("volumes", +[](const Scene& s) { return toNumpy(s.bodies.volume); },
+                    "Solid volume of each body (a clump's union, overlaps once).")
       .add_property("inertia", &inertia)
       .add_property("member_begin", &memberBegin)
       .add_property("radii", &radii, &setRadii)
