@@ -20,14 +20,15 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
 from analysis import figures  # noqa: E402
-from trueaniso import atomic, cli, specimen, specimen_file, study  # noqa: E402
+from trueaniso import atomic, clump_specimen, cli, specimen, specimen_file, study  # noqa: E402
 
 DEFAULT_IDS = "1,5,9,13,17,21,25,35,39"
 
 
 def options():
     p = cli.Parser(description="trueaniso default study")
-    p.add_argument("--n", type=int, default=1000, help="spheres in the specimen")
+    p.add_argument("--assembly", default="sphere", help="sphere (default), clump1 or clump2 (docs/specimens.md)")
+    p.add_argument("--n", type=int, default=1000, help="particles in the specimen")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--ids", default=DEFAULT_IDS, help="Table C1 states to run")
     p.add_argument("--out", default="results/default", help="results directory")
@@ -38,6 +39,14 @@ def main():
     o = options()
     if o.n < 100:
         raise cli.InputError("--n must be >= 100 for a study specimen")
+    o.assembly = {"spheres": "sphere"}.get(o.assembly, o.assembly)
+    if o.assembly not in ("sphere", "clump1", "clump2"):
+        raise cli.InputError("unknown assembly %r (available: sphere, clump1, clump2)" % o.assembly)
+    if o.assembly != "sphere":
+        try:
+            clump_specimen.check_count(o.assembly, o.n)
+        except ValueError as exc:
+            raise cli.InputError(str(exc)) from None
     try:
         ids = [int(v) for v in o.ids.split(",") if v.strip()]
         states = study.table_states(ids)
@@ -50,11 +59,17 @@ def main():
         try:
             scene, meta = specimen_file.load(path)
             print("specimen: kept %s" % path)
+            kept = meta.get("parameters", {}).get("assembly", "sphere")
+            if kept != o.assembly:
+                raise cli.InputError("%s holds a %s specimen, not %s: use another --out" % (path, kept, o.assembly))
         except specimen_file.SpecimenFileError as exc:
             raise cli.InputError("%s is not usable (%s); remove it to prepare it again" % (path, exc))
     else:
-        print("specimen: preparing %d spheres (seed %d) ..." % (o.n, o.seed), flush=True)
-        scene, log = specimen.prepare_spheres(o.n, seed=o.seed)
+        print("specimen: preparing %d %s (seed %d) ..." % (o.n, o.assembly, o.seed), flush=True)
+        if o.assembly == "sphere":
+            scene, log = specimen.prepare_spheres(o.n, seed=o.seed)
+        else:
+            scene, log = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed)
         specimen_file.save(path, scene, seed=o.seed, parameters=log, summary=specimen.state(scene))
         print("specimen: saved %s (%.1f s)" % (path, time.time() - t0))
     st = specimen.state(scene)
@@ -101,7 +116,7 @@ def main():
     if cli.in_yade():
         from trueaniso import yade_bridge
         yade_bridge.yade_scene_from(scene, import_contacts=False)
-        print("specimen written into YADE's O (%d spheres) for viewing/export" % scene.num_bodies)
+        print("specimen written into YADE's O (%d particles) for viewing/export" % scene.num_bodies)
 
 
 def contrast_zeta(out, rows):

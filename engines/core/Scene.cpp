@@ -56,7 +56,7 @@ int Scene::addBody(const Vec3& pos, const Quat& orientation, const std::vector<V
   bodies.mass.push_back(mass);
   bodies.inertia.push_back(inertia);
   bodies.volume.push_back(volume);
-  bodies.orientation.push_back(orientation.normalized());
+  bodies.orientation.push_back(unitQuaternion(orientation));
   for (size_t k = 0; k < offsets.size(); ++k) {
     members.body.push_back(b);
     members.offset.push_back(offsets[k]);

@@ -13,6 +13,11 @@ Mat3 loveWeberStress(const Scene& scene);
 // the mean |contact force| over contacts.
 Real unbalancedForce(const Scene& scene);
 
+// The same for moments about the body centres: mean |resultant torque| over bodies divided by
+// (mean |contact force| x mean lever arm, half the mean member-centre distance of the contacts).
+// Clumps held with rotations blocked keep torques that a probe with rotations free would relax.
+Real unbalancedTorque(const Scene& scene);
+
 // d sigma_kk / d epsilon_kk of an affine strain of axis k, (1/V) sum_c k_n (n_k L_k)^2 (plus the
 // shear part); an upper bound of the true stiffness that servos use to scale their gain.
 Vec3 affineAxialStiffness(const Scene& scene);

@@ -23,6 +23,8 @@ np::ndarray perBody(const Scene& s) { return toNumpy(contactsPerBody(s)); }
 void exportMeasures() {
   bp::def("stress", &stress, "Love-Weber stress tensor (Pa, compression positive) = -YADE getStress().");
   bp::def("unbalanced_force", &unbalancedForce, "YADE's unbalancedForce(useMaxForce=False).");
+  bp::def("unbalanced_torque", &unbalancedTorque,
+          "Mean |resultant torque| / (mean |contact force| x mean lever arm); valid after a force evaluation.");
   bp::def("affine_axial_stiffness", &axialStiffness);
   bp::def("coordination", &coordinationDict, "Nc, Np, Np0, Np1, Zm (Eq. 14) and Z = 2Nc/Np.");
   bp::def("contacts_per_body", &perBody);

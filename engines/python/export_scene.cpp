@@ -53,7 +53,7 @@ void setOrientations(Scene& s, const bp::object& o) {
   const std::vector<Real> q = toRealList(bp::import("numpy").attr("ravel")(o), "orientations");
   require(q.size() == 4 * s.bodies.orientation.size(), "orientations must have shape (n_bodies, 4)");
   for (size_t b = 0; b < s.bodies.orientation.size(); ++b)
-    s.bodies.orientation[b] = Quat(q[4 * b], q[4 * b + 1], q[4 * b + 2], q[4 * b + 3]).normalized();
+    s.bodies.orientation[b] = unitQuaternion(Quat(q[4 * b], q[4 * b + 1], q[4 * b + 2], q[4 * b + 3]));
   s.refreshMembers();
   s.detectionInvalid = true;
 }
