@@ -23,6 +23,8 @@ SHAPES = {
     "dimer-1.7": ([[0, 0, 0], [1.4, 0, 0]], [1.0, 1.0]),
     # three equal balls in a row, neighbours one radius apart: aspect ratio 2
     "trimer-2.0": ([[-1.0, 0, 0], [0, 0, 0], [1.0, 0, 0]], [1.0, 1.0, 1.0]),
+    # the same with neighbours 0.8 radius apart: aspect ratio 1.8
+    "trimer-1.8": ([[-0.8, 0, 0], [0, 0, 0], [0.8, 0, 0]], [1.0, 1.0, 1.0]),
 }
 
 _cache = {}

@@ -27,9 +27,9 @@ class PreparationError(RuntimeError):
 
 RECIPES = {
     "clump1": dict(shape="dimer-1.5", d50=0.195e-3, cu=1.25, orientation_weights=(1.0, 1.0, 3.0), layers=1,
-                   stage1_rotations="blocked", mu_prep=0.0, mu_final=0.5, phi_cell=0.62),
+                   stage1_rotations="blocked", stage1_pressure=100e3, mu_prep=0.0, mu_final=0.5, phi_cell=0.62),
     "clump2": dict(shape="dimer-1.5", d50=0.216e-3, cu=1.43, orientation_weights=(1.0, 1.0, 0.3), layers=4,
-                   stage1_rotations="blocked", mu_prep=0.1, mu_final=0.5, phi_cell=0.55),
+                   stage1_rotations="blocked", stage1_pressure=100e3, mu_prep=0.1, mu_final=0.5, phi_cell=0.55),
 }
 
 
@@ -181,6 +181,8 @@ def recipe(assembly, **overrides):
             r[k] = v
     if r["stage1_rotations"] not in ("blocked", "free"):
         raise ValueError("stage1_rotations must be 'blocked' or 'free'")
+    if not r["stage1_pressure"] > 0:
+        raise ValueError("stage1_pressure must be > 0")
     return r
 
 
@@ -230,7 +232,15 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
     while grow.pressure < 0.01 * pressure and steps_gas < max_steps:
         steps_gas += chain.run(500)
     grow.max_growth_rate = rate
+    # Stage 1 ends at stage1_pressure; below the target, the expansion goes on to the target with
+    # rotations free (the network formed with the stage-1 fabric then densifies).
+    p1 = min(r["stage1_pressure"], pressure)
+    grow.target_pressure = p1
     steps_grow = steps_gas + _run_until(chain, grow, max_steps, 2000, "expansion", progress)
+    if p1 < pressure:
+        scene.block_rotations = False
+        grow.target_pressure = pressure
+        steps_grow += _run_until(chain, grow, max_steps, 2000, "expansion (free)", progress)
     scene.rescale(1.0 / (start * grow.scale))
     scene.cell_ref_size = scene.cell_size
 

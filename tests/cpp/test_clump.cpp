@@ -238,3 +238,24 @@ TEST(NewtonIntegrator, FreeAsymmetricClumpConservesMomentumAndEnergy) {
   std::printf("free clump, 1e5 steps: |dL|/L = %.2e, max |dE|/E = %.2e, drift of the mean %.2e\n",
               (momentum() - L0).norm() / L0.norm(), worst, last - first);
 }
+
+// Members of one clump overlap by construction but never touch each other: detection lists no
+// pair inside a body, so nothing there carries a force or counts in Nc (fabric, Zm, stress).
+TEST(ClumpTemplate, MembersOfOneClumpAreNotContacts) {
+  auto s = std::make_shared<Scene>();
+  s->material = paperMaterial();
+  const Real r = 1e-4;
+  const ClumpTemplate t = makeClumpTemplate({Vec3::Zero(), Vec3(r, 0, 0), Vec3(0.5 * r, 0.8 * r, 0)}, {r, r, r});
+  s->cell.size = s->cell.refSize = Vec3::Constant(10 * r);
+  s->addClump(Vec3::Constant(5 * r), Quat::Identity(), t);
+  s->addClump(Vec3::Constant(5 * r) + Vec3(0, 0, 2 * t.boundingRadius() + r), Quat::Identity(), t);  // apart
+  s->dt = 1e-9;
+  ContactDetection detection;
+  detection.apply(*s);
+  ContactForces forces;
+  forces.apply(*s);
+  EXPECT_EQ(s->contacts.size(), 0);
+  EXPECT_EQ(coordination(*s).contacts, 0);
+  EXPECT_EQ(s->bodies.force[0], Vec3::Zero());
+  EXPECT_EQ(s->bodies.torque[0], Vec3::Zero());
+}
