@@ -7,7 +7,7 @@
 // volume and mass by its cube, its inertia by its fifth power, so its shape never changes.
 #include <vector>
 
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

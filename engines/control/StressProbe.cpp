@@ -10,7 +10,7 @@ namespace trueaniso {
 void StressProbe::begin(const Vec3& hold) {
   require(axis >= 0 && axis <= 2, "probe axis must be x, y or z (0, 1, 2)");
   require(sign == 1 || sign == -1, "probe sign must be +1 or -1");
-  require(gammaTarget > 0, "probe gamma must be > 0");
+  require(std::isfinite(gammaTarget) && gammaTarget > 0, "probe gamma must be a finite number > 0");
   require(increment >= 0, "probe increment must be >= 0 (0: stop at gamma)");
   require(relativeTolerance > 0 && relativeTolerance < 1, "probe tolerance must lie in (0, 1)");
   require(unbalancedTolerance > 0 && rampSteps > 0 && settleSteps >= 1 && maxSteps > 0,

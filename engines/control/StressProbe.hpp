@@ -15,7 +15,7 @@
 
 #include "control/CellMeasurement.hpp"
 #include "control/CellServoLaw.hpp"
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 
@@ -27,7 +27,7 @@ class StressProbe : public Engine {
   int sign = 1;                    // +1 loads (compression), -1 unloads
   Real gammaTarget = 1e-6;         // Eq. (12) at which the ramp stops
   Real increment = 0;              // Pa; > 0 replaces the gamma criterion by a fixed increment
-  Real probeFriction = 1e23;       // the paper's "sliding suppressed"
+  Real probeFriction = kProbeFriction;  // the paper's "sliding suppressed"
   bool restrainRotations = false;
   CellServoLaw law{0.03, 1.0};     // gain 0.03: docs/speed-vs-error.md
   long rampSteps = 300;            // the ramp's expected length, sets its rate

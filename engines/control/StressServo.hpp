@@ -1,7 +1,7 @@
 #pragma once
 // Servo on the cell's diagonal stresses to fixed goals (isotropic consolidation, holding a state).
 #include "control/CellServoLaw.hpp"
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

@@ -1,16 +1,34 @@
 #include "control/TrueTriaxialServo.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 
 namespace trueaniso {
+
+void TrueTriaxialServo::validate() const {
+  goal.validate();
+  law.validate();
+  require(pathRate > 0 && stressTolerance > 0 && followTolerance > 0 && maxStrain > 0,
+          "servo tolerances and path rate must be > 0");
+  require(std::isfinite(loadingFriction) && loadingFriction > 0,
+          "servo: the loading friction must be a finite number > 0");
+}
+
+void TrueTriaxialServo::start(Scene& s) {
+  reset();
+  validate();
+  s.material.friction = loadingFriction;
+  started_ = true;
+}
 
 void TrueTriaxialServo::apply(Scene& s) {
   if (status == Status::Reached || status == Status::Failed) {
     done = true;
     return;
   }
+  if (!started_) throw InputError("TrueTriaxialServo: call start(scene) before running it");
   s.cell.strainRate = update(CellMeasurement::of(s), s.dt);
 }
 
@@ -22,11 +40,8 @@ Vec3 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   stress = m.stress;
   unbalanced = m.unbalanced;
   if (status == Status::Idle) {
-    goal.validate();
-    law.validate();
-    require(pathRate > 0 && stressTolerance > 0 && followTolerance > 0 && maxStrain > 0,
-            "servo tolerances and path rate must be > 0");
-    start = stress;
+    validate();
+    startStress = stress;
     target = stress;
     startStrain = m.strain;
     status = Status::Loading;
@@ -35,7 +50,7 @@ Vec3 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   const Vec3 final = goal.stresses();
   if (status == Status::Loading) {
     if ((stress - target).cwiseAbs().maxCoeff() < followTolerance) {
-      const Real length = (final - start).cwiseAbs().maxCoeff();
+      const Real length = (final - startStress).cwiseAbs().maxCoeff();
       progress = length > 0 ? std::min(1.0, progress + pathRate / length) : 1.0;
       stalled = 0;
       if (progress >= 1.0) status = Status::Holding;
@@ -43,9 +58,9 @@ Vec3 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
       ++stalled;
     }
   }
-  target = start + progress * (final - start);
+  target = startStress + progress * (final - startStress);
   for (int k = 0; k < 3; ++k) {
-    const Real dir = final[k] >= start[k] ? 1.0 : -1.0;
+    const Real dir = final[k] >= startStress[k] ? 1.0 : -1.0;
     overshoot[k] = std::max(overshoot[k], dir * (stress[k] - final[k]));
   }
 

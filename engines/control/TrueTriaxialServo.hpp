@@ -14,7 +14,7 @@
 #include "control/CellMeasurement.hpp"
 #include "control/CellServoLaw.hpp"
 #include "control/TrueTriaxialPath.hpp"
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 
@@ -24,6 +24,11 @@ class TrueTriaxialServo : public Engine {
 
   TrueTriaxialState goal;
   CellServoLaw law;
+  // The friction of every contact while loading (the paper's 0.5), set on the scene by start():
+  // a scene fresh from a probe or from elsewhere may carry another value. The servo owns it as
+  // the probe owns kProbeFriction. (update() alone, as the YADE adapter uses it, leaves friction
+  // to the host.)
+  Real loadingFriction = kLoadingFriction;
   Real pathRate = 2.0;             // Pa per step: the fastest the goal moves along the path
   Real followTolerance = 1000.0;   // Pa
   Real stressTolerance = 500.0;    // Pa: the 0.5 kPa
@@ -42,7 +47,7 @@ class TrueTriaxialServo : public Engine {
   Status status = Status::Idle;
   std::string message;
   Real progress = 0;               // 0 at the start stresses, 1 at the state
-  Vec3 start = Vec3::Zero(), target = Vec3::Zero(), stress = Vec3::Zero();
+  Vec3 startStress = Vec3::Zero(), target = Vec3::Zero(), stress = Vec3::Zero();
   Vec3 startStrain = Vec3::Zero();
   // Largest excursion of each stress beyond its final value in the direction of loading (Pa);
   // <= 0 means it never passed its goal.
@@ -57,12 +62,21 @@ class TrueTriaxialServo : public Engine {
     steps = settled = stalled = holding = 0;
     overshoot = Vec3::Constant(-1e300);
     done = false;
+    started_ = false;
   }
+  // Validates the parameters and sets the loading friction on the scene, before the first force
+  // evaluation of the run (the engine list evaluates forces before the servo). Required before
+  // apply(), as StressProbe::start.
+  void start(Scene& scene);
   void apply(Scene& scene) override;
   // The control logic alone: cell strain rates from a measurement (used by apply and by the
   // YADE adapter). Sets `done` when the state is reached or has failed.
   Vec3 update(const CellMeasurement& m, Real dt);
   std::string name() const override { return "TrueTriaxialServo"; }
+
+ private:
+  void validate() const;
+  bool started_ = false;
 };
 
 }  // namespace trueaniso

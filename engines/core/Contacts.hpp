@@ -30,8 +30,7 @@ struct Contacts {
   int size() const { return static_cast<int>(m1.size()); }
   bool active(int c) const { return normalForce[c] > 0; }
   Vec3 force(int c) const { return normalForce[c] * normal[c] + shearForce[c]; }  // on body 2
-  // Tangent normal stiffness dN/d delta = 1.5 N / delta, Eq. (5).
-  Real kn(int c) const { return normalForce[c] > 0 ? 1.5 * normalForce[c] / overlap[c] : 0.0; }
+  // The contact law's stiffnesses come from contact/HertzMindlin (normalStiffness(N, delta)).
 
   void resize(int n) {
     m1.resize(n); m2.resize(n); b1.resize(n); b2.resize(n); shift.resize(n); rbar.resize(n);

@@ -6,11 +6,18 @@
 
 namespace trueaniso {
 
+// The paper's friction coefficient during stress probes: sliding suppressed (section 2.2). The one
+// place this number is written; the probe, the static solve and Python (engines.PROBE_FRICTION)
+// read it here.
+constexpr Real kProbeFriction = 1e23;
+// The paper's friction coefficient while consolidating and loading along the stress paths.
+constexpr Real kLoadingFriction = 0.5;
+
 struct Material {
   Real shearModulus = 18e9;  // G_g (Pa)
   Real poisson = 0.15;       // nu_g
   Real density = 2500.0;     // kg/m^3
-  Real friction = 0.5;       // mu: 0.5 while consolidating, 1e23 while probing
+  Real friction = kLoadingFriction;  // mu, switchable at run time (kProbeFriction while probing)
 
   void validate() const {
     require(shearModulus > 0, "shear modulus must be > 0");

@@ -135,6 +135,16 @@ Real Scene::maxRadius() const {
   return members.radius.empty() ? 0.0 : *std::max_element(members.radius.begin(), members.radius.end());
 }
 
+void Scene::setDensity(Real density) {
+  require(std::isfinite(density) && density > 0, "density must be a finite number > 0");
+  const Real f = density / material.density;
+  material.density = density;
+  for (int b = 0; b < bodies.size(); ++b) {
+    bodies.mass[b] *= f;
+    bodies.inertia[b] *= f;
+  }
+}
+
 void Scene::validate() const {
   material.validate();
   require(bodies.size() > 0, "the scene has no particles");

@@ -40,6 +40,9 @@ struct Scene {
                const std::vector<Real>& radii, Real mass, const Vec3& inertia);
   // Single spheres only: change the radius and the mass and inertia that follow from it.
   void setSphereRadius(int body, Real radius);
+  // The material's density, with every body's mass and inertia scaled to it (they are
+  // proportional to the density for spheres and clumps alike).
+  void setDensity(Real density);
 
   bool hasClumps() const { return members.size() != bodies.size(); }
   // Member world positions from body positions and orientations (clumps only; for single

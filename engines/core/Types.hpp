@@ -13,6 +13,9 @@ using Vec3 = Eigen::Vector3d;
 using Vec3i = Eigen::Vector3i;
 using Mat3 = Eigen::Matrix3d;
 using Quat = Eigen::Quaterniond;
+// Voigt 6x6 stiffness and 6-vectors, order xx, yy, zz, yz, xz, xy (Eq. 38; statics/Voigt.hpp).
+using Mat6 = Eigen::Matrix<Real, 6, 6>;
+using Vec6 = Eigen::Matrix<Real, 6, 1>;
 
 // Thrown for bad input before any work starts; the Python layer turns it into one clear line.
 struct InputError : std::invalid_argument {

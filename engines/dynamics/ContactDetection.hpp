@@ -4,7 +4,7 @@
 // the motion since the last build could have brought a pair outside the list into contact.
 #include <vector>
 
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

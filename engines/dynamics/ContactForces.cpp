@@ -16,8 +16,6 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   const Vec3 h = s.cell.size;
   const Vec3 rate = s.cell.strainRate;
   const Real dt = s.dt;
-  const Real ratio = law.shearToNormal();
-  const Real hertz = law.hertzCoefficient(1.0);  // (4/3) E* sqrt(rbar/2) = hertz * sqrt(rbar)
   const int nc = C.size(), nb = B.size();
   int nthreads = 1;
 #ifdef _OPENMP
@@ -26,12 +24,17 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   forceBuffers_.resize(nthreads);
   torqueBuffers_.resize(nthreads);
   long sliding = 0;
+  // The team may be smaller than asked (OMP_DYNAMIC, nesting): only the buffers of threads that
+  // ran this step hold this step's forces, so only they are summed below.
+  int team = 1;
 
 #pragma omp parallel reduction(+ : sliding)
   {
     int t = 0;
 #ifdef _OPENMP
     t = omp_get_thread_num();
+#pragma omp single nowait
+    team = omp_get_num_threads();
 #endif
     Vec3* F;
     Vec3* T;
@@ -68,11 +71,6 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       const Real dist = std::sqrt(dist2);
       const Vec3 n = d * (1.0 / dist);
       const Real delta = rsum - dist;
-      // Hertz in closed form; its tangent 1.5 N/delta is Eq. (5), written without a division.
-      const Real sqrtDelta = std::sqrt(delta);
-      const Real coef = hertz * std::sqrt(C.rbar[c]);
-      const Real N = coef * delta * sqrtDelta;
-      const Real ks = ratio * 1.5 * coef * sqrtDelta;
       const Vec3 branch = Clumps ? Vec3(B.pos[b] + sh - B.pos[a]) : d;
 
       // Lever arms from the body centres to the contact point, mid-overlap as in YADE's ScGeom.
@@ -86,18 +84,17 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         vrel += B.angVel[b].cross(arm2) - B.angVel[a].cross(arm1);
         twist = 0.5 * dt * n.dot(B.angVel[a] + B.angVel[b]);
       }
-      Vec3 Fs;
-      if (C.normalForce[c] > 0) Fs = HertzMindlin::rotateWithContact(C.shearForce[c], C.normal[c], n, twist);
-      else Fs.setZero();  // a contact that starts now has no tangential history
       const Vec3 dus = (vrel - n.dot(vrel) * n) * dt;
-      if (law.updateShear(Fs, dus, ks, N)) ++sliding;
+      const HertzMindlin::Response r =
+          law.evaluate(delta, C.rbar[c], n, C.normalForce[c] > 0, C.normal[c], C.shearForce[c], dus, twist);
+      if (r.sliding) ++sliding;
 
       C.normal[c] = n;
       C.branch[c] = branch;
       C.overlap[c] = delta;
-      C.normalForce[c] = N;
-      C.shearForce[c] = Fs;
-      const Vec3 Fc = N * n + Fs;  // force on body b; body a receives -Fc
+      C.normalForce[c] = r.N;
+      C.shearForce[c] = r.Fs;
+      const Vec3 Fc = r.N * n + r.Fs;  // force on body b; body a receives -Fc
       F[a] -= Fc;
       F[b] += Fc;
       if (Rotations) {
@@ -108,10 +105,9 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   }
   slidingContacts = sliding;
   // Thread buffers into the bodies' arrays, in thread order.
-  for (int t = 1; t < nthreads; ++t) {
+  for (int t = 1; t < team; ++t) {
     const std::vector<Vec3>& Ft = forceBuffers_[t];
     const std::vector<Vec3>& Tt = torqueBuffers_[t];
-    if (Ft.size() != static_cast<size_t>(nb)) continue;
 #pragma omp parallel for schedule(static)
     for (int q = 0; q < nb; ++q) {
       B.force[q] += Ft[q];

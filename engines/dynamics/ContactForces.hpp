@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "contact/HertzMindlin.hpp"
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

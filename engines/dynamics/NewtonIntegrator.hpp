@@ -4,7 +4,7 @@
 // clumps the torque, as YADE's aspherical integrator), plus the cell's deformation: positions
 // follow the affine field of the cell's strain rates and velocities are stored as fluctuations
 // about it. Clumps rotate by an angular-momentum-conserving splitting (NewtonIntegrator.cpp).
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

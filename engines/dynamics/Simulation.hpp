@@ -3,7 +3,7 @@
 #include <memory>
 #include <vector>
 
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

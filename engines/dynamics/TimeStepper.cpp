@@ -4,12 +4,14 @@
 #include <cmath>
 #include <limits>
 
+#include "contact/HertzMindlin.hpp"
+
 namespace trueaniso {
 
 Real TimeStepper::stiffnessBound(const Scene& s) {
   const Bodies& B = s.bodies;
   const Contacts& C = s.contacts;
-  const Real ratio = s.material.stiffnessRatio();
+  const HertzMindlin law(s.material);
   const bool rot = !s.blockRotations;
   Real best = std::numeric_limits<Real>::infinity();
   const int nb = B.size();
@@ -19,14 +21,14 @@ Real TimeStepper::stiffnessBound(const Scene& s) {
     for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
       const int e = C.incidence[q];
       const int c = e >= 0 ? e : ~e;
-      const Real kn = C.kn(c);
+      const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
       if (kn <= 0) continue;
       kt += kn;
       if (rot) {
         // Lever arm of the contact point about this body's centre: member offset + radius.
         const int m = e >= 0 ? C.m2[c] : C.m1[c];
         const Real l = s.members.offset[m].norm() + s.members.radius[m];
-        kr += ratio * kn * l * l;
+        kr += law.shearStiffness(kn) * l * l;
       }
     }
     if (kt > 0) best = std::min(best, std::sqrt(B.mass[b] / kt));
@@ -38,12 +40,12 @@ Real TimeStepper::stiffnessBound(const Scene& s) {
 Real TimeStepper::criticalPairStep(const Scene& s) {
   const Bodies& B = s.bodies;
   const Contacts& C = s.contacts;
-  const Real ratio = s.material.stiffnessRatio();
+  const HertzMindlin law(s.material);
   Real best = std::numeric_limits<Real>::infinity();
   const int nc = C.size();
 #pragma omp parallel for schedule(static) reduction(min : best)
   for (int c = 0; c < nc; ++c) {
-    const Real kn = C.kn(c);
+    const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
     if (kn <= 0) continue;
     const int a = C.b1[c], b = C.b2[c];
     Real inv = 1.0 / B.mass[a] + 1.0 / B.mass[b];
@@ -52,7 +54,7 @@ Real TimeStepper::criticalPairStep(const Scene& s) {
       const Real l1 = s.members.offset[C.m1[c]].norm() + s.members.radius[C.m1[c]];
       const Real l2 = s.members.offset[C.m2[c]].norm() + s.members.radius[C.m2[c]];
       inv += l1 * l1 / B.inertia[a].minCoeff() + l2 * l2 / B.inertia[b].minCoeff();
-      w2 = std::max(w2, ratio * kn * inv);
+      w2 = std::max(w2, law.shearStiffness(kn) * inv);
     }
     best = std::min(best, 2.0 / std::sqrt(w2));
   }

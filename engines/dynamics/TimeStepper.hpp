@@ -2,7 +2,7 @@
 // Time step from the current contact stiffnesses. For each body the translational stiffness is
 // bounded by the sum of its contacts' k_n, the rotational one by the sum of k_s arm^2; the step is
 // a safety fraction of the smallest sqrt(mass/stiffness), as YADE's GlobalStiffnessTimeStepper.
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 
 namespace trueaniso {
 

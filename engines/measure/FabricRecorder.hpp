@@ -4,7 +4,7 @@
 // engine list: it reads the contacts of the step's force evaluation.
 #include <vector>
 
-#include "dynamics/Engine.hpp"
+#include "core/Engine.hpp"
 #include "measure/Fabric.hpp"
 
 namespace trueaniso {

@@ -2,6 +2,7 @@
 
 #include <limits>
 
+#include "contact/HertzMindlin.hpp"
 #include "measure/Reduce.hpp"
 
 namespace trueaniso {
@@ -51,15 +52,16 @@ Real unbalancedTorque(const Scene& s) {
 
 Vec3 affineAxialStiffness(const Scene& s) {
   const Contacts& C = s.contacts;
-  const Real ratio = s.material.stiffnessRatio();
+  const HertzMindlin law(s.material);
   const Vec3 sum = blockSum<Vec3>(C.size(), Vec3::Zero(), [&](int c, Vec3& acc) {
-    const Real kn = C.kn(c);
+    const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
     if (kn <= 0) return;
+    const Real ks = law.shearStiffness(kn);
     const Vec3& n = C.normal[c];
     const Vec3& L = C.branch[c];
     for (int k = 0; k < 3; ++k) {
       // K_kk = sum L_k^2 [k_s + (k_n - k_s) n_k^2], the kk kk component of Eq. (32).
-      acc[k] += L[k] * L[k] * (ratio * kn + (1.0 - ratio) * kn * n[k] * n[k]);
+      acc[k] += L[k] * L[k] * (ks + (1.0 - law.shearToNormal()) * kn * n[k] * n[k]);
     }
   });
   return sum / s.cell.volume();

@@ -68,18 +68,6 @@ const char* probeStage(const StressProbe& p) {
   }
   return "?";
 }
-void setAxis(StressProbe& p, int a) {
-  require(a >= 0 && a <= 2, "probe axis must be x, y or z (0, 1, 2)");
-  p.axis = a;
-}
-void setSign(StressProbe& p, int s) {
-  require(s == 1 || s == -1, "probe sign must be +1 or -1");
-  p.sign = s;
-}
-void setGammaTarget(StressProbe& p, Real g) {
-  require(g > 0, "probe gamma must be > 0");
-  p.gammaTarget = g;
-}
 Real poisson(const StressProbe& p, int j) { return p.poissonRatio(j); }
 
 // The control logic of an engine without a scene, for the YADE adapter: measurement in, strain
@@ -139,6 +127,10 @@ void exportControl() {
       .def("set_goal", &setGoal, (bp::arg("b"), bp::arg("sigma_z"), bp::arg("p") = 100e3),
            "Validate and set the state to reach; resets the servo.")
       .def("reset", &TrueTriaxialServo::reset)
+      .def("start", &TrueTriaxialServo::start, (bp::arg("scene")),
+           "Validate the parameters and set the loading friction on the scene; required before running.")
+      .def_readwrite("loading_friction", &TrueTriaxialServo::loadingFriction,
+                     "Friction of every contact while loading (the paper's 0.5), set by start().")
       .add_property("b", &goalB)
       .add_property("sigma_z", &goalSz)
       .add_property("p", &goalP)
@@ -173,9 +165,9 @@ void exportControl() {
            (bp::arg("scene"), bp::arg("hold")),
            "Snapshot the scene, suppress sliding, begin relaxing at the held stresses.")
       .def("restore", &StressProbe::restore, "Put the snapshot back into the scene.")
-      .add_property("axis", bp::make_getter(&StressProbe::axis), &setAxis)
-      .add_property("sign", bp::make_getter(&StressProbe::sign), &setSign)
-      .add_property("gamma_target", bp::make_getter(&StressProbe::gammaTarget), &setGammaTarget)
+      .def_readwrite("axis", &StressProbe::axis, "0, 1, 2 = x, y, z (checked by start/begin)")
+      .def_readwrite("sign", &StressProbe::sign, "+1 loads, -1 unloads (checked by start/begin)")
+      .def_readwrite("gamma_target", &StressProbe::gammaTarget, "Eq. (12) at which the ramp stops")
       .def_readwrite("increment", &StressProbe::increment)
       .def_readwrite("probe_friction", &StressProbe::probeFriction)
       .def_readwrite("restrain_rotations", &StressProbe::restrainRotations)

@@ -8,6 +8,7 @@
 
 #include "dynamics/ContactDetection.hpp"
 #include "dynamics/ContactForces.hpp"
+#include "dynamics/ContactRefresh.hpp"
 #include "dynamics/NewtonIntegrator.hpp"
 #include "dynamics/Simulation.hpp"
 #include "dynamics/TimeStepper.hpp"
@@ -69,6 +70,12 @@ void exportEngines() {
       .def_readonly("lost_contacts", &ContactDetection::lostContacts)
       .def("rebuild", &ContactDetection::rebuild)
       .def("needs_rebuild", &ContactDetection::needsRebuild);
+
+  bp::def("refresh_contacts", &refreshContacts, (bp::arg("scene")),
+          "Contact list, normals, branches and forces for the current positions, no tangential increment "
+          "(tangential forces carried bit for bit where the contact frame is unchanged).");
+  bp::scope().attr("PROBE_FRICTION") = kProbeFriction;
+  bp::scope().attr("LOADING_FRICTION") = kLoadingFriction;
 
   bp::class_<ContactForces, bp::bases<Engine>, std::shared_ptr<ContactForces>>("ContactForces")
       .def_readonly("sliding_contacts", &ContactForces::slidingContacts);

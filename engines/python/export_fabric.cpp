@@ -104,14 +104,7 @@ bp::dict predictScene(const Scene& s, Real zeta, const std::string& density) {
 }
 
 bp::dict micromechanics(const bp::object& B, const bp::object& M, Real contactDensity, Real Cn, Real Cs, Real zeta) {
-  require(zeta >= 0 && zeta <= 1, "zeta must lie in [0, 1] (k_s* = zeta k_s, section 4.2)");
-  MicromechanicalPrediction p;
-  p.zeta = zeta;
-  p.contactDensity = contactDensity;
-  p.C = stiffnessTensor(toMat3(B, "B"), toMat9(M, "M"), contactDensity, Cn, Cs, zeta);
-  p.voigt = orthotropicStiffness(p.C);
-  p.moduli = orthotropicModuli(p.voigt);
-  return predictionDict(p);
+  return predictionDict(predict(toMat3(B, "B"), toMat9(M, "M"), contactDensity, Cn, Cs, zeta));
 }
 
 bp::dict orthotropic(const bp::object& C) { return modulusDict(orthotropicModuli(toMat6(C, "stiffness"))); }
@@ -149,6 +142,7 @@ void reserveHistory(FabricRecorder& r, int rows) {
 }  // namespace
 
 void exportFabric() {
+  bp::scope().attr("ZETA_RANGE") = bp::make_tuple(ZetaRange::lo, ZetaRange::hi);
   bp::def("fabric", &fabricOf,
           "Zm (Eq. 14), R (15), H (16), B (33), M (34, shape 3x3x3x3), NcV_eq36 (36), NcV_count, e, mean_N, "
           "Nc, Np, Np0, Np1 of the last force evaluation.");

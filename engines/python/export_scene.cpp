@@ -3,6 +3,7 @@
 #include <memory>
 #include <numeric>
 
+#include "contact/HertzMindlin.hpp"
 #include "core/Scene.hpp"
 #include "python/Numpy.hpp"
 
@@ -92,12 +93,7 @@ void setG(Scene& s, Real v) { s.material.shearModulus = v; s.material.validate()
 Real getNu(const Scene& s) { return s.material.poisson; }
 void setNu(Scene& s, Real v) { s.material.poisson = v; s.material.validate(); }
 Real getRho(const Scene& s) { return s.material.density; }
-void setRho(Scene& s, Real v) {
-  require(v > 0, "density must be > 0");
-  const Real f = v / s.material.density;
-  s.material.density = v;
-  for (int b = 0; b < s.bodies.size(); ++b) { s.bodies.mass[b] *= f; s.bodies.inertia[b] *= f; }
-}
+void setRho(Scene& s, Real v) { s.setDensity(v); }
 Real getMu(const Scene& s) { return s.material.friction; }
 void setMu(Scene& s, Real v) { s.material.friction = v; s.material.validate(); }
 
@@ -111,7 +107,10 @@ bp::dict contactArrays(const Scene& s) {
   d["overlap"] = toNumpy(C.overlap); d["normal_force"] = toNumpy(C.normalForce);
   std::vector<Real> kn(C.size());
   std::vector<Vec3> force(C.size());
-  for (int c = 0; c < C.size(); ++c) { kn[c] = C.kn(c); force[c] = C.force(c); }
+  for (int c = 0; c < C.size(); ++c) {
+    kn[c] = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
+    force[c] = C.force(c);
+  }
   d["kn"] = toNumpy(kn); d["shear_force"] = toNumpy(C.shearForce); d["force"] = toNumpy(force);
   return d;
 }

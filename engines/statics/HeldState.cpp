@@ -3,8 +3,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "dynamics/ContactDetection.hpp"
-#include "dynamics/ContactForces.hpp"
+#include "contact/HertzMindlin.hpp"
+#include "dynamics/ContactRefresh.hpp"
 #include "measure/Reduce.hpp"
 #include "measure/Stress.hpp"
 
@@ -13,15 +13,10 @@ namespace trueaniso {
 Scene heldState(const Scene& scene) {
   scene.validate();
   Scene held = scene;
-  held.material.friction = 1e23;  // the probes' value: nothing slides
-  held.blockRotations = false;    // torques are wanted for the balance check; dt = 0 moves nothing
-  held.dt = 0;
-  held.refreshMembers();
-  ContactDetection detection;
-  detection.rebuild(held);  // keeps the history of every listed pair
-  held.detectionInvalid = false;
-  ContactForces forces;
-  forces.apply(held);
+  held.material.friction = kProbeFriction;  // the probes' value: nothing slides
+  held.blockRotations = false;              // torques are wanted for the balance check
+  refreshContacts(held);
+  held.dt = 0;  // nothing of the held state moves
   return held;
 }
 
@@ -60,8 +55,9 @@ HeldContact heldContact(const Scene& held, int c) {
   h.offset1 = M.pos[i] - B.pos[C.b1[c]];
   h.offset2 = M.pos[j] - B.pos[C.b2[c]];
   h.normalForce = C.normalForce[c];
-  h.kn = C.kn(c);
-  h.ks = held.material.stiffnessRatio() * h.kn;
+  const HertzMindlin law(held.material);
+  h.kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
+  h.ks = law.shearStiffness(h.kn);
   const Real delta = C.overlap[c];
   h.distance = M.radius[i] + M.radius[j] - delta;
   h.arm1 = M.radius[i] - 0.5 * delta;

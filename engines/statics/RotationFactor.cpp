@@ -4,16 +4,18 @@
 #include <functional>
 #include <limits>
 
-#include "statics/ElasticConstants.hpp"
+#include "theory/Micromechanics.hpp"
+#include "theory/Orthotropic.hpp"
 
 namespace trueaniso {
 
 namespace {
 
-// Root of f in [-2, 5]: intervals of 0.05 are scanned outwards from zeta = 1 (the root nearest
-// the kinematic value is the meaningful one), the first sign change is bisected to round-off.
+// Root of f in ZetaRange (theory/Micromechanics.hpp): intervals of 0.05 are scanned outwards from
+// zeta = 1 (the root nearest the kinematic value is the meaningful one), the first sign change is
+// bisected to round-off. NaN when no zeta in the range reproduces the modulus.
 Real root(const std::function<Real(Real)>& f) {
-  const Real lo = -2.0, hi = 5.0, step = 0.05;
+  const Real lo = ZetaRange::lo, hi = ZetaRange::hi, step = 0.05;
   auto bisect = [&](Real x0, Real x1) {
     Real f0 = f(x0);
     for (int it = 0; it < 200 && x1 - x0 > 1e-15; ++it) {
@@ -34,7 +36,7 @@ Real root(const std::function<Real(Real)>& f) {
 }  // namespace
 
 Vec3 kinematicModuli(const Mat6& normalPart, const Mat6& shearPart, Real zeta) {
-  return elasticConstants(normalPart + zeta * shearPart).E;
+  return orthotropicModuli(normalPart + zeta * shearPart).E;
 }
 
 RotationFactor rotationFactor(const Mat6& An, const Mat6& As, const Vec3& free, const Vec3& blocked) {

@@ -14,7 +14,7 @@
 //    blocked), i.e. the reduction that freeing the rotations adds to the relaxed, rotation-
 //    blocked solve, expressed as a tangential-stiffness factor on the kinematic estimate.
 // zeta_h solves the same equations for (E_x + E_y)/2; zeta_v is the z one. A factor whose
-// equation has no root in [-2, 5] is NaN.
+// equation has no root in ZetaRange (theory/Micromechanics.hpp) is NaN.
 #include "statics/Voigt.hpp"
 
 namespace trueaniso {

@@ -110,7 +110,7 @@ StaticStiffnessResult StaticStiffness::compute(const Scene& scene) const {
   res.C = -dSigmaV / V + volumeTerm;
   Eigen::FullPivLU<Mat6> lu(res.C);
   res.compliance = lu.isInvertible() ? Mat6(lu.inverse()) : Mat6::Constant(std::numeric_limits<Real>::quiet_NaN());
-  res.constants = elasticConstants(res.C);
+  res.constants = orthotropicModuli(res.C);
   const auto t4 = Clock::now();
   res.timeHeld = seconds(t0, t1);
   res.timeAssembly = seconds(t1, t2);

@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "core/Scene.hpp"
-#include "statics/ElasticConstants.hpp"
+#include "theory/Orthotropic.hpp"
 #include "statics/Voigt.hpp"
 #include "statics/ZeroModes.hpp"
 
@@ -30,7 +30,7 @@ namespace trueaniso {
 struct StaticStiffnessResult {
   Mat6 C = Mat6::Zero();           // relaxed tangent stiffness
   Mat6 compliance = Mat6::Zero();  // C^-1 (NaN if C is singular)
-  ElasticConstants constants;      // E_i, nu_ij (Eqs. 40-42, probe conditions), G_ij (Eq. 39)
+  OrthotropicModuli constants;     // E_i, nu_ij (Eqs. 40-42, probe conditions), G_ij (Eq. 39)
   // Affine (kinematic hypothesis) stiffness of every contact, no relaxation and no rotation:
   // affineNormal + affineShear is Eq. (32) (k_n n n and k_s (I - n n) parts of K_jl), and
   // affineGeometric the terms of the existing forces; affine is their sum.

@@ -8,9 +8,6 @@
 
 namespace trueaniso {
 
-using Mat6 = Eigen::Matrix<Real, 6, 6>;
-using Vec6 = Eigen::Matrix<Real, 6, 1>;
-
 namespace voigt {
 
 constexpr int kRow[6] = {0, 1, 2, 1, 0, 0};

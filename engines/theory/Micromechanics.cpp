@@ -1,6 +1,7 @@
 #include "theory/Micromechanics.hpp"
 
 #include <cmath>
+#include <sstream>
 
 namespace trueaniso {
 
@@ -28,15 +29,29 @@ Mat6 orthotropicStiffness(const Mat9& C) {
   return V;
 }
 
-MicromechanicalPrediction predict(const Fabric& f, const Material& m, Real zeta, ContactDensity density) {
-  require(zeta >= 0 && zeta <= 1, "zeta must lie in [0, 1] (k_s* = zeta k_s, section 4.2)");
+void requireZeta(Real zeta) {
+  if (!(zeta >= ZetaRange::lo && zeta <= ZetaRange::hi)) {
+    std::ostringstream msg;
+    msg << "zeta must lie in [" << ZetaRange::lo << ", " << ZetaRange::hi << "] (k_s* = zeta k_s, section 4.2), not "
+        << zeta;
+    throw InputError(msg.str());
+  }
+}
+
+MicromechanicalPrediction predict(const Mat3& B, const Mat9& M, Real contactDensity, Real Cn, Real Cs, Real zeta) {
+  requireZeta(zeta);
   MicromechanicalPrediction p;
   p.zeta = zeta;
-  p.contactDensity = density == ContactDensity::Eq36 ? f.contactDensityEq36() : f.contactDensityCount();
-  p.C = stiffnessTensor(f.B, f.M, p.contactDensity, m.Cn(), m.Cs(), zeta);
+  p.contactDensity = contactDensity;
+  p.C = stiffnessTensor(B, M, contactDensity, Cn, Cs, zeta);
   p.voigt = orthotropicStiffness(p.C);
   p.moduli = orthotropicModuli(p.voigt);
   return p;
+}
+
+MicromechanicalPrediction predict(const Fabric& f, const Material& m, Real zeta, ContactDensity density) {
+  const Real nv = density == ContactDensity::Eq36 ? f.contactDensityEq36() : f.contactDensityCount();
+  return predict(f.B, f.M, nv, m.Cn(), m.Cs(), zeta);
 }
 
 }  // namespace trueaniso

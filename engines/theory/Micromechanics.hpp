@@ -8,6 +8,19 @@
 
 namespace trueaniso {
 
+// The rotation factor zeta of Eq. (37), k_s* = zeta k_s (section 4.2): its one valid range, used
+// by the prediction, the static derivation (statics/RotationFactor) and the Python fits
+// (engines.ZETA_RANGE).
+//  - zeta >= 0: a negative tangential stiffness has no meaning (the directional form
+//    sqrt(zeta_i zeta_k) of pyscripts/trueaniso/zeta.py needs it too);
+//  - zeta <= 5: the paper's zeta is a reduction (<= 1), but a fit or a derivation can land above
+//    1 (rotations blocked give 1.01) and is reported as it is, not clipped; 5 is far beyond any
+//    value met and keeps the root searches bounded.
+struct ZetaRange {
+  static constexpr Real lo = 0.0, hi = 5.0;
+};
+void requireZeta(Real zeta);
+
 // Which Nc/V enters Eq. (37): Eq. (36) as the paper does, or the counted Nc / V.
 enum class ContactDensity { Eq36, Count };
 
@@ -27,7 +40,10 @@ struct MicromechanicalPrediction {
   OrthotropicModuli moduli;   // Eqs. (39)-(42)
 };
 
-// zeta in [0, 1] as the paper defines it (k_s* = zeta k_s); anything else is refused.
+// Eq. (37), Appendix A and Eqs. (39)-(42) from given fabric tensors, Nc/V, C_n and C_s; zeta
+// outside ZetaRange is refused.
+MicromechanicalPrediction predict(const Mat3& B, const Mat9& M, Real contactDensity, Real Cn, Real Cs, Real zeta);
+// The same from a scene's fabric and material.
 MicromechanicalPrediction predict(const Fabric& fabric, const Material& material, Real zeta = 1.0,
                                   ContactDensity density = ContactDensity::Eq36);
 

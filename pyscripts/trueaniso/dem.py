@@ -34,14 +34,9 @@ class Chain:
 
 def refresh(scene):
     """Recompute every contact quantity (forces, normals, branches) for the current positions
-    without any tangential increment: what a loaded or edited scene needs before it is measured."""
-    dt = scene.dt
-    scene.dt = 0.0  # zero time: the shear increment v dt vanishes, history is only carried
-    try:
-        _e.ContactDetection().apply(scene)
-        _e.ContactForces().apply(scene)
-    finally:
-        scene.dt = dt
+    without any tangential increment: what a loaded or edited scene needs before it is measured.
+    The C++ engines/dynamics/ContactRefresh is the one home of this."""
+    _e.refresh_contacts(scene)
 
 
 def reference_contact_force(scene, pressure):

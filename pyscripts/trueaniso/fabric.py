@@ -31,13 +31,6 @@ _SYM = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 _SHEAR = ("yz", "xz", "xy")
 
 
-def _check_zeta(zeta):
-    zeta = float(zeta)
-    if not 0.0 <= zeta <= 1.0:
-        raise ValueError("zeta must lie in [0, 1] (k_s* = zeta k_s, section 4.2), got %g" % zeta)
-    return zeta
-
-
 def _check_density(density):
     if density not in DENSITIES:
         raise ValueError("density must be one of %s (Nc/V by Eq. 36 or counted), got %r" % (DENSITIES, density))
@@ -51,7 +44,7 @@ def fabric(scene):
 
 def prediction(scene, zeta=1.0, density="eq36"):
     """Micromechanical C (Eq. 37), Voigt matrix (Appendix A), E, nu[i, j] = nu_ij, G (yz, xz, xy)."""
-    return engines.micromechanical_prediction(scene, _check_zeta(zeta), _check_density(density))
+    return engines.micromechanical_prediction(scene, float(zeta), _check_density(density))
 
 
 def prediction_from(f, shear_modulus, poisson, zeta=1.0, density="eq36"):
@@ -59,7 +52,7 @@ def prediction_from(f, shear_modulus, poisson, zeta=1.0, density="eq36"):
     m = _material(shear_modulus, poisson)
     ncv = f["NcV_eq36"] if _check_density(density) == "eq36" else f["NcV_count"]
     return engines.micromechanics(np.asarray(f["B"]), np.asarray(f["M"]), float(ncv), m.Cn, m.Cs,
-                                  _check_zeta(zeta))
+                                  float(zeta))
 
 
 def _material(shear_modulus, poisson):
@@ -77,7 +70,7 @@ def fabric_row(scene, zeta=1.0, density="eq36"):
     f = fabric(scene)
     p = engines.micromechanics(f["B"], f["M"], float(f["NcV_eq36"] if _check_density(density) == "eq36"
                                                      else f["NcV_count"]),
-                               scene.Cn, scene.Cs, _check_zeta(zeta))
+                               scene.Cn, scene.Cs, float(zeta))
     return row(f, p, zeta, density)
 
 

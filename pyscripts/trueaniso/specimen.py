@@ -142,6 +142,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
     scene.strain_rate = np.zeros(3)
     scene.velocities = np.zeros((scene.num_bodies, 3))
     scene.angular_velocities = np.zeros((scene.num_bodies, 3))
+    dem.refresh(scene)  # forces of the positions kept (the integrator moved them last)
 
     log = dict(n=n, seed=seed, pressure=pressure, mu_prep=mu_prep, mu_final=mu_final,
                phi_cell=phi_cell, damping=damping, inertial_number=inertial_number,

@@ -6,7 +6,6 @@ strains of the periodic cell with a sparse Cholesky solve, and returns the 6x6 t
 Love-Weber stress against the cell's log strain (both compression positive; Voigt order xx, yy,
 zz, yz, xz, xy; engineering shear strains). docs/statics.md has the definitions and derivations.
 """
-import numpy as np
 
 from . import engines as _e
 
@@ -62,13 +61,3 @@ def summary(result):
     lines.append("residual %.2e, %d rattlers, %d pinned, %.2f s" % (
         result["residual"], len(result["rattlers"]), len(result["pinned"]), result["time"]["total"]))
     return "\n".join(lines)
-
-
-def probe_moduli(C):
-    """E_i and nu_ij of a probe on axis i with the two other normal stresses held and no shear
-    strain (the orthorhombic cell), from any 6x6 stiffness: the normal 3x3 block inverted."""
-    S = np.linalg.inv(np.asarray(C)[:3, :3])
-    E = 1.0 / np.diag(S)
-    nu = -S.T / np.diag(S)[:, None]
-    np.fill_diagonal(nu, np.nan)
-    return E, nu

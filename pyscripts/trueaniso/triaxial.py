@@ -77,9 +77,6 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     strains beyond `max_strain`, or runs `max_steps`.
     """
     validate_state(b, sigma_z, p)
-    if not (math.isfinite(friction) and friction > 0):
-        raise ValueError("loading friction must be a finite number > 0, not %r" % (friction,))
-    scene.friction = friction  # set, not assumed: a scene fresh from elsewhere may carry 1e23
     servo = engines.TrueTriaxialServo()
     servo.set_goal(b, sigma_z, p)
     servo.path_rate = path_rate
@@ -89,15 +86,20 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     servo.max_steps = max_steps
     servo.stall_steps = stall_steps
     servo.hold_steps = hold_steps
+    servo.loading_friction = friction  # the servo sets it on the scene (a scene may carry 1e23)
     d50 = 2.0 * float(np.median(scene.radii))
     servo.max_strain_rate = dem.strain_rate_for_inertial_number(inertial_number, d50, scene.density, p)
     chain = dem.Chain(scene, damping=damping, controllers=[servo])
+    servo.start(scene)
     t0 = time.time()
     while servo.status not in ("reached", "failed"):
         chain.run(chunk)
         if progress:
             progress(servo)
     scene.strain_rate = np.zeros(3)
+    # The integrator moved the bodies after the last force evaluation: forces for the positions
+    # held, so that what is measured, saved and probed next is one consistent state.
+    dem.refresh(scene)
     info = dict(status=servo.status, steps=int(servo.steps), wall_time=time.time() - t0,
                 stress=servo.stress.tolist(), unbalanced=float(servo.unbalanced), message=servo.message,
                 overshoot=servo.overshoot.tolist(), goal=servo.goal_stresses.tolist(),

@@ -58,15 +58,12 @@ def scene_from_yade(O=None, import_contacts=True):
                           % (len(bodies) - len(spheres)))
     if not spheres:
         raise BridgeError("the YADE scene has no spheres")
-    mats = {id(b.material): b.material for b in spheres}
-    if len(mats) != 1:
-        raise BridgeError("all spheres must share one material")
-    mat = next(iter(mats.values()))
+    young, poisson, density, friction_angle = _shared_material(spheres)
     s = engines.Scene()
-    s.shear_modulus = mat.young / (2.0 * (1.0 + mat.poisson))
-    s.poisson = mat.poisson
-    s.density = mat.density
-    s.friction = math.tan(mat.frictionAngle)
+    s.shear_modulus = young / (2.0 * (1.0 + poisson))
+    s.poisson = poisson
+    s.density = density
+    s.friction = math.tan(friction_angle)
     s.cell_size = size
     ref = np.array([O.cell.refSize[k] for k in range(3)])
     s.cell_ref_size = ref if np.all(ref > 0) else size
@@ -95,6 +92,29 @@ def scene_from_yade(O=None, import_contacts=True):
             s.set_contact_history(np.array(m1), np.array(m2), np.array(sh, dtype=np.int32),
                                   np.array(nrm), np.array(fn), np.array(fs))
     return s, ids
+
+
+MATERIAL_FIELDS = ("young", "poisson", "density", "frictionAngle")
+
+
+def _shared_material(spheres):
+    """(young, poisson, density, frictionAngle) common to all spheres, or BridgeError.
+
+    Materials are compared by value, not by identity: YADE hands out a new Python wrapper at
+    every access to b.material, and a scene restored by O.load has fresh material objects
+    (b.material.id may even be the same for different ones). The law sees only these values."""
+    values = set()
+    for b in spheres:
+        m = b.material
+        try:
+            values.add(tuple(float(getattr(m, k)) for k in MATERIAL_FIELDS))
+        except AttributeError:
+            raise BridgeError("body %d has a %s material; the bridge needs FrictMat's young, poisson, density "
+                              "and frictionAngle" % (b.id, type(m).__name__)) from None
+    if len(values) != 1:
+        raise BridgeError("all spheres must share one material (young, poisson, density, frictionAngle); "
+                          "this scene has %d different ones" % len(values))
+    return values.pop()
 
 
 def _check_homo_deform(O):

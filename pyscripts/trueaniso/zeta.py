@@ -33,7 +33,7 @@ from scipy import optimize
 from . import engines, fabric
 
 PAPER_ZETA = 0.552      # zeta_h = zeta_v fitted by the paper for its sphere assembly (Fig. 13b)
-ZETA_BOUNDS = (0.0, 5.0)  # k_s* < 0 has no meaning (and sqrt(zeta) in C); 5 as rotation_factor
+ZETA_BOUNDS = tuple(engines.ZETA_RANGE)  # the one valid range (engines/theory/Micromechanics.hpp)
 _GRID_STEP = 0.05       # coarse scan before the least-squares refinement (misfit may be flat)
 
 

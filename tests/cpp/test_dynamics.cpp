@@ -4,7 +4,12 @@
 
 #include <random>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "Drivers.hpp"
+#include "dynamics/ContactRefresh.hpp"
 #include "dynamics/NewtonIntegrator.hpp"
 #include "dynamics/Simulation.hpp"
 #include "dynamics/TimeStepper.hpp"
@@ -185,4 +190,77 @@ TEST(Scene, RejectsBadInput) {
   s.cell.size = Vec3::Constant(1e-4);
   s.addSphere(Vec3::Zero(), 1e-4);
   EXPECT_THROW(s.validate(), InputError);  // solid volume exceeds the cell
+}
+
+// The force reduction sums only the buffers of threads that ran this step. A team smaller than
+// omp_get_max_threads() (here: the loop called from inside an active parallel region, where the
+// nested region gets one thread) once added the stale buffer of a thread absent this step.
+// Exact comparison: one thread sums the contacts in the same order either way.
+TEST(ContactForces, SumsOnlyTheThreadsThatRan) {
+#ifdef _OPENMP
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(2);
+  auto s = randomGas(300, 0.6, 11);
+  s->dt = 1e-8;
+  ContactDetection detection;
+  detection.rebuild(*s);
+  s->detectionInvalid = false;
+  ContactForces forces;
+  forces.apply(*s);  // two threads: thread 1's buffer now holds this step's share
+  ASSERT_GT(s->contacts.size(), 300);
+  for (Vec3& p : s->bodies.pos) p *= 1.0 + 1e-4;  // other forces next time
+  s->cell.size *= 1.0 + 1e-4;
+  s->members.pos = s->bodies.pos;
+  ContactForces serial;
+  Scene reference = *s;
+  omp_set_num_threads(1);
+  serial.apply(reference);
+  omp_set_num_threads(2);
+  // Inside an active region with one active level allowed, the loop's own region gets a team of
+  // one, while omp_get_max_threads() still says 2.
+  const int levels = omp_get_max_active_levels();
+  omp_set_max_active_levels(1);
+  int inner = 0;
+#pragma omp parallel num_threads(2)
+#pragma omp single
+  {
+    inner = omp_get_max_threads();
+    forces.apply(*s);
+  }
+  omp_set_max_active_levels(levels);
+  omp_set_num_threads(saved);
+  ASSERT_EQ(inner, 2);
+  Real worst = 0, scale = 0;
+  for (int b = 0; b < s->bodies.size(); ++b) {
+    worst = std::max(worst, (s->bodies.force[b] - reference.bodies.force[b]).norm());
+    scale = std::max(scale, reference.bodies.force[b].norm());
+  }
+  EXPECT_EQ(worst, 0.0) << "relative to the largest force " << scale;
+#else
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+}
+
+// A contact refresh at unchanged positions gives back every tangential force bit for bit, however
+// often it runs (each refresh once shifted them by ~3e-19 N, and the shift accumulated).
+TEST(ContactRefresh, IsExactAtTheSamePositions) {
+  auto s = randomGas(300, 0.62, 5);
+  s->dt = 1e-8;
+  Chain chain(s, 0.2);
+  for (int k = 0; k < 50; ++k) {
+    s->cell.strainRate = Vec3(-1.0, -2.0, -3.0);
+    chain.sim.run(1);  // sheared contacts: tangential forces with history
+  }
+  refreshContacts(*s);
+  const Scene first = *s;
+  long loaded = 0;
+  for (int c = 0; c < first.contacts.size(); ++c) loaded += first.contacts.shearForce[c].norm() > 0;
+  ASSERT_GT(loaded, 100);
+  for (int k = 0; k < 100; ++k) refreshContacts(*s);
+  ASSERT_EQ(s->contacts.size(), first.contacts.size());
+  for (int c = 0; c < s->contacts.size(); ++c) {
+    EXPECT_EQ(s->contacts.shearForce[c], first.contacts.shearForce[c]);
+    EXPECT_EQ(s->contacts.normalForce[c], first.contacts.normalForce[c]);
+  }
+  EXPECT_EQ(s->dt, 1e-8);  // the zero-time evaluation leaves the scene's step alone
 }

@@ -34,14 +34,21 @@ TEST(HertzMindlin, StiffnessesMatchEquations5and6) {
     const Real rbar = rbarPaper(rr[0], rr[1]);
     for (Real N = 1e-5; N <= 1.0001; N *= 10) {
       // Invert Hertz for the overlap that carries N, then evaluate the law there.
-      const Real delta = std::pow(N / law.hertzCoefficient(rbar), 2.0 / 3.0);
+      const Real delta = std::pow(N / law.normalForce(1.0, rbar), 2.0 / 3.0);
       const Real Nlaw = law.normalForce(delta, rbar);
       EXPECT_NEAR(Nlaw / N, 1.0, 1e-12);
-      const Real kn = HertzMindlin::tangentFromForce(Nlaw, delta);
+      const Real kn = HertzMindlin::normalStiffness(Nlaw, delta);
       EXPECT_NEAR(kn / knPaper(rbar, N), 1.0, 1e-12) << "N=" << N;
       EXPECT_NEAR(law.shearToNormal() * kn / ksPaper(rbar, N), 1.0, 1e-12) << "N=" << N;
       EXPECT_NEAR(law.knFromForce(N, rbar) / knPaper(rbar, N), 1.0, 1e-13);
       EXPECT_NEAR(law.ksFromForce(N, rbar) / ksPaper(rbar, N), 1.0, 1e-13);
+      // The whole evaluator: a new contact's first tangential increment du gives -k_s du with
+      // k_s of Eq. (6), and N of Hertz (well below the cap: du is 1e-6 of the slip distance).
+      const Vec3 n(0, 0, 1), du(1e-6 * 0.5 * N / ksPaper(rbar, N), 0, 0);
+      const HertzMindlin::Response r = law.evaluate(delta, rbar, n, false, n, Vec3::Zero(), du, 0.0);
+      EXPECT_NEAR(r.N / N, 1.0, 1e-12);
+      EXPECT_NEAR(-r.Fs.x() / du.x() / ksPaper(rbar, N), 1.0, 1e-12) << "N=" << N;
+      EXPECT_FALSE(r.sliding);
       // Second method: the tangent is the derivative of the force law (central difference,
       // relative step 1e-5, truncation error ~1e-10).
       const Real h = 1e-5 * delta;
@@ -88,7 +95,8 @@ TEST(HertzMindlin, CyclicTangentialLoadingHitsCoulombCap) {
   Driver drv(s);
   drv.evaluate();
   const Real N = s->contacts.normalForce[0];
-  const Real ks = s->material.stiffnessRatio() * s->contacts.kn(0);
+  const Real ks = HertzMindlin(s->material).shearStiffness(
+      HertzMindlin::normalStiffness(s->contacts.normalForce[0], s->contacts.overlap[0]));
   const Real uSlip = mu * N / ks;
   const Real du = uSlip / 50.0;                   // 50 steps to the cap
   const Real arm = r - 0.5 * delta;
@@ -122,7 +130,8 @@ TEST(HertzMindlin, FrictionSwitchedAtRunTimeCapsLoadedContacts) {
   Driver drv(s);
   drv.evaluate();
   const Real N = s->contacts.normalForce[0];
-  const Real ks = s->material.stiffnessRatio() * s->contacts.kn(0);
+  const Real ks = HertzMindlin(s->material).shearStiffness(
+      HertzMindlin::normalStiffness(s->contacts.normalForce[0], s->contacts.overlap[0]));
   const Real arm = r - 0.5 * delta;
   const Real du = 2.0 * 0.5 * N / ks / 100.0;  // 100 steps to twice the 0.5 cap
   s->bodies.angVel[1] = Vec3(0, 0, -du / (arm * s->dt));

@@ -135,6 +135,48 @@ TEST(Orthotropic, ModuliEqualCompliance) {
   EXPECT_GT(std::abs(m.nu(0, 1) - m.nu(1, 0)), 1e-4);  // a generic matrix: the test has teeth
 }
 
+// Eqs. (40)-(42) as printed (cofactors of the normal block; the last line corrected) on a symmetric
+// block: the inverse the code takes is the same thing. Round-off only: 1e-12.
+TEST(Orthotropic, ClosedFormsOfEqs40to42OnASymmetricBlock) {
+  Mat6 C = Mat6::Zero();
+  C.topLeftCorner<3, 3>() << 500, 120, 90, 120, 420, 70, 90, 70, 610;
+  C(3, 3) = 150; C(4, 4) = 170; C(5, 5) = 160;
+  const Real c11 = C(0, 0), c22 = C(1, 1), c33 = C(2, 2), c12 = C(0, 1), c13 = C(0, 2), c23 = C(1, 2);
+  const Real Delta = c11 * c22 * c33 + 2 * c12 * c13 * c23 - c11 * c23 * c23 - c22 * c13 * c13 - c33 * c12 * c12;
+  const Real a11 = c22 * c33 - c23 * c23, a22 = c11 * c33 - c13 * c13, a33 = c11 * c22 - c12 * c12;
+  const OrthotropicModuli m = orthotropicModuli(C);
+  EXPECT_NEAR(m.Delta, Delta, 1e-12 * Delta);
+  EXPECT_NEAR(m.E[0], Delta / a11, 1e-12 * m.E[0]);
+  EXPECT_NEAR(m.E[1], Delta / a22, 1e-12 * m.E[1]);
+  EXPECT_NEAR(m.E[2], Delta / a33, 1e-12 * m.E[2]);
+  EXPECT_NEAR(m.nu(0, 1), (c12 * c33 - c13 * c23) / a11, 1e-12);
+  EXPECT_NEAR(m.nu(0, 2), (c13 * c22 - c12 * c23) / a11, 1e-12);
+  EXPECT_NEAR(m.nu(1, 0), (c12 * c33 - c13 * c23) / a22, 1e-12);
+  EXPECT_NEAR(m.nu(1, 2), (c23 * c11 - c12 * c13) / a22, 1e-12);
+  EXPECT_NEAR(m.nu(2, 0), (c13 * c22 - c12 * c23) / a33, 1e-12);
+  EXPECT_NEAR(m.nu(2, 1), (c23 * c11 - c12 * c13) / a33, 1e-12);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(m.G[i], C(3 + i, 3 + i));
+}
+
+// A prestressed tangent is not symmetric. The moduli are the probe's: a stress increment on x alone
+// (the other normal stresses held, no shear strain) gives strains S e_x, whence E_x = 1/S_xx and
+// nu_xj = -S_jx/S_xx, which the symmetric closed forms would miss.
+TEST(Orthotropic, NonSymmetricBlockGivesTheProbeModuli) {
+  Mat6 C = Mat6::Zero();
+  C.topLeftCorner<3, 3>() << 500, 140, 90, 100, 420, 85, 95, 60, 610;
+  C(3, 3) = 150; C(4, 4) = 170; C(5, 5) = 160;
+  const OrthotropicModuli m = orthotropicModuli(C);
+  for (int i = 0; i < 3; ++i) {
+    Vec3 dsigma = Vec3::Zero();
+    dsigma[i] = 1.0;
+    const Vec3 deps = C.topLeftCorner<3, 3>().fullPivLu().solve(dsigma);  // a second solver
+    EXPECT_NEAR(m.E[i], 1.0 / deps[i], 1e-12 * m.E[i]);
+    for (int j = 0; j < 3; ++j)
+      if (j != i) EXPECT_NEAR(m.nu(i, j), -deps[j] / deps[i], 1e-12);
+  }
+  EXPECT_GT(std::abs(m.nu(0, 1) / m.E[0] - m.nu(1, 0) / m.E[1]) * m.E[0], 1e-2);  // not reciprocal: teeth
+}
+
 // The printed last line of Eq. (42), "nu_xy = (C23 C11 - C12 C23)/(C11 C22 - C12^2)", is not a
 // Poisson's ratio of the compliance: its label repeats nu_xy and its numerator should read
 // C23 C11 - C12 C13 (nu_zy). Shown on a generic matrix.
@@ -168,7 +210,8 @@ TEST(Micromechanics, SimpleCubicPackingInClosedForm) {
   for (int c = 0; c < C.size(); ++c)
     if (C.active(c)) { first = c; break; }
   // the force law's own tangent 1.5 N/delta, not Eq. (5): an independent route to k_n
-  const Real kn = C.kn(first), ks = s->material.stiffnessRatio() * kn;
+  const Real kn = HertzMindlin::normalStiffness(C.normalForce[first], C.overlap[first]);
+  const Real ks = s->material.stiffnessRatio() * kn;
   const Mat3 sigma = loveWeberStress(*s);
   const Real Estar = s->material.contactModulus();
   for (auto density : {ContactDensity::Eq36, ContactDensity::Count}) {
@@ -187,11 +230,15 @@ TEST(Micromechanics, SimpleCubicPackingInClosedForm) {
   }
 }
 
-TEST(Micromechanics, RefusesZetaOutsideUnitInterval) {
+// One range for zeta everywhere (ZetaRange): a fit that lands above 1 (rotations blocked: 1.01)
+// can still be predicted with; below 0 or beyond the range is refused.
+TEST(Micromechanics, RefusesZetaOutsideItsRange) {
   auto s = handSpheres();
   evaluateContacts(*s);
   const Fabric f = fabric(*s);
   EXPECT_THROW(predict(f, s->material, -0.1), InputError);
-  EXPECT_THROW(predict(f, s->material, 1.5), InputError);
+  EXPECT_THROW(predict(f, s->material, ZetaRange::hi + 0.5), InputError);
+  EXPECT_THROW(predict(f, s->material, std::nan("")), InputError);
   EXPECT_NO_THROW(predict(f, s->material, 0.0));
+  EXPECT_NO_THROW(predict(f, s->material, 1.01));
 }

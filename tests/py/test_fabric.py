@@ -180,7 +180,9 @@ def test_recorder_samples_the_running_network():
 def test_bad_input_gets_a_clear_error():
     s = _random_network(50, 0.6, 1)
     with pytest.raises(ValueError, match="zeta"):
-        fabric.fabric_row(s, zeta=1.2)
+        fabric.fabric_row(s, zeta=E.ZETA_RANGE[1] * 1.1)
+    with pytest.raises(ValueError, match="zeta"):
+        fabric.prediction(s, zeta=-0.1)
     with pytest.raises(ValueError, match="density"):
         fabric.prediction(s, density="eq35")
     with pytest.raises(ValueError, match="every"):

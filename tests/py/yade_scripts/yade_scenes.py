@@ -1,9 +1,11 @@
 """Scenes built the way a YADE user builds them, shared by the peer scripts."""
 import math
+import time
 
+import numpy as np
 from yade import (O, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
                   InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
-                  Law2_ScGeom_MindlinPhys_Mindlin, Matrix3, pack)
+                  Law2_ScGeom_MindlinPhys_Mindlin, Matrix3, PeriTriaxController, pack, utils)
 
 
 def mindlin_cloud(n, seed, solid_fraction, extra_engines=(), damping=0.4, r=0.0975e-3):
@@ -29,3 +31,45 @@ def mindlin_cloud(n, seed, solid_fraction, extra_engines=(), damping=0.4, r=0.09
         NewtonIntegrator(damping=damping, label="newton"),
     ]
     return side
+
+
+def _log_strain(ref):
+    h = np.array([O.cell.hSize[k][k] for k in range(3)])
+    return -np.log(h / ref)
+
+
+def yade_user_probe(hold, increment, axis=2, max_steps=400_000):
+    """A stress probe as a YADE user does it on the scene in O (friction already 1e23, the
+    NewtonIntegrator last in O.engines): PeriTriaxController relaxes the state at the held
+    stresses `hold` (Pa, compression positive), then raises the `axis` stress by `increment`.
+
+    Stress every step (globUpdate=1; YADE extrapolates it in between otherwise) and a relative
+    tolerance of 1e-5 (1 Pa at 100 kPa, 0.3 % of a ~300 Pa increment); with the defaults (3e-5,
+    5) or 1e-6 the controller reaches its goal late or never. Returns E, the two nu, increments,
+    steps and wall time."""
+    hold = np.asarray(hold, dtype=float)
+    ref_h = np.array([O.cell.hSize[k][k] for k in range(3)])
+    t0 = time.time()
+    start = O.iter
+    triax = PeriTriaxController(goal=tuple(-hold), stressMask=7, relStressTol=1e-5, absStressTol=1e3,
+                                globUpdate=1, maxUnbalanced=1e-5, maxStrainRate=(10, 10, 10),
+                                doneHook="O.pause()", label="triax")
+    O.engines = O.engines[:-1] + [triax] + O.engines[-1:]
+    O.run(max_steps, True)
+    relax_steps = O.iter - start
+    s0 = -np.diag(np.array(utils.getStress()))
+    e0 = _log_strain(ref_h)
+    goal = hold.copy()
+    goal[axis] += increment
+    triax.goal = tuple(-goal)
+    start = O.iter
+    O.run(max_steps, True)
+    ds = -np.diag(np.array(utils.getStress())) - s0
+    de = _log_strain(ref_h) - e0
+    out = dict(E=float(ds[axis] / de[axis]), d_stress=ds.tolist(), d_strain=de.tolist(),
+               relax_steps=int(relax_steps), probe_steps=int(O.iter - start), wall_time=time.time() - t0,
+               dt=O.dt)
+    for j in range(3):
+        if j != axis:
+            out["nu_%s%s" % ("xyz"[axis], "xyz"[j])] = float(-de[j] / de[axis])
+    return out

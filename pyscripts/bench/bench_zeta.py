@@ -3,7 +3,7 @@ contrast a_i^2 as the paper does (Fig. 13, trueaniso.zeta) and matched on the ma
 (statics.rotation_factor, with Nc/V by Eq. 36 and counted); writes the table into docs/statics.md
 between <!-- zeta-contrast --> and <!-- /zeta-contrast -->.
 
-    OMP_NUM_THREADS=1 /usr/bin/python3 pyscripts/bench_zeta.py --states results/default/states \\
+    OMP_NUM_THREADS=1 /usr/bin/python3 pyscripts/bench/bench_zeta.py --states results/default/states \\
         --csv docs/data/table-c1-spheres-4000.csv --csv results/default/probes.csv --doc docs/statics.md
 
 DEM E_i come from (a) exact static solves, rotations free and blocked, at the held-state
@@ -19,7 +19,8 @@ import os
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 import numpy as np  # noqa: E402
 
 from bench_statics import machine, replace_block  # noqa: E402

@@ -1,7 +1,7 @@
 """Benchmark of the fabric measures: the cost of recording them during a run, and the C++
 computation against the same computation in Python over YADE's O.interactions.
 
-    yade-double -n -x pyscripts/bench_fabric.py --specimen specimens/spheres-4000.npz --out bench_fabric.json
+    yade-double -n -x pyscripts/bench/bench_fabric.py --specimen specimens/spheres-4000.npz --out bench_fabric.json
 
 OpenMP threads: set OMP_NUM_THREADS in the environment (default: all cores).
 (prepare the specimen with pyscripts/prepare_specimen.py --n 4000 --seed 1). Results are printed
@@ -14,7 +14,8 @@ import platform
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import atomic, cli, dem, engines, fabric, specimen_file, yade_bridge  # noqa: E402
 
 

@@ -1,6 +1,6 @@
 """Speed against error of the ways to get E_i and nu_ij at a held state (issue 5).
 
-    /usr/bin/python3 pyscripts/bench_speed_error.py --specimens A.npz B.npz ... \
+    /usr/bin/python3 pyscripts/bench/bench_speed_error.py --specimens A.npz B.npz ... \
         --doc docs/speed-vs-error.md --plot docs/speed-vs-error.png
 
 Reference: the exact static stiffness (engines/statics, rotations free), whose normal block
@@ -22,7 +22,7 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path.insert(0, HERE)
+sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import cli  # noqa: E402
 
 OURS = [  # label, damping, ramp, gain, settle, relative tolerance, unbalanced, gamma, detection
@@ -178,7 +178,7 @@ def write(o, results):
         lines.append("| %d | %s | %s | %.1e | %.1e | %d | %.2f |" % (
             r["n"], r["label"], ", ".join("%.2f" % (e / 1e6) for e in r["E"]), r["err_E"], r["err_nu"], r["steps"],
             r["time"]))
-    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench_speed_error.py --specimens %s --doc %s --plot %s`"
+    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_speed_error.py --specimens %s --doc %s --plot %s`"
               % (" ".join(os.path.relpath(p) for p in o.specimens), o.doc, o.plot)]
     table = "\n".join(lines)
     print(table)

@@ -1,7 +1,7 @@
 """Cost of clump assemblies: the stepper on clumps against YADE's clumps on the same packing, and
 the preparation time of each assembly (issue 13 benchmark).
 
-    /usr/bin/python3 pyscripts/bench_clumps.py --specimen specimens/clump1-4000-s1.npz \
+    /usr/bin/python3 pyscripts/bench/bench_clumps.py --specimen specimens/clump1-4000-s1.npz \
         --specimen specimens/clump2-4000-s1.npz [--doc docs/benchmarks.md]
 
 Both codes run the same clump scene (periodic cell, contact history), the same fixed time step,
@@ -22,7 +22,7 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path.insert(0, HERE)
+sys.path[:0] = [HERE, os.path.dirname(HERE)]  # bench_stepper, trueaniso
 from trueaniso import cli  # noqa: E402
 
 
@@ -111,7 +111,7 @@ def main():
             lines.append("| %s (%s) | %d (%d) | %.3f | %s | %d | %.3f | %.4f | %.1f |" % (
                 os.path.basename(path), par.get("assembly", "?"), s.num_bodies, s.num_members,
                 engines.void_ratio(s), prep, th, ours / 1e6, yade / 1e6, ours / yade))
-    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench_clumps.py %s --doc docs/benchmarks.md`"
+    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_clumps.py %s --doc docs/benchmarks.md`"
               % " ".join("--specimen %s" % os.path.relpath(p) for p in o.specimen)]
     table = "\n".join(lines)
     print(table)

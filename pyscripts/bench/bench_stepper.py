@@ -1,6 +1,6 @@
 """Speed of the stepper against YADE's on the same consolidated packing (issue 2 benchmark).
 
-    /usr/bin/python3 pyscripts/bench_stepper.py --specimen S.npz [--doc docs/benchmarks.md]
+    /usr/bin/python3 pyscripts/bench/bench_stepper.py --specimen S.npz [--doc docs/benchmarks.md]
 
 Both codes run the same scene (spheres, periodic cell, contact history), the same fixed time step,
 local damping 0.2, the simplified Hertz-Mindlin law (ours: engines; YADE 2023.02a:
@@ -20,7 +20,7 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path.insert(0, HERE)
+sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import cli  # noqa: E402
 
 
@@ -119,7 +119,7 @@ def main():
              "|---|---|---|---|"]
     for th, ours, yade in rows:
         lines.append("| %d | %.2f | %.3f | %.1f |" % (th, ours / 1e6, yade / 1e6, ours / yade))
-    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench_stepper.py --specimen %s --doc docs/benchmarks.md`"
+    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_stepper.py --specimen %s --doc docs/benchmarks.md`"
               % os.path.relpath(o.specimen)]
     table = "\n".join(lines)
     print(table)

@@ -2,7 +2,7 @@
 blocked, and the moduli against the kinematic (affine) estimate; writes both tables into
 docs/statics.md between their markers.
 
-    /usr/bin/python3 pyscripts/bench_statics.py /tmp/statics/s1000.npz /tmp/statics/s4000.npz \\
+    /usr/bin/python3 pyscripts/bench/bench_statics.py /tmp/statics/s1000.npz /tmp/statics/s4000.npz \\
         /tmp/statics/s16000.npz --doc docs/statics.md
 
 Specimens from: pyscripts/prepare_specimen.py --n N --seed 1 --out /tmp/statics/sN.npz
@@ -14,7 +14,8 @@ import resource
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 import numpy as np  # noqa: E402
 
 from trueaniso import atomic, cli, engines, specimen_file, statics  # noqa: E402
