@@ -8,7 +8,6 @@ E_x, E_y, E_z with particle rotations restrained and free, from the exact static
 
 With --doc the table between <!-- anisotropy:begin --> and <!-- anisotropy:end --> is replaced.
 """
-import json
 import os
 import re
 import sys

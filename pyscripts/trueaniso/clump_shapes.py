@@ -49,6 +49,22 @@ def aspect_ratio(t):
     return float(length / width)
 
 
+def rotation_matrix(q):
+    """Rotation matrix of a unit quaternion (w, x, y, z)."""
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def quaternion_product(a, b):
+    """a b for quaternions (w, x, y, z): the rotation b, then a."""
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
+
+
 def quaternion_from_matrix(R):
     """(w, x, y, z) of a rotation matrix (Shepperd's method, stable for every rotation)."""
     t = np.trace(R)
@@ -99,10 +115,6 @@ def orientations(n, rng, weights):
 def long_axis_fabric(scene):
     """<u u> of the clumps' long axes (template axis 0 in the world): the orientation fabric of the
     particles themselves, which the preparation sets and the contact fabric follows."""
-    q = scene.orientations
-    begin = scene.member_begin
-    multi = np.diff(begin) > 1
-    w, x, y, z = q[multi].T
-    # first column of the rotation matrix of (w, x, y, z)
-    u = np.column_stack([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
+    multi = np.diff(scene.member_begin) > 1
+    u = np.array([rotation_matrix(q)[:, 0] for q in scene.orientations[multi]]).reshape(-1, 3)
     return u.T @ u / max(len(u), 1)

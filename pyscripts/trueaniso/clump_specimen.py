@@ -4,13 +4,14 @@ compacted by radius expansion and consolidated isotropically (docs/specimens.md,
 The paper only cites its two preparation methods; our readings of them:
  - clump1, "two-stage isotropic consolidation" (after Zhao & Guo 2015): clumps generated with
    their long axes favouring the vertical, stage 1 compacts them with particle rotation blocked
-   (the orientation fabric is kept while the contact network forms), stage 2 releases rotation and
-   consolidates to the isotropic stress with the final friction;
+   until the network carries 10 kPa (the orientation fabric is kept while the contact network
+   forms), stage 2 releases rotation, compacts to the isotropic 100 kPa and consolidates there with
+   the final friction;
  - clump2, "multi-layer rotational replication" (after Zhou et al. 2026b, c): one horizontal layer
    of clumps lying near the horizontal is generated, and the specimen is built from copies of it
    stacked along z, copy k turned by k x 90 degrees about z (which maps the square periodic cell
-   onto itself), so the two horizontal directions are equivalent by construction; then the same
-   two-stage compaction.
+   onto itself), so the two horizontal directions are equivalent by construction; stage 1 (rotation
+   blocked) goes to 100 kPa, stage 2 consolidates there with the final friction.
 Recipe parameters live in RECIPES; every one can be overridden by a keyword of prepare_clumps.
 """
 import math
@@ -31,20 +32,6 @@ RECIPES = {
     "clump2": dict(shape="dimer-1.5", d50=0.216e-3, cu=1.43, orientation_weights=(1.0, 1.0, 0.5), layers=4,
                    stage1_rotations="blocked", stage1_pressure=100e3, mu_prep=0.01, mu_final=0.5, phi_cell=0.55),
 }
-
-
-def _rotation(q):
-    w, x, y, z = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-
-
-def _quat_mul(a, b):
-    w1, x1, y1, z1 = a
-    w2, x2, y2, z2 = b
-    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
 
 
 def random_sequential_clumps(template, scales, quats, box, rng, periodic_z=True, max_attempts=100000):
@@ -71,7 +58,7 @@ def random_sequential_clumps(template, scales, quats, box, rng, periodic_z=True,
         return c
 
     for k in np.argsort(-scales, kind="stable"):
-        local = scales[k] * (off @ _rotation(quats[k]).T)
+        local = scales[k] * (off @ clump_shapes.rotation_matrix(quats[k]).T)
         r = scales[k] * rad
         lo_z, hi_z = (r - local[:, 2]).max(), (box[2] - r - local[:, 2]).min()
         if not periodic_z and hi_z <= lo_z:
@@ -137,7 +124,7 @@ def random_loose_clumps(n, template, size_distribution, seed, orientation_weight
         half = 0.5 * math.pi * (k % 4)
         rz = np.array([math.cos(0.5 * half), 0.0, 0.0, math.sin(0.5 * half)])
         pos.append(turned)
-        qs.append(np.array([_quat_mul(rz, q) for q in quats]))
+        qs.append(np.array([clump_shapes.quaternion_product(rz, q) for q in quats]))
     pos, quats, d = np.vstack(pos), np.vstack(qs), np.tile(d, layers)
     # Memory order along a cell grid: neighbours in space are neighbours in the arrays.
     ncell = max(1, int(side // (2.0 * template.bounding_radius * d.max())))

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from . import engines
+from . import clump_shapes, engines
 
 
 def _bridge_error(msg):
@@ -32,13 +32,6 @@ def _quat_wxyz(q):
     axis, angle = q.toAxisAngle()
     s = math.sin(0.5 * angle)
     return [math.cos(0.5 * angle), axis[0] * s, axis[1] * s, axis[2] * s]
-
-
-def _rotation(q):
-    w, x, y, z = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 def _material(bodies):
@@ -144,7 +137,6 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     distance between YADE's reference point and our centre of mass over our largest member radius,
     and our inertia tensor's largest off-diagonal term in YADE's frame over its largest term
     (0 when YADE's clump frame is ours)."""
-    import yade
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
                       InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin, Matrix3,
                       NewtonIntegrator, Vector3, utils)
@@ -171,7 +163,7 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
             st = O.bodies[i].state
             offset = max(offset, np.linalg.norm(np.array(st.pos) - pos[k]) / rad[begin[k]:begin[k + 1]].max())
             # our inertia tensor in YADE's clump frame: its diagonal becomes YADE's inertia
-            Ry, Ro = _rotation(_quat_wxyz(st.ori)), _rotation(q[k])
+            Ry, Ro = clump_shapes.rotation_matrix(_quat_wxyz(st.ori)), clump_shapes.rotation_matrix(q[k])
             I = Ry.T @ Ro @ np.diag(inertia[k]) @ Ro.T @ Ry
             offdiag = max(offdiag, np.abs(I - np.diag(np.diag(I))).max() / np.abs(I).max())
             st.mass = float(mass[k])
