@@ -3,13 +3,13 @@
     /usr/bin/python3 -m analysis.figures results/x/probes.csv --out docs/figures
 """
 import argparse
-import csv
 import os
 import sys
 
 import numpy as np
 
 from . import hyperelastic
+from .results import ResultsError, number, read_probes
 
 
 def _plt():
@@ -75,17 +75,24 @@ def scalar_moduli_vs_zm(rows, path):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description="figures from a probes.csv")
-    p.add_argument("csv")
-    p.add_argument("--out", required=True)
-    p.add_argument("--title", default="sphere assembly")
+    p.add_argument("csv", help="probe table of run_states.py or run_study.py")
+    p.add_argument("--out", required=True, help="directory for the PNG files")
+    p.add_argument("--title", default="sphere assembly", help="assembly named in the titles")
     o = p.parse_args(argv)
-    with open(o.csv, newline="") as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
-        sys.exit("error: %s has no rows" % o.csv)
-    os.makedirs(o.out, exist_ok=True)
-    modulus_vs_stress(rows, os.path.join(o.out, "E_vs_sigma.png"), o.title)
-    fits = scalar_moduli_vs_zm(rows, os.path.join(o.out, "K_G_vs_Zm.png"))
+    try:
+        rows = read_probes(o.csv, need=("state", "probe", "E", "sigma_x", "sigma_y", "sigma_z", "Zm", "b", "q",
+                                        "nu_1", "nu_2", "nu_1_name", "nu_2_name"))
+        for r in rows:
+            for column in ("E", "sigma_x", "sigma_y", "sigma_z", "Zm", "b", "q", "nu_1", "nu_2"):
+                number(r, column, o.csv)
+        if rows.note:
+            sys.stderr.write("note: %s\n" % rows.note)
+        os.makedirs(o.out, exist_ok=True)
+        modulus_vs_stress(rows, os.path.join(o.out, "E_vs_sigma.png"), o.title)
+        fits = scalar_moduli_vs_zm(rows, os.path.join(o.out, "K_G_vs_Zm.png"))
+    except (ResultsError, OSError, ValueError) as exc:
+        sys.stderr.write("error: %s\n" % exc)
+        sys.exit(2)
     print("figures in %s; K, G fits: %s" % (o.out, fits))
 
 

@@ -5,8 +5,9 @@
     /usr/bin/python3 pyscripts/prepare_specimen.py --assembly clump1 --n 4000 --out specimens/clump1-4000.npz
 
 The recipe and the reasons for its parameters are in docs/specimens.md. An existing valid output
-is kept and reported (runs are resumable); use --force to prepare it again. Inside yade-double the
-result is also written into O (cell and spheres) for viewing or export.
+is kept and reported (runs are resumable); use --force to prepare it again. Memory and time are
+estimated before any work, and a specimen that cannot fit in this machine's memory is refused.
+Inside yade-double the result is also written into O (cell and spheres) for viewing or export.
 """
 import json
 import os
@@ -14,7 +15,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import clump_specimen, cli, engines, psd, specimen, specimen_file  # noqa: E402
+from trueaniso import clump_specimen, cli, engines, lock, progress, psd, resources, specimen, specimen_file  # noqa: E402
 
 ASSEMBLIES = ("sphere", "clump1", "clump2")
 ALIASES = {"spheres": "sphere"}
@@ -30,25 +31,31 @@ def assembly_defaults(assembly):
 
 
 def options(argv=None):
-    p = cli.Parser(description=__doc__.splitlines()[0])
+    p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--assembly", default="sphere", help="particle type: %s (docs/specimens.md)" % ", ".join(ASSEMBLIES))
-    p.add_argument("--n", type=int, default=1000, help="number of particles")
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--pressure", type=float, default=100e3, help="isotropic stress (Pa)")
-    p.add_argument("--d50", type=float, help="median diameter by mass (m; clumps: of the equal-volume sphere); "
+    p.add_argument("--n", type=cli.count, default=1000, help="number of particles")
+    p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
+    p.add_argument("--pressure", type=cli.finite, default=100e3, help="isotropic stress (Pa)")
+    p.add_argument("--d50", type=cli.finite, help="median diameter by mass (m; clumps: of the equal-volume sphere); "
                    "default 0.195e-3, clump2 0.216e-3")
-    p.add_argument("--cu", type=float, help="uniformity coefficient D60/D10; default 1.25, clump2 1.43")
-    p.add_argument("--mu-prep", type=float, help="friction while radii grow; default per assembly")
-    p.add_argument("--mu", type=float, default=0.5, help="friction of the consolidated state")
-    p.add_argument("--phi-cell", type=float,
+    p.add_argument("--cu", type=cli.finite, help="uniformity coefficient D60/D10; default 1.25, clump2 1.43")
+    p.add_argument("--mu-prep", type=cli.finite, help="friction while radii grow; default per assembly")
+    p.add_argument("--mu", type=cli.finite, default=0.5, help="friction of the consolidated state")
+    p.add_argument("--phi-cell", type=cli.finite,
                    help="solid fraction at which the final sizes would fill the cell; default per assembly")
-    p.add_argument("--inertial-number", type=float, default=1e-2,
+    p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
                    help="cap of the expansion/compression rate as an inertial number")
-    p.add_argument("--unbalanced", type=float, default=1e-3, help="unbalanced force of the final state")
-    p.add_argument("--threads", type=int, default=0, help="OpenMP threads (0: all cores)")
+    p.add_argument("--unbalanced", type=cli.finite, default=1e-3, help="unbalanced force of the final state")
+    p.add_argument("--threads", type=cli.count, default=0,
+                   help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
+                        % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
     p.add_argument("--out", required=True, help="specimen file (.npz); a .json summary is written beside it")
     p.add_argument("--force", action="store_true", help="prepare again even if --out is a valid specimen")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--wait", action="store_true",
+                   help="if another run is preparing --out, wait for it instead of refusing")
+    p.add_argument("--progress-every", type=cli.non_negative, default=progress.EVERY,
+                   help="seconds between progress lines (0: after every chunk of 2,000 steps)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines, only the final summary")
     return cli.parse(p, argv)
 
 
@@ -77,8 +84,7 @@ def validate(o):
                              "(spheres fill at most 0.74 of space; use 0.3 < phi < 0.74)" % o.phi_cell)
     if not (0 < o.unbalanced < 1 and 0 < o.inertial_number < 1):
         raise cli.InputError("--unbalanced and --inertial-number must lie in (0, 1)")
-    if o.threads < 0:
-        raise cli.InputError("--threads must be >= 0")
+    resources.check_threads(o.threads)
     if not o.out.endswith(".npz"):
         raise cli.InputError("--out must name a .npz file")
     try:
@@ -93,9 +99,13 @@ def validate(o):
         raise cli.InputError("%d particles of D50 %.3g m make a cell of %.3g m, shorter than the contact "
                              "range of the largest spheres: the size distribution cannot fit the box"
                              % (o.n, o.d50, side, ))
-    out_dir = os.path.dirname(os.path.abspath(o.out))
-    if os.path.exists(out_dir) and not os.access(out_dir, os.W_OK):
-        raise cli.InputError("cannot write to %s" % out_dir)
+    problem = cli.output_problem(o.out, directory=False)
+    if problem:
+        raise cli.InputError(problem)
+    # Memory goes with the member spheres (contacts, cell lists), not with the bodies.
+    spheres = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
+    memory, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
+    resources.check_memory(memory, "a specimen of %d %s (%d member spheres)" % (o.n, o.assembly, spheres))
     return dist
 
 
@@ -104,45 +114,54 @@ def main():
     dist = validate(o)
     if o.threads:
         engines.set_threads(o.threads)
+    directory, name = os.path.split(os.path.abspath(o.out))
+    # One preparation per output at a time; under the lock, the temporary files of an
+    # interrupted preparation of this output are removed.
+    with lock.held(directory, wait=o.wait, name=".%s.lock" % name, what="specimen output",
+                   log=lambda m: print(m, flush=True)):
+        for stray in os.listdir(directory):
+            if stray.startswith(".tmp-") and stray.endswith(("-" + name, "-" + name[:-4] + ".json")):
+                os.unlink(os.path.join(directory, stray))
+        prepare(o, dist)
+
+
+def prepare(o, dist):
     if os.path.exists(o.out) and not o.force:
         try:
             scene, meta = specimen_file.load(o.out)
         except specimen_file.SpecimenFileError as exc:
             raise cli.InputError("%s exists but is not usable (%s); remove it or use --force" % (o.out, exc))
         print("kept existing specimen %s (use --force to prepare again)" % o.out)
+        if specimen_file.ensure_summary(o.out, meta):
+            print("wrote the missing summary %s from the specimen" % specimen_file.summary_path(o.out))
         report(scene, meta.get("parameters", {}), o)
         return
 
-    def progress(label, scene, engine, steps):
-        if not o.quiet and steps % 20000 == 0:
-            st = specimen.state(scene)
-            print("  %-13s step %8d  p = %9.1f Pa  unbalanced = %.2e  e = %.4f  Zm = %.3f"
-                  % (label, steps, st["p"], engine.unbalanced, st["void_ratio"], st["Zm"]), flush=True)
-
+    bar = progress.Progress("  preparation", lambda m: print(m, flush=True), o.progress_every)
     if not o.quiet:
-        print("preparing %d %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa"
-              % (o.n, o.assembly, o.seed, o.d50, o.cu, o.pressure / 1e3), flush=True)
+        memory, seconds = resources.preparation_estimate(o.n, o.threads or resources.cores())
+        print("preparing %d %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s"
+              % (o.n, o.assembly, o.seed, o.d50, o.cu, o.pressure / 1e3, resources.human_bytes(memory),
+                 resources.human_seconds(seconds)), flush=True)
     t0 = time.time()
     try:
         if o.assembly == "sphere":
             scene, log = specimen.prepare_spheres(
                 o.n, seed=o.seed, size_distribution=dist, pressure=o.pressure, mu_prep=o.mu_prep,
                 mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
-                unbalanced=o.unbalanced, progress=progress)
+                unbalanced=o.unbalanced, progress=None if o.quiet else bar.preparation)
         else:
             scene, log = clump_specimen.prepare_clumps(
                 o.assembly, o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu, mu_prep=o.mu_prep,
                 mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number, unbalanced=o.unbalanced,
-                progress=progress)
+                progress=None if o.quiet else bar.preparation)
     except (ValueError, specimen.PreparationError, clump_specimen.PreparationError) as exc:
         cli.fail(str(exc), 1)
     log["threads"] = engines.threads()  # the count used, not the option (0 means all cores)
     log.setdefault("assembly", o.assembly)
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)
-    from trueaniso import atomic
-    atomic.write_json(o.out[:-4] + ".json", dict(summary=summary, parameters=log, versions=meta["versions"],
-                                                 sha256=meta["sha256"]))
+    specimen_file.write_summary(o.out, meta)  # derived from the .npz; rewritten from it if lost
     if not o.quiet:
         print("saved %s in %.1f s" % (o.out, time.time() - t0))
     report(scene, log, o)
@@ -158,5 +177,5 @@ def report(scene, log, o):
         yade_bridge.yade_scene_from(scene, import_contacts=False)
 
 
-if __name__ == "__main__" or cli.in_yade():
+if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing
     cli.guarded(main)

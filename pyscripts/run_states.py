@@ -1,73 +1,114 @@
-"""True-triaxial states and their x, y, z stress probes on a specimen.
+"""True-triaxial states and their x, y, z stress probes on a specimen, one CSV row per state and probe.
 
     yade-double -n -x pyscripts/run_states.py --specimen S.npz --table-c1 --out results/table-c1
     yade-double -n -x pyscripts/run_states.py --specimen S.npz --states 0.5:140e3,0:60e3 --out results/x
     /usr/bin/python3 pyscripts/run_states.py --specimen S.npz --ids 1,5,21 --out results/y
+    yade-batch states.table pyscripts/run_states.py      (one run per table line; docs/runs.md)
 
-Writes probes.csv (one row per state and probe direction), metadata.json, and a checkpoint per
-state; an interrupted run resumes (see trueaniso/study.py).
+Writes probes.csv (one row per state and probe direction), metadata.json (the study's fingerprint)
+and a checkpoint per state. The output directory is one study: a rerun continues it (adding
+states is fine), or refuses in one line if it asks for something else (docs/runs.md).
 """
-import math
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import cli, engines, study, triaxial  # noqa: E402
+from trueaniso import cli, progress, resources, specimen_file, study, triaxial  # noqa: E402
 
 
-def options():
-    p = cli.Parser(description=__doc__.splitlines()[0])
-    p.add_argument("--specimen", required=True, help="specimen file from prepare_specimen.py")
-    p.add_argument("--states", help="b:sigma_z pairs in Pa, comma separated")
+def parser():
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimen", required=True, help="specimen file from prepare_specimen.py (.npz)")
+    p.add_argument("--assembly", choices=("sphere", "clump1", "clump2"),
+                   help="refuse a specimen of another assembly (the specimen file says which it is)")
+    p.add_argument("--states", help="b:sigma_z pairs, sigma_z in Pa, comma separated (e.g. 0.5:140e3,0:60e3); "
+                                    "a state's id is its Table C1 number, else b<b>_sz<sigma_z>")
     p.add_argument("--table-c1", action="store_true", help="all 39 states of the paper's Table C1")
-    p.add_argument("--ids", help="a subset of Table C1 states, e.g. 1,5,21")
-    p.add_argument("--gamma", type=float, default=1e-6, help="probe strain gamma (Eq. 12)")
-    p.add_argument("--probes", default="zxy", help="probe axes, any of x, y, z")
-    p.add_argument("--rotations", choices=("free", "restrained"), default="free")
-    p.add_argument("--skip-detection", action="store_true", help="no contact detection during probes")
-    p.add_argument("--damping", type=float, default=0.4)
-    p.add_argument("--threads", type=int, default=0)
-    p.add_argument("--out", required=True, help="results directory")
-    return cli.parse(p)
+    p.add_argument("--ids", help="a subset of Table C1 states by number, e.g. 1,5,21")
+    lo, hi = triaxial.GAMMA_RANGE
+    p.add_argument("--gamma", type=cli.finite, default=1e-6,
+                   help="probe size gamma of Eq. 12, in [%g, %g]: above, the probe is no longer elastic; below, "
+                        "its increment nears the stress noise (docs/triaxial.md)" % (lo, hi))
+    p.add_argument("--probes", default="zxy", help="probe axes, each of x, y, z at most once")
+    p.add_argument("--rotations", choices=("free", "restrained"), default="free",
+                   help="particle rotations during probes")
+    p.add_argument("--skip-detection", action="store_true",
+                   help="no contact detection during probes (nothing slides, the network cannot change)")
+    p.add_argument("--damping", type=cli.finite, default=0.4, help="local non-viscous damping, in [0, 1)")
+    p.add_argument("--mu", type=cli.finite, default=0.5,
+                   help="friction coefficient while states are reached (the paper's 0.5; probes always suppress "
+                        "sliding)")
+    p.add_argument("--threads", type=cli.count, default=0,
+                   help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
+                        % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
+    p.add_argument("--out", required=True, help="results directory (one study; created if missing)")
+    p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
+                                                       "refusing")
+    p.add_argument("--force-new", action="store_true",
+                   help="start a new study in --out: the old one is moved into --out/superseded/, not deleted")
+    p.add_argument("--progress-every", type=cli.non_negative, default=progress.EVERY,
+                   help="seconds between progress lines of long work (0: after every chunk of steps)")
+    return p
 
 
-def main():
-    o = options()
-    if o.threads:
-        engines.set_threads(o.threads)
-    chosen = sum(bool(x) for x in (o.states, o.table_c1, o.ids))
-    if chosen != 1:
+def validate(o):
+    """Every check that needs no work; returns the states."""
+    if sum(bool(x) for x in (o.states is not None, o.table_c1, o.ids is not None)) != 1:
         raise cli.InputError("give exactly one of --states, --table-c1, --ids")
-    if not os.path.isfile(o.specimen):
-        raise cli.InputError("specimen file not found: %s" % o.specimen)
-    if not (math.isfinite(o.gamma) and o.gamma > 0):
-        raise cli.InputError("--gamma must be a finite number > 0 (got %r)" % o.gamma)
-    if not o.probes or any(c not in "xyz" for c in o.probes) or len(set(o.probes)) != len(o.probes):
-        raise cli.InputError("--probes must name each of the axes x, y, z at most once (got %r)" % o.probes)
-    if not 0 <= o.damping < 1:
-        raise cli.InputError("--damping must lie in [0, 1)")
     try:
-        if o.states:
+        if o.states is not None:
             states = study.parse_states(o.states)
+        elif o.ids is not None:
+            states = study.table_states(study.parse_ids(o.ids))
         else:
-            ids = [int(v) for v in o.ids.split(",")] if o.ids else None
-            states = study.table_states(ids)
+            states = study.table_states()
         for _, b, sz in states:
             triaxial.validate_state(b, sz)
     except ValueError as exc:
         raise cli.InputError(str(exc)) from None
-    from trueaniso import specimen_file
+    check_probe_options(o)
+    problem = cli.output_problem(o.out)
+    if problem:
+        raise cli.InputError(problem)
     try:
-        specimen_file.read(o.specimen)
+        _, meta = specimen_file.read(o.specimen)
     except specimen_file.SpecimenFileError as exc:
         raise cli.InputError(str(exc)) from None
+    if o.assembly and study.assembly_of(meta) != o.assembly:
+        raise cli.InputError("%s is a %s specimen, not %s (--assembly)" % (o.specimen, study.assembly_of(meta),
+                                                                         o.assembly))
+    return states
+
+
+def check_probe_options(o):
+    lo, hi = triaxial.GAMMA_RANGE
+    if not lo <= o.gamma <= hi:
+        raise cli.InputError("--gamma %g is outside [%g, %g]: above, the probe is no longer elastic; below, its "
+                             "increment nears the stress noise of a held state (docs/triaxial.md)" % (o.gamma, lo, hi))
+    if not o.probes or any(c not in "xyz" for c in o.probes) or len(set(o.probes)) != len(o.probes):
+        raise cli.InputError("--probes must name each of the axes x, y, z at most once (got %r)" % o.probes)
+    if not 0 <= o.damping < 1:
+        raise cli.InputError("--damping must lie in [0, 1)")
+    if not o.mu > 0:
+        raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
+    resources.check_threads(o.threads)
+
+
+def main(argv=None):
+    o = cli.parse(parser(), argv)
+    states = validate(o)
+    if o.threads:
+        from trueaniso import engines
+        engines.set_threads(o.threads)
     try:
         study.run_states(o.specimen, states, o.out, probes=["xyz".index(c) for c in o.probes], gamma=o.gamma,
                          restrain_rotations=o.rotations == "restrained", skip_detection=o.skip_detection,
-                         damping=o.damping, log=lambda m: print(m, flush=True))
+                         damping=o.damping, state_options=dict(friction=o.mu), wait=o.wait,
+                         force_new=o.force_new, progress_every=o.progress_every,
+                         log=lambda m: print(m, flush=True))
     except triaxial.StateNotReached as exc:
         cli.fail(str(exc), 1)
 
 
-if __name__ == "__main__" or cli.in_yade():
+if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing
     cli.guarded(main)

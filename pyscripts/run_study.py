@@ -1,16 +1,18 @@
-"""The default study, run by ./main.sh:
+"""The default study, run by ./main.sh: a specimen, Table C1 states probed on x, y, z, statics, zeta, figures.
 
-    yade-double -n -x pyscripts/run_study.py [--n 1000] [--seed 1] [--ids 1,5,9,13,17,21,25,35,39]
-                                             [--out results/default]
+    yade-double -n -x pyscripts/run_study.py [--assembly sphere] [--n 1000] [--seed 1]
+                                             [--ids 1,5,9,13,17,21,25,35,39] [--out results/default]
 
-1. a sphere specimen consolidated isotropically to 100 kPa (docs/specimens.md);
+1. a specimen (spheres, or clumps with --assembly clump1|clump2) consolidated isotropically to
+   100 kPa (docs/specimens.md);
 2. a selection of the paper's Table C1 states, each reached by the b-controlled servo and probed
    on z, x and y (docs/triaxial.md), with the micro-structure of each state (docs/fabric.md);
 3. the exact static stiffness at the isotropic state and the rotation factor zeta it implies
-   (docs/statics.md);
+   (docs/statics.md), and zeta fitted on the contrast over the probed states (analysis/zeta_contrast.py);
 4. figures (E_i against sigma_i, K and G against Zm) and a summary.
-Every stage writes its results atomically and is skipped when its output is already there, so an
-interrupted study resumes where it stopped.
+The output directory is one study (docs/runs.md): a rerun continues it where it stopped, also
+after a kill, and may add states (--ids 1,5 then --ids 1,5,9); a rerun that asks for another
+specimen or other settings refuses in one line.
 """
 import json
 import os
@@ -19,130 +21,211 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
-from analysis import figures  # noqa: E402
-from trueaniso import atomic, clump_specimen, cli, specimen, specimen_file, study  # noqa: E402
+from analysis import figures, zeta_contrast  # noqa: E402
+from trueaniso import (atomic, clump_specimen, cli, engines, lock, progress, resources, specimen,  # noqa: E402
+                       specimen_file, study, study_dir, triaxial)
 
 DEFAULT_IDS = "1,5,9,13,17,21,25,35,39"
+ASSEMBLIES = ("sphere", "clump1", "clump2")
+SPECIMEN = "specimen.npz"
 
 
-def options():
-    p = cli.Parser(description="trueaniso default study")
+def parser():
+    p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--assembly", default="sphere", help="sphere (default), clump1 or clump2 (docs/specimens.md)")
-    p.add_argument("--n", type=int, default=1000, help="particles in the specimen")
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--ids", default=DEFAULT_IDS, help="Table C1 states to run")
-    p.add_argument("--out", default="results/default", help="results directory")
-    return cli.parse(p)
+    p.add_argument("--n", type=cli.count, default=1000, help="particles in the specimen (>= 100)")
+    p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
+    p.add_argument("--ids", default=DEFAULT_IDS, help="Table C1 states to run, by number")
+    p.add_argument("--mu", type=cli.finite, default=0.5,
+                   help="friction coefficient while states are reached (the paper's 0.5; the specimen is "
+                        "consolidated with 0.5, and probes always suppress sliding)")
+    p.add_argument("--threads", type=cli.count, default=0,
+                   help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
+                        % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
+    p.add_argument("--out", default="results/default", help="results directory (one study; created if missing)")
+    p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
+                                                       "refusing")
+    p.add_argument("--force-new", action="store_true",
+                   help="start a new study in --out: the old one is moved into --out/superseded/, not deleted")
+    p.add_argument("--progress-every", type=cli.non_negative, default=progress.EVERY,
+                   help="seconds between progress lines of long work (0: after every chunk of steps)")
+    return p
 
 
-def main():
-    o = options()
+def validate(o):
     if o.n < 100:
         raise cli.InputError("--n must be >= 100 for a study specimen")
     o.assembly = {"spheres": "sphere"}.get(o.assembly, o.assembly)
-    if o.assembly not in ("sphere", "clump1", "clump2"):
-        raise cli.InputError("unknown assembly %r (available: sphere, clump1, clump2)" % o.assembly)
+    if o.assembly not in ASSEMBLIES:
+        raise cli.InputError("unknown assembly %r (available: %s)" % (o.assembly, ", ".join(ASSEMBLIES)))
     if o.assembly != "sphere":
         try:
             clump_specimen.check_count(o.assembly, o.n)
         except ValueError as exc:
             raise cli.InputError(str(exc)) from None
     try:
-        ids = [int(v) for v in o.ids.split(",") if v.strip()]
-        states = study.table_states(ids)
+        states = study.table_states(study.parse_ids(o.ids))
     except ValueError as exc:
         raise cli.InputError("--ids: %s" % exc) from None
-    os.makedirs(o.out, exist_ok=True)
+    if not o.mu > 0:
+        raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
+    resources.check_threads(o.threads)
+    problem = cli.output_problem(o.out)
+    if problem:
+        raise cli.InputError(problem)
+    spheres = o.n * members(o.assembly)
+    prep, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
+    # The static solve's memory goes with the bodies' degrees of freedom and the contacts (members).
+    statics_memory = resources.INTERPRETER_BYTES + resources.STATICS_BYTES_PER_SPHERE * spheres
+    resources.check_memory(max(prep, statics_memory), "a study of %d %s (its exact static solve)"
+                           % (o.n, o.assembly))
+    return states
+
+
+def members(assembly):
+    return 1 if assembly == "sphere" else clump_specimen.members_per_clump(assembly)
+
+
+def recipe(o):
+    """What the study's specimen is made from (part of the study's fingerprint)."""
+    return dict(assembly=o.assembly, n=o.n, seed=o.seed)
+
+
+def describe(r):
+    return "--assembly %s --n %s --seed %s" % (r.get("assembly", "sphere"), r.get("n"), r.get("seed"))
+
+
+def check_recipe(o, log):
+    """Refuse, before any preparation, a rerun that asks for another specimen than the study's."""
+    meta = study_dir.read_metadata(o.out)
+    want = recipe(o)
+    if meta is not None:
+        study_dir.require_layout(o.out, meta)
+        have = meta.get("fingerprint", {}).get("recipe")
+        if have is not None:
+            have = dict(dict(assembly="sphere"), **have)  # studies written before clumps are sphere studies
+        if have is not None and have != want:
+            raise study_dir.StudyMismatch(
+                "%s holds another study: its specimen is %s, this run asks %s; %s"
+                % (o.out, describe(have), describe(want),
+                   study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
+    path = os.path.join(o.out, SPECIMEN)
+    if not os.path.exists(path):
+        if meta is not None:
+            raise study_dir.StudyMismatch("%s holds a study whose %s is missing; %s" % (
+                o.out, SPECIMEN, study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
+        return None
+    try:
+        scene, spec_meta = specimen_file.load(path)
+    except specimen_file.SpecimenFileError as exc:
+        raise study_dir.StudyMismatch("%s; %s" % (exc, study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
+    have = dict(assembly=spec_meta["parameters"].get("assembly", "sphere"), n=spec_meta["parameters"].get("n"),
+                seed=spec_meta["seed"])
+    if have != want:
+        raise study_dir.StudyMismatch(
+            "%s holds another study: its specimen is %s, this run asks %s; %s"
+            % (o.out, describe(have), describe(want),
+               study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
+    log("specimen: kept %s" % path)
+    return scene
+
+
+def prepare(o, log):
+    path = os.path.join(o.out, SPECIMEN)
+    memory, seconds = resources.preparation_estimate(o.n * members(o.assembly), o.threads or resources.cores())
+    log("specimen: preparing %d %s (seed %d): about %s of memory and %s ..."
+        % (o.n, o.assembly, o.seed, resources.human_bytes(memory), resources.human_seconds(seconds)))
     t0 = time.time()
-    path = os.path.join(o.out, "specimen.npz")
-    if os.path.exists(path):
-        try:
-            scene, meta = specimen_file.load(path)
-            print("specimen: kept %s" % path)
-            kept = meta.get("parameters", {}).get("assembly", "sphere")
-            if kept != o.assembly:
-                raise cli.InputError("%s holds a %s specimen, not %s: use another --out" % (path, kept, o.assembly))
-        except specimen_file.SpecimenFileError as exc:
-            raise cli.InputError("%s is not usable (%s); remove it to prepare it again" % (path, exc))
+    bar = progress.Progress("specimen", log, o.progress_every)
+    if o.assembly == "sphere":
+        scene, params = specimen.prepare_spheres(o.n, seed=o.seed, progress=bar.preparation)
     else:
-        print("specimen: preparing %d %s (seed %d) ..." % (o.n, o.assembly, o.seed), flush=True)
-        if o.assembly == "sphere":
-            scene, log = specimen.prepare_spheres(o.n, seed=o.seed)
-        else:
-            scene, log = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed)
-        specimen_file.save(path, scene, seed=o.seed, parameters=log, summary=specimen.state(scene))
-        print("specimen: saved %s (%.1f s)" % (path, time.time() - t0))
-    st = specimen.state(scene)
-    atomic.write_json(os.path.join(o.out, "specimen_state.json"), st)
-    print("specimen: e = %.4f, Zm = %.3f, sigma = (%.2f, %.2f, %.2f) kPa, unbalanced = %.2e"
-          % (st["void_ratio"], st["Zm"], st["sigma_x"] / 1e3, st["sigma_y"] / 1e3, st["sigma_z"] / 1e3,
-             st["unbalanced"]), flush=True)
+        scene, params = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, progress=bar.preparation)
+    params.setdefault("assembly", o.assembly)
+    params["threads"] = engines.threads()
+    specimen_file.save(path, scene, seed=o.seed, parameters=params, summary=specimen.state(scene))
+    log("specimen: saved %s (%.1f s)" % (path, time.time() - t0))
+    # Everything after this starts from the file, as a rerun does: the same numbers either way.
+    return specimen_file.load(path)[0]
 
-    rows = study.run_states(path, states, o.out, log=lambda m: print(m, flush=True))
 
-    statics_path = os.path.join(o.out, "statics_isotropic.json")
-    if not os.path.exists(statics_path):
-        from trueaniso import statics
-        free = statics.static_stiffness(scene, rotations=True)
-        blocked = statics.static_stiffness(scene, rotations=False)
-        zeta = statics.rotation_factor(scene, free=free, blocked=blocked)
-        atomic.write_json(statics_path, dict(
-            E_free=free["E"], E_blocked=blocked["E"], E_kinematic=zeta["E_kinematic"], nu_free=free["nu"],
-            zeta_h=zeta["zeta_h"], zeta_v=zeta["zeta_v"], residual=free["residual"],
-            rattlers=len(free["rattlers"]), time=free["time"]["total"] + blocked["time"]["total"]))
-    sres = json.load(open(statics_path))
-    print("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %.3f, zeta_v = %.3f"
-          % ([round(e / 1e6, 1) for e in sres["E_free"]], [round(e / 1e6, 1) for e in sres["E_blocked"]],
-             sres["zeta_h"], sres["zeta_v"]))
+def main(argv=None):
+    o = cli.parse(parser(), argv)
+    states = validate(o)
+    if o.threads:
+        engines.set_threads(o.threads)
 
-    contrast = contrast_zeta(o.out, rows)
-    if contrast:
-        print("zeta calibrated on the contrast a_i^2 (Eq. 25) over %d states, as the paper's Fig. 13: "
-              "zeta_h = %.3f, zeta_v = %.3f (rms of a_i^2 %.4f; %.4f at the paper's 0.552, %.4f at 1); the "
-              "magnitude zeta above answers another question (docs/statics.md 7.1)"
-              % (contrast["n_states"], contrast["zeta_h"], contrast["zeta_v"], contrast["rms"],
-                 contrast["rms_at_paper"], contrast["rms_at_1"]))
-
-    fig_dir = os.path.join(o.out, "figures")
-    os.makedirs(fig_dir, exist_ok=True)
-    rows = study.read_rows(os.path.join(o.out, "probes.csv"))
-    figures.modulus_vs_stress(rows, os.path.join(fig_dir, "E_vs_sigma.png"))
-    fits = figures.scalar_moduli_vs_zm(rows, os.path.join(fig_dir, "K_G_vs_Zm.png"))
-    atomic.write_json(os.path.join(o.out, "summary.json"), dict(
-        specimen=st, states=len({r["state"] for r in rows}), probes=len(rows), statics=sres, K_G_fits=fits,
-        zeta_contrast=contrast,
-        wall_time=time.time() - t0))
-    print("results: %s (probes.csv, figures/, summary.json) in %.0f s" % (o.out, time.time() - t0))
+    def log(m):
+        print(m, flush=True)
+    t0 = time.time()
+    with lock.held(o.out, wait=o.wait, log=log):
+        if o.force_new:
+            study_dir.supersede(o.out, log)
+        path = os.path.join(o.out, SPECIMEN)
+        options = dict(state_options=dict(friction=o.mu), recipe=recipe(o))
+        scene = check_recipe(o, log)  # a refusal changes nothing
+        if scene is not None:
+            study.check(path, states, o.out, **options)  # the whole fingerprint, before anything is written
+        study_dir.clean_strays(o.out, log)
+        scene = scene or prepare(o, log)
+        # The summary is derived; it is written again at the end, so a run that stops never
+        # leaves one that describes other rows than probes.csv holds.
+        study_dir.remove([os.path.join(o.out, "summary.json")])
+        st = specimen.state(scene)
+        atomic.write_json(os.path.join(o.out, "specimen_state.json"), st)
+        log("specimen: e = %.4f, Zm = %.3f, sigma = (%.2f, %.2f, %.2f) kPa, unbalanced = %.2e"
+            % (st["void_ratio"], st["Zm"], st["sigma_x"] / 1e3, st["sigma_y"] / 1e3, st["sigma_z"] / 1e3,
+               st["unbalanced"]))
+        try:
+            study.run_states(path, states, o.out, log=log, progress_every=o.progress_every, **options)
+        except triaxial.StateNotReached as exc:
+            cli.fail(str(exc), 1)
+        sres = isotropic_statics(o.out, scene)
+        log("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %.3f, zeta_v = %.3f"
+            % ([round(e / 1e6, 1) for e in sres["E_free"]], [round(e / 1e6, 1) for e in sres["E_blocked"]],
+               sres["zeta_h"], sres["zeta_v"]))
+        csv_path = os.path.join(o.out, study.CSV_NAME)
+        material = specimen_file.read(path)[1]["material"]
+        contrast = zeta_contrast.fit(csv_path, material["shear_modulus"], material["poisson"])
+        if contrast:
+            log("zeta calibrated on the contrast a_i^2 (Eq. 25) over %d states, as the paper's Fig. 13: "
+                "zeta_h = %.3f, zeta_v = %.3f (rms of a_i^2 %.4f; %.4f at the paper's 0.552, %.4f at 1); the "
+                "magnitude zeta above answers another question (docs/statics.md 7.1)"
+                % (contrast["n_states"], contrast["zeta_h"], contrast["zeta_v"], contrast["rms"],
+                   contrast["rms_at_paper"], contrast["rms_at_1"]))
+        fig_dir = os.path.join(o.out, "figures")
+        os.makedirs(fig_dir, exist_ok=True)
+        rows = study.read_rows(csv_path)
+        figures.modulus_vs_stress(rows, os.path.join(fig_dir, "E_vs_sigma.png"))
+        fits = figures.scalar_moduli_vs_zm(rows, os.path.join(fig_dir, "K_G_vs_Zm.png"))
+        atomic.write_json(os.path.join(o.out, "summary.json"), dict(
+            specimen=st, states=len({r["state"] for r in rows}), probes=len(rows), statics=sres, K_G_fits=fits,
+            zeta_contrast=contrast, wall_time=time.time() - t0))
+    log("results: %s (probes.csv, figures/, summary.json) in %.0f s" % (o.out, time.time() - t0))
     if cli.in_yade():
         from trueaniso import yade_bridge
         yade_bridge.yade_scene_from(scene, import_contacts=False)
-        print("specimen written into YADE's O (%d particles) for viewing/export" % scene.num_bodies)
+        log("specimen written into YADE's O (%d particles) for viewing/export" % scene.num_bodies)
 
 
-def contrast_zeta(out, rows):
-    """zeta_h, zeta_v fitted on a_i^2 over the probed states (trueaniso.zeta), from the probe
-    rows and the held-state checkpoints; None with fewer than two complete states."""
-    import numpy as np
-    from trueaniso import dem, zeta
-    by_state = {}
-    for r in rows:
-        by_state.setdefault(r["state"], {})[r["probe"]] = float(r["E"])
-    E, A_n, A_s = [], [], []
-    for sid, moduli in sorted(by_state.items()):
-        ck = os.path.join(out, "states", "%s.npz" % sid)
-        if set(moduli) != set("xyz") or not os.path.exists(ck):
-            continue
-        held, _ = specimen_file.load(ck)
-        dem.refresh(held)
-        a_n, a_s = zeta.parts_from_scene(held)
-        E.append([moduli[a] for a in "xyz"])
-        A_n.append(a_n)
-        A_s.append(a_s)
-    if len(E) < 2:
-        return None
-    fit = zeta.fit_contrast(np.array(E), np.array(A_n), np.array(A_s))
-    return {k: v for k, v in fit.items() if not isinstance(v, np.ndarray)}
+def isotropic_statics(out, scene):
+    """The exact static stiffness of the specimen (the isotropic state), rotations free and
+    blocked, and the magnitude zeta; computed once per study."""
+    path = os.path.join(out, "statics_isotropic.json")
+    if not os.path.exists(path):
+        from trueaniso import statics
+        print("statics (isotropic state): solving the contact network's stiffness, rotations free and blocked ...",
+              flush=True)
+        free = statics.static_stiffness(scene, rotations=True)
+        blocked = statics.static_stiffness(scene, rotations=False)
+        zeta = statics.rotation_factor(scene, free=free, blocked=blocked)
+        atomic.write_json(path, dict(
+            E_free=free["E"], E_blocked=blocked["E"], E_kinematic=zeta["E_kinematic"], nu_free=free["nu"],
+            zeta_h=zeta["zeta_h"], zeta_v=zeta["zeta_v"], residual=free["residual"],
+            rattlers=len(free["rattlers"]), time=free["time"]["total"] + blocked["time"]["total"]))
+    with open(path) as f:
+        return json.load(f)
 
 
-if __name__ == "__main__" or cli.in_yade():
+if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing
     cli.guarded(main)

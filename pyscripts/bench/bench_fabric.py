@@ -20,7 +20,7 @@ from trueaniso import atomic, cli, dem, engines, fabric, specimen_file, yade_bri
 
 
 def options(argv=None):
-    p = cli.Parser(description=__doc__.splitlines()[0])
+    p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--specimen", required=True, help="specimen file (.npz) of a consolidated packing")
     p.add_argument("--steps", type=int, default=3000, help="steps per timed run")
     p.add_argument("--every", type=int, default=100, help="recording interval (steps)")
@@ -118,5 +118,5 @@ def main(argv=None):
     print("| max relative difference C++ vs Python | %.1e |" % speed["max_relative_difference"])
 
 
-if __name__ == "__main__" or cli.in_yade():
+if __name__ == "__main__":  # also under yade-double -x; an import runs nothing
     cli.guarded(main)

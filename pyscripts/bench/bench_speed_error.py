@@ -92,14 +92,14 @@ def errors(E, nu, E0, nu0):
 
 
 def options():
-    p = cli.Parser(description=__doc__.splitlines()[0])
-    p.add_argument("--specimens", nargs="+")
-    p.add_argument("--specimen")
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimens", nargs="+", help="specimen files (.npz) to scan")
+    p.add_argument("--specimen", help="(worker) the one specimen a YADE worker probes")
     p.add_argument("--increments", default="0,0,0", help="(worker) stress increments on x,y,z in Pa")
-    p.add_argument("--yade-worker", action="store_true")
-    p.add_argument("--no-yade", action="store_true")
-    p.add_argument("--doc")
-    p.add_argument("--plot")
+    p.add_argument("--yade-worker", action="store_true", help="(internal) run as the YADE worker")
+    p.add_argument("--no-yade", action="store_true", help="leave out the YADE probes")
+    p.add_argument("--doc", help="Markdown file whose speed-error table is replaced")
+    p.add_argument("--plot", help="PNG file for the speed-against-error figure")
     return cli.parse(p)
 
 
@@ -229,5 +229,5 @@ def main():
     write(o, run(o))
 
 
-if __name__ == "__main__" or cli.in_yade():
+if __name__ == "__main__":  # also under yade-double -x; an import runs nothing
     cli.guarded(main)

@@ -22,7 +22,7 @@ from trueaniso import atomic, cli, engines, specimen_file, statics  # noqa: E402
 
 
 def options(argv=None):
-    p = cli.Parser(description=__doc__.splitlines()[0])
+    p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("specimens", nargs="+", help="specimen files (.npz)")
     p.add_argument("--doc", default=None, help="markdown file whose benchmark/results blocks are replaced")
     p.add_argument("--repeat", type=int, default=1, help="solves per case; the fastest is reported")

@@ -54,13 +54,13 @@ def worker_yade(o):
 
 
 def options():
-    p = cli.Parser(description=__doc__.splitlines()[0])
-    p.add_argument("--specimen", required=True)
-    p.add_argument("--worker", choices=("ours", "yade"))
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimen", required=True, help="specimen file (.npz) to step")
+    p.add_argument("--worker", choices=("ours", "yade"), help="(internal) time one stepper in this process")
     p.add_argument("--dt", type=float, default=0.0, help="time step (s); 0: half the stiffness bound")
     p.add_argument("--steps", type=int, default=0, help="timed steps (0: 20000 ours, 2000 YADE)")
-    p.add_argument("--threads", default="1,2")
-    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--threads", default="1,2", help="thread counts to time, comma separated")
+    p.add_argument("--repeats", type=int, default=3, help="timed runs per setting (the best is kept)")
     p.add_argument("--doc", help="Markdown file whose stepper table is replaced")
     return cli.parse(p)
 
@@ -135,5 +135,5 @@ def main():
             f.write(text)
 
 
-if __name__ == "__main__" or cli.in_yade():
+if __name__ == "__main__":  # also under yade-double -x; an import runs nothing
     cli.guarded(main)

@@ -12,8 +12,6 @@ each --csv (one row per state and probe axis, with the fabric columns B_ij, M_ij
 trueaniso.fabric.fabric_row writes). The micromechanical a_i^2 of a CSV state is rebuilt from its
 B and M and the particle material (--shear-modulus, --poisson), checked against the row's mic_E_*.
 """
-import collections
-import csv
 import datetime
 import os
 import sys
@@ -23,16 +21,16 @@ HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py"
 sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 import numpy as np  # noqa: E402
 
+from analysis import zeta_contrast  # noqa: E402
+from analysis.zeta_contrast import DENSITIES, parts_of  # noqa: E402
 from bench_statics import machine, replace_block  # noqa: E402
-from trueaniso import atomic, cli, dem, engines, fabric, specimen_file, statics, zeta  # noqa: E402
+from trueaniso import atomic, cli, dem, engines, specimen_file, statics, zeta  # noqa: E402
 
-AXES = "xyz"
-DENSITIES = ("eq36", "count")
 ISOTROPIC = 0.01  # relative spread of the principal stresses below which a state is isotropic
 
 
 def options(argv=None):
-    p = cli.Parser(description=__doc__.splitlines()[0])
+    p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--states", help="directory of held-state checkpoints N.npz (static solves)")
     p.add_argument("--csv", action="append", default=[], help="probe table (repeatable)")
     p.add_argument("--shear-modulus", type=float, default=18e9, help="particle shear modulus of the CSV runs (Pa)")
@@ -66,91 +64,12 @@ def checkpoint_paths(directory):
     return [paths[k] for k in sorted(paths)]
 
 
-def read_probe_table(path):
-    """{(rotations, state): row per axis} with the fabric of the held state; one clear error for
-    a table without the needed columns, or with a state whose three probes are not all there."""
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    need = ["state", "probe", "E", "rotations", "Np", "sigma_x", "sigma_y", "sigma_z", "NcV_eq36", "NcV_count",
-            "mic_zeta", "mic_density"] + ["B_%s" % c for c in ("xx", "yy", "zz", "xy", "xz", "yz")] + \
-           ["M_" + "".join(AXES[k] for k in idx) for idx in fabric.M_COLUMNS] + ["mic_E_" + a for a in AXES]
-    if not rows:
-        raise cli.InputError("%s has no data rows" % path)
-    missing = [c for c in need if c not in rows[0]]
-    if missing:
-        raise cli.InputError("%s lacks the columns %s (needs fabric_row's B, M and NcV columns)"
-                             % (path, ", ".join(missing[:6]) + (" ..." if len(missing) > 6 else "")))
-    states = collections.OrderedDict()
-    for r in rows:
-        per_axis = states.setdefault((r["rotations"], r["state"]), {})
-        if r["probe"] not in AXES or r["probe"] in per_axis:
-            raise cli.InputError("%s: state %s has a probe %r that is not a single x, y or z probe"
-                                 % (path, r["state"], r["probe"]))
-        check_modulus(path, r)
-        per_axis[r["probe"]] = r
-    for (rot, s), per_axis in states.items():
-        if len(per_axis) != 3:
-            raise cli.InputError("%s: state %s (rotations %s) lacks the %s probe(s)"
-                                 % (path, s, rot, ", ".join(a for a in AXES if a not in per_axis)))
-    return states
-
-
-def check_modulus(path, r):
-    try:
-        E = float(r["E"])
-    except ValueError:
-        E = float("nan")
-    if not (np.isfinite(E) and E > 0):  # Eq. (25) takes roots of E_i
-        raise cli.InputError("%s: state %s probe %s has E = %r, not a positive number"
-                             % (path, r["state"], r["probe"], r["E"]))
-
-
-def fabric_of_row(r):
-    """The fabric dict of a CSV row: B (symmetric) and the M components of Appendix A (the only
-    ones Eqs. A1-A9 use; the rest stay 0)."""
-    B = np.zeros((3, 3))
-    for i in range(3):
-        for j in range(i, 3):
-            B[i, j] = B[j, i] = float(r["B_" + AXES[i] + AXES[j]])
-    M = np.zeros((3, 3, 3, 3))
-    for idx in fabric.M_COLUMNS:
-        M[idx] = float(r["M_" + "".join(AXES[k] for k in idx)])
-    return dict(B=B, M=M, NcV_eq36=float(r["NcV_eq36"]), NcV_count=float(r["NcV_count"]))
-
-
-def check_rebuild(path, state, f, r, o):
-    """The rebuilt prediction must reproduce the row's mic_E_* (same zeta and Nc/V): this pins the
-    material and the reconstruction of B and M from the columns."""
-    p = fabric.prediction_from(f, o.shear_modulus, o.poisson, float(r["mic_zeta"]), r["mic_density"])
-    mic = np.array([float(r["mic_E_" + a]) for a in AXES])
-    if not np.allclose(p["E"], mic, rtol=1e-9, atol=0):
-        raise cli.InputError("%s state %s: B, M and the material (--shear-modulus %g, --poisson %g) give E = %s, "
-                             "the row's mic_E = %s" % (path, state, o.shear_modulus, o.poisson, p["E"], mic))
-
-
 def isotropic(sigma):
     sigma = np.asarray(sigma, dtype=float)
     return bool(np.ptp(sigma) < ISOTROPIC * np.mean(sigma))
 
 
 # ---------------------------------------------------------------------------- sources
-
-def csv_sources(path, o):
-    """One source per rotations value of the table: E (n, 3), parts per Nc/V, stresses."""
-    out = collections.OrderedDict()
-    for (rot, state), per_axis in read_probe_table(path).items():
-        r = per_axis["z"]
-        f = fabric_of_row(r)
-        check_rebuild(path, state, f, r, o)
-        src = out.setdefault(rot, dict(label="dynamic probes, %s" % os.path.basename(path), rotations=rot,
-                                       N=int(r["Np"]), states=[], E=[], sigma=[], parts={d: [] for d in DENSITIES}))
-        src["states"].append(state)
-        src["E"].append([float(per_axis[a]["E"]) for a in AXES])
-        src["sigma"].append([float(r["sigma_" + a]) for a in AXES])
-        for d in DENSITIES:
-            src["parts"][d].append(zeta.parts_from_fabric(f, o.shear_modulus, o.poisson, d))
-    return list(out.values())
-
 
 def static_sources(directory):
     """Sources (a): static solves at each checkpoint, rotations free and blocked."""
@@ -178,10 +97,6 @@ def static_sources(directory):
 
 
 # ---------------------------------------------------------------------------- the two definitions
-
-def parts_of(src, density="eq36"):
-    return tuple(np.array([p[k] for p in src["parts"][density]]) for k in (0, 1))
-
 
 def contrast(src):
     fit = zeta.fit_contrast(src["E"], *parts_of(src))
@@ -278,7 +193,7 @@ def main(o):
     t0 = time.time()
     sources = []
     for path in o.csv:  # read and check every table before the (slower) static solves
-        sources += csv_sources(path, o)
+        sources += zeta_contrast.sources(path, o.shear_modulus, o.poisson)
     if o.states:
         sources = static_sources(o.states) + sources
     lines, bands, shifts = list(MAIN_HEADER), list(BAND_HEADER), []

@@ -34,4 +34,4 @@ def _find_extension():
 
 engines = _find_extension()
 __version__ = "0.1.0"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # specimen files; 2: the checksum covers the metadata (docs/specimens.md)

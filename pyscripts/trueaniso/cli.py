@@ -1,18 +1,21 @@
 """Command-line habits shared by the scripts in pyscripts/.
 
 - ``yade-double -n -x pyscripts/x.py --option value`` or ``/usr/bin/python3 pyscripts/x.py ...``;
-- parameters can also come from a yade-batch table line: ``--table FILE --line N`` or the
-  PARAM_TABLE=FILE:LINE environment variable that yade-batch sets; explicit options win;
+- ``yade-batch TABLE pyscripts/x.py``: parameters come from the table line named by YADE_BATCH,
+  read the YADE way (trueaniso/param_table.py); ``--table FILE --line N`` does the same by hand.
+  Options given on the command line win over the table;
+- ``--help`` shows every option with its help text and its default;
 - bad input ends the script before any work with one line ``error: ...`` and exit status 2.
 """
 import argparse
+import math
 import os
-import shlex
 import sys
 
+from . import param_table
+from .refusal import InputError, Refusal
 
-class InputError(ValueError):
-    """Bad input detected before any work starts."""
+__all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "in_yade", "description"]
 
 
 def fail(message, status=2):
@@ -23,77 +26,213 @@ def fail(message, status=2):
     os._exit(status)
 
 
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """The default after every help text that has one (not for on/off flags, nor None); the
+    description keeps its line breaks."""
+
+    def _get_help_string(self, action):
+        text = action.help
+        shown = action.default not in (None, argparse.SUPPRESS) and action.nargs != 0
+        if shown and "%(default)" not in text:
+            text += " (default: %(default)s)"
+        return text
+
+
 class Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kw):
+        kw.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kw)
+
+    def add_argument(self, *args, **kw):
+        # Every option says what it does in --help (the defaults are added by the formatter).
+        if not kw.get("help") and args != ("-h", "--help"):
+            raise TypeError("option %s has no help text" % "/".join(args))
+        return super().add_argument(*args, **kw)
+
     def error(self, message):  # argparse would print usage + message; we want one line
         fail(message)
 
+
+def description(doc):
+    """A script's --help description: the first paragraph of its docstring, whole (not its first
+    line, which may stop mid-sentence)."""
+    first = doc.strip().split("\n\n")[0]
+    return " ".join(line.strip() for line in first.splitlines())
+
+
+# ---------------------------------------------------------------- option types (argparse type=)
+
+def finite(text):
+    """A float that is a number: nan and inf are refused when the options are read."""
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError("%r is not a number" % text) from None
+    if not math.isfinite(x):
+        raise argparse.ArgumentTypeError("%r is not a finite number" % text)
+    return x
+
+
+def positive(text):
+    x = finite(text)
+    if not x > 0:
+        raise argparse.ArgumentTypeError("%r is not > 0" % text)
+    return x
+
+
+def non_negative(text):
+    x = finite(text)
+    if not x >= 0:
+        raise argparse.ArgumentTypeError("%r is not >= 0" % text)
+    return x
+
+
+def count(text):
+    """An integer >= 0 (seeds, thread counts)."""
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError("%r is not an integer" % text) from None
+    if k < 0:
+        raise argparse.ArgumentTypeError("%r is not >= 0" % text)
+    return k
+
+
+def output_problem(path, directory=True, option="--out"):
+    """Why `path` cannot be written, or None: a directory (or a file) that exists or can be
+    created, in a place where this user can create files. Checked by creating and removing a
+    file, so read-only mounts and permissions count as they really are (root included)."""
+    import tempfile
+    full = os.path.abspath(path)
+    if os.path.isdir(full) != directory and os.path.exists(full):
+        return "%s %s is a %s, not a %s" % (option, path, "directory" if directory is False else "file",
+                                            "directory" if directory else "file")
+    where = full if directory else os.path.dirname(full)
+    while not os.path.exists(where):
+        parent = os.path.dirname(where)
+        if parent == where:
+            break
+        where = parent
+    if not os.path.isdir(where):
+        return "%s %s: %s is a file, not a directory" % (option, path, where)
+    try:
+        with tempfile.TemporaryFile(dir=where, prefix=".tmp-writable-"):
+            pass
+    except OSError as exc:
+        return "%s %s: cannot create files in %s (%s)" % (option, path, where, exc.strerror)
+    return None
+
+
+# ---------------------------------------------------------------- tables and parsing
 
 def script_args():
     """The script's own arguments, under python3 or yade-double (which keeps them in sys.argv)."""
     return sys.argv[1:]
 
 
-def read_table_line(path, line):
-    """One data line of a yade-batch parameter table as {column: value string}."""
-    try:
-        with open(path) as f:
-            rows = [ln for ln in f.read().splitlines() if ln.strip() and not ln.lstrip().startswith(("#", "!"))]
-    except OSError as exc:
-        raise InputError("cannot read parameter table %s (%s)" % (path, exc.strerror)) from None
-    if len(rows) < 2:
-        raise InputError("parameter table %s has no data lines" % path)
-    header = shlex.split(rows[0])
-    if not 1 <= line < len(rows):
-        raise InputError("parameter table %s has no data line %d (it has %d)" % (path, line, len(rows) - 1))
-    values = shlex.split(rows[line])
-    if len(values) != len(header):
-        raise InputError("parameter table %s line %d has %d values for %d columns"
-                         % (path, line, len(values), len(header)))
-    return dict(zip(header, values))
+def in_yade():
+    return "yade" in sys.modules
+
+
+_YES = ("yes", "true", "on", "1")
+_NO = ("no", "false", "off", "0", "")
+
+
+def _flag(value, where):
+    """A table value for an on/off option: False, 0 and 'no' are off (bool('no') would be on)."""
+    if isinstance(value, str) and value.strip().lower() in _YES + _NO:
+        return value.strip().lower() in _YES
+    if isinstance(value, (bool, int)) and value in (0, 1):
+        return bool(value)
+    if value is None:
+        return False
+    raise InputError("%s: %r is not on or off (use True/False, 1/0 or 'yes'/'no')" % (where, value))
+
+
+def _text(value):
+    if isinstance(value, (tuple, list)):  # an unquoted 1,5 evaluates to a tuple
+        return ",".join(str(v) for v in value)
+    return str(value)
+
+
+def table_argv(parser, values, where):
+    """Command-line tokens for {parameter: value} of a table line (prepended to the real ones,
+    so that explicit options win)."""
+    by_name = {}
+    for a in parser._actions:
+        for s in a.option_strings:
+            if s.startswith("--"):
+                by_name[s[2:]] = a
+                by_name[s[2:].replace("-", "_")] = a
+    argv = []
+    for name, value in values.items():
+        a = by_name.get(name)
+        if a is None or name in ("help", "table", "line"):
+            raise InputError("%s: column %r is not an option of this script (see --help)" % (where, name))
+        opt = a.option_strings[-1]
+        if isinstance(a, (argparse._StoreTrueAction, argparse._StoreFalseAction)):
+            on = _flag(value, "%s column %s" % (where, name))
+            if on == isinstance(a, argparse._StoreTrueAction):
+                argv.append(opt)
+        elif isinstance(a, argparse._AppendAction):
+            for v in (value if isinstance(value, (tuple, list)) else [value]):
+                argv.append("%s=%s" % (opt, _text(v)))
+        elif value is not None:
+            argv.append("%s=%s" % (opt, _text(value)))
+    return argv
+
+
+def _table_source(known):
+    """(path, line) of the parameter table, or None: --table/--line first, then YADE_BATCH."""
+    if known.table:
+        if known.line is None:
+            raise InputError("--table needs --line (the line number as a text editor shows it, as yade-batch counts)")
+        return known.table, known.line
+    if known.line is not None:
+        raise InputError("--line needs --table")
+    batch = os.environ.get("YADE_BATCH", "")
+    if batch:  # yade-batch sets it empty for a job without a table
+        path, _, line = batch.rpartition(":")
+        try:
+            return path, int(line)
+        except ValueError:
+            raise InputError("YADE_BATCH=%r is not TABLE:LINE" % batch) from None
+    return None
 
 
 def parse(parser, argv=None):
-    """Parse options, filling defaults from a table line first; errors exit with one line."""
-    parser.add_argument("--table", help="yade-batch style parameter table")
-    parser.add_argument("--line", type=int, default=1, help="data line of --table (1 = first)")
-    argv = script_args() if argv is None else argv
-    table = None
-    probe = argparse.ArgumentParser(add_help=False)
-    probe.add_argument("--table")
-    probe.add_argument("--line", type=int, default=1)
-    known, _ = probe.parse_known_args(argv)
+    """Parse options, filling them from a table line first; errors exit with one line."""
+    parser.add_argument("--table", help="parameter table in yade-batch's format (trueaniso/param_table.py); "
+                                        "yade-batch passes it in YADE_BATCH instead")
+    parser.add_argument("--line", type=int, help="line of --table, numbered as a text editor shows it (as yade-batch does)")
+    argv = script_args() if argv is None else list(argv)
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--table")
+    pre.add_argument("--line", type=int)
     try:
-        if known.table:
-            table = read_table_line(known.table, known.line)
-        elif os.environ.get("PARAM_TABLE"):
-            path, _, line = os.environ["PARAM_TABLE"].rpartition(":")
-            table = read_table_line(path, int(line))
-        if table:
-            dests = {a.dest: a for a in parser._actions}
-            for key, value in table.items():
-                dest = key.replace("-", "_")
-                if dest not in dests:
-                    if key in ("description",):
-                        continue
-                    raise InputError("parameter table column %r is not an option of this script" % key)
-                action = dests[dest]
-                parser.set_defaults(**{dest: action.type(value) if action.type else value})
+        known, _ = pre.parse_known_args(argv)
+        source = _table_source(known)
+        if source:
+            path, line = source
+            where = "parameter table %s line %d" % (path, line)
+            if in_yade():
+                defaults = {a.dest: a.default for a in parser._actions if a.dest not in ("help", "table", "line")}
+                values = param_table.read_line_in_yade(path, line, defaults)
+            else:
+                values = param_table.read_line(path, line)
+            argv = table_argv(parser, values, where) + argv
     except InputError as exc:
         fail(str(exc))
     return parser.parse_args(argv)
 
 
 def guarded(main):
-    """Run main(); InputError and ValueError from validation become one line and exit 2."""
+    """Run main(); refusals and ValueError become one line and exit 2."""
     try:
         main()
-    except (InputError, ValueError) as exc:
+    except (Refusal, ValueError) as exc:
         # ValueError: validation inside the library (bad specimen contents, bad arguments to an
         # engine); a traceback would hide the one line the user needs.
         fail(str(exc))
     except KeyboardInterrupt:
         fail("interrupted", 130)
-
-
-def in_yade():
-    return "yade" in sys.modules

@@ -150,6 +150,11 @@ def bounding_diameter(assembly):
     return 2.0 * clump_shapes.template(recipe(assembly)["shape"]).bounding_radius
 
 
+def members_per_clump(assembly):
+    """Member spheres of one clump of the assembly's shape."""
+    return len(clump_shapes.template(recipe(assembly)["shape"]).radii)
+
+
 def check_count(assembly, n):
     """ValueError if n clumps cannot be built by the assembly's recipe (layers must divide n)."""
     layers = recipe(assembly)["layers"]

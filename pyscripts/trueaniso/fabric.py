@@ -37,13 +37,27 @@ def _check_density(density):
     return density
 
 
+class NoContacts(ValueError):
+    """Zm, R, H, B, M are averages over contacts: a scene without any has none of them."""
+
+
+def _require_contacts(scene, nc):
+    if nc == 0:
+        raise NoContacts("the scene has no contact carrying a normal force, so Zm, R, H, B and M are undefined "
+                         "(a loose or unloaded packing, or a loaded scene before its first force evaluation)")
+
+
 def fabric(scene):
-    """Dict of the fabric measures of the scene's last force evaluation (see module doc)."""
-    return engines.fabric(scene)
+    """Dict of the fabric measures of the scene's last force evaluation (see module doc);
+    raises NoContacts for a scene without a loaded contact (never a quiet NaN)."""
+    f = engines.fabric(scene)
+    _require_contacts(scene, int(f["Nc"]))
+    return f
 
 
 def prediction(scene, zeta=1.0, density="eq36"):
     """Micromechanical C (Eq. 37), Voigt matrix (Appendix A), E, nu[i, j] = nu_ij, G (yz, xz, xy)."""
+    _require_contacts(scene, int(engines.coordination(scene)["Nc"]))
     return engines.micromechanical_prediction(scene, float(zeta), _check_density(density))
 
 
@@ -67,7 +81,7 @@ def fabric_row(scene, zeta=1.0, density="eq36"):
     components of Appendix A, NcV_eq36, NcV_count, e, mean_N, and the micromechanical moduli
     mic_E_i, mic_nu_ij, mic_G_ij for the given zeta (prefixed so they cannot be mistaken for
     the probe's measured E_i, nu_ij)."""
-    f = fabric(scene)
+    f = fabric(scene)  # refuses a scene without contacts
     p = engines.micromechanics(f["B"], f["M"], float(f["NcV_eq36"] if _check_density(density) == "eq36"
                                                      else f["NcV_count"]),
                                scene.Cn, scene.Cs, float(zeta))

@@ -1,21 +1,32 @@
 """Versioned specimen files: one .npz holding the whole mechanical state and its provenance.
 
-Layout (format "trueaniso-specimen", version 1): arrays for bodies, member spheres, cell and
+Layout (format "trueaniso-specimen", version 2): arrays for bodies, member spheres, cell and
 contact history (the tangential forces matter: a probe starts from them), plus a JSON string
-``meta`` with material, seed, preparation parameters, the state summary, software versions
-and a SHA-256 of the arrays. Loading checks format, version, shapes and checksum before
-building anything, and refuses a file that fails any check with one clear message.
+``meta`` with material, time step, rotation blocking, seed, preparation parameters, the state
+summary and software versions. ``meta["sha256"]`` is a SHA-256 of the whole content: every array
+(name, dtype, shape, bytes) and every other metadata field, so an edited material or
+``block_rotations`` fails the check just as an edited radius does.
+
+Loading checks format, version, checksum, then every field (``meta_problem``, ``contents_problem``,
+and after the scene is built ``contacts_problem``) before anything is simulated, and refuses a
+file that fails any check with one line naming the field. Version-1 files (whose checksum left the
+metadata out) are refused with the way out: prepare the specimen again.
+
+A specimen written by prepare_specimen.py has a ``.json`` summary beside it, derived from the
+``.npz`` (``write_summary``); a missing one is written again from the ``.npz`` (``ensure_summary``),
+so a run killed between the two writes loses nothing.
 """
 import hashlib
 import json
+import math
 import os
-import platform
 import time
 import zipfile
 
 import numpy as np
 
-from . import FORMAT_VERSION, __version__, atomic, engines
+from . import FORMAT_VERSION, atomic, engines
+from .provenance import versions
 
 FORMAT = "trueaniso-specimen"
 _ARRAYS = ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia",
@@ -28,7 +39,15 @@ class SpecimenFileError(ValueError):
     pass
 
 
-def _checksum(arrays):
+def _canonical_meta(meta):
+    """The metadata as hashed: every field but the checksum itself, in one canonical JSON text
+    (sorted keys; floats as Python writes them, which round-trip exactly)."""
+    rest = {k: v for k, v in meta.items() if k != "sha256"}
+    return json.dumps(json.loads(json.dumps(rest, default=atomic._jsonable)), sort_keys=True,
+                      separators=(",", ":")).encode()
+
+
+def _checksum(arrays, meta):
     h = hashlib.sha256()
     for name in _ARRAYS:
         a = np.ascontiguousarray(arrays[name])
@@ -36,6 +55,8 @@ def _checksum(arrays):
         h.update(str(a.dtype).encode())
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
+    h.update(b"meta")
+    h.update(_canonical_meta(meta))
     return h.hexdigest()
 
 
@@ -53,33 +74,6 @@ def scene_arrays(scene):
         c_shear_force=c["shear_force"][active])
 
 
-def _git_commit():
-    """The source commit (with '+dirty' for local edits), or None outside a git checkout."""
-    import subprocess
-    top = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    try:
-        head = subprocess.run(["git", "-C", top, "rev-parse", "HEAD"], capture_output=True, text=True,
-                              timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "-C", top, "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return (head + ("+dirty" if dirty else "")) if head else None
-
-
-def versions():
-    """What produced a result: code, interpreter, libraries, machine and engine threads."""
-    import sys
-    out = dict(trueaniso=__version__, git=_git_commit(), python=platform.python_version(),
-               numpy=np.__version__, machine=platform.machine(), threads=engines.threads())
-    if "yade" in sys.modules:
-        try:
-            out["yade"] = sys.modules["yade"].config.version
-        except AttributeError:
-            out["yade"] = "unknown"
-    return out
-
-
 def save(path, scene, seed=None, parameters=None, summary=None):
     """Write a specimen atomically (an existing file is replaced only by a complete new one)."""
     arrays = scene_arrays(scene)
@@ -90,8 +84,11 @@ def save(path, scene, seed=None, parameters=None, summary=None):
                 seed=seed, parameters=parameters or {}, summary=summary or {}, versions=versions(),
                 material=dict(shear_modulus=scene.shear_modulus, poisson=scene.poisson,
                               density=scene.density, friction=scene.friction),
-                dt=scene.dt, time=scene.time, step=scene.step, block_rotations=scene.block_rotations,
-                sha256=_checksum(arrays))
+                dt=scene.dt, time=scene.time, step=scene.step, block_rotations=bool(scene.block_rotations))
+    problem = meta_problem(json.loads(json.dumps(meta, default=atomic._jsonable)))
+    if problem:
+        raise SpecimenFileError("refusing to save %s: %s" % (path, problem))
+    meta["sha256"] = _checksum(arrays, meta)
     with atomic.atomic_open(path, "wb") as f:
         np.savez(f, meta=np.array(json.dumps(meta, default=atomic._jsonable)), **arrays)
     return meta
@@ -116,18 +113,70 @@ def read(path):
         raise SpecimenFileError("corrupt specimen file %s (metadata unreadable)" % path) from None
     if meta.get("format") != FORMAT:
         raise SpecimenFileError("%s is not a trueaniso specimen (format %r)" % (path, meta.get("format")))
+    if meta.get("format_version") == 1:
+        raise SpecimenFileError("%s is a version-1 specimen file, whose checksum leaves its metadata (material, "
+                                "time step, rotation blocking) unchecked; prepare the specimen again with this "
+                                "trueaniso (prepare_specimen.py --force)" % path)
     if meta.get("format_version") != FORMAT_VERSION:
         raise SpecimenFileError("%s has specimen format version %r; this trueaniso reads version %d"
                                 % (path, meta.get("format_version"), FORMAT_VERSION))
     missing = [k for k in _ARRAYS if k not in data]
     if missing:
         raise SpecimenFileError("corrupt specimen file %s (missing arrays: %s)" % (path, ", ".join(missing)))
-    if _checksum(data) != meta.get("sha256"):
-        raise SpecimenFileError("corrupt specimen file %s (checksum mismatch)" % path)
-    problem = contents_problem(data)
+    if not isinstance(meta.get("sha256"), str) or _checksum(data, meta) != meta["sha256"]:
+        raise SpecimenFileError("corrupt specimen file %s (checksum mismatch: arrays or metadata were changed "
+                                "after it was written)" % path)
+    problem = meta_problem(meta) or contents_problem(data)
     if problem:
         raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     return data, meta
+
+
+def _number(x, low=-math.inf, high=math.inf, low_open=False, high_open=False):
+    """Whether x is a finite real number (not a bool) within the bounds."""
+    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+        return False
+    return (x > low if low_open else x >= low) and (x < high if high_open else x <= high)
+
+
+_META_KEYS = ("format", "format_version", "created", "seed", "parameters", "summary", "versions", "material",
+              "dt", "time", "step", "block_rotations")
+
+
+def meta_problem(meta):
+    """What makes the metadata unusable, or None (every field the loader uses, and their types)."""
+    missing = [k for k in _META_KEYS if k not in meta]
+    if missing:
+        return "metadata lacks %s" % ", ".join(missing)
+    m = meta["material"]
+    if not isinstance(m, dict):
+        return "material is not a table of shear_modulus, poisson, density, friction"
+    missing = [k for k in ("shear_modulus", "poisson", "density", "friction") if k not in m]
+    if missing:
+        return "material lacks %s" % ", ".join(missing)
+    if not _number(m["shear_modulus"], 0, low_open=True):
+        return "material.shear_modulus must be a finite number > 0, not %r" % (m["shear_modulus"],)
+    if not _number(m["poisson"], -1, 0.5, low_open=True, high_open=True):
+        return "material.poisson must be a finite number in (-1, 0.5), not %r" % (m["poisson"],)
+    if not _number(m["density"], 0, low_open=True):
+        return "material.density must be a finite number > 0, not %r" % (m["density"],)
+    if not _number(m["friction"], 0):
+        return "material.friction must be a finite number >= 0, not %r" % (m["friction"],)
+    if not _number(meta["dt"], 0):
+        return "dt must be a finite number >= 0, not %r" % (meta["dt"],)
+    if not _number(meta["time"], 0):
+        return "time must be a finite number >= 0, not %r" % (meta["time"],)
+    if isinstance(meta["step"], bool) or not isinstance(meta["step"], int) or meta["step"] < 0:
+        return "step must be an integer >= 0, not %r" % (meta["step"],)
+    if not isinstance(meta["block_rotations"], bool):
+        return "block_rotations must be true or false, not %r" % (meta["block_rotations"],)
+    if meta["seed"] is not None and (isinstance(meta["seed"], bool) or not isinstance(meta["seed"], int)
+                                     or meta["seed"] < 0):
+        return "seed must be an integer >= 0 or null, not %r" % (meta["seed"],)
+    for k in ("parameters", "summary", "versions"):
+        if not isinstance(meta[k], dict):
+            return "%s must be a table, not %r" % (k, type(meta[k]).__name__)
+    return None
 
 
 def contents_problem(a):
@@ -142,21 +191,79 @@ def contents_problem(a):
     nm = int(mb[-1])
     if a["radii"].shape != (nm,) or a["member_body"].shape != (nm,) or a["member_offsets"].shape != (nm, 3):
         return "inconsistent body/member arrays"
-    for name in ("positions", "velocities", "angular_velocities", "masses", "radii", "cell_size",
-                 "member_offsets", "c_normal_force", "c_shear_force"):
-        if not np.all(np.isfinite(a[name])):
+    if not np.array_equal(a["member_body"], np.repeat(np.arange(nb), np.diff(mb))):
+        return "inconsistent body/member arrays (member_body does not follow member_begin)"
+    shapes = dict(velocities=(nb, 3), angular_velocities=(nb, 3), orientations=(nb, 4), masses=(nb,),
+                  inertia=(nb, 3), cell_size=(3,), cell_ref_size=(3,), strain_rate=(3,))
+    for name, shape in shapes.items():
+        if a[name].shape != shape:
+            return "%s has shape %s, not %s" % (name, a[name].shape, shape)
+    for name in ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia", "radii",
+                 "cell_size", "cell_ref_size", "strain_rate", "member_offsets", "c_normal", "c_normal_force",
+                 "c_shear_force"):
+        if not np.issubdtype(a[name].dtype, np.floating) or not np.all(np.isfinite(a[name])):
             return "non-finite values in %s" % name
     if np.any(a["radii"] <= 0):
         return "radius <= 0"
     if np.any(a["masses"] <= 0):
         return "mass <= 0"
-    if a["cell_size"].shape != (3,) or np.any(a["cell_size"] <= 0):
+    if np.any(a["inertia"] <= 0):
+        return "moment of inertia <= 0"
+    if np.any(a["cell_size"] <= 0) or np.any(a["cell_ref_size"] <= 0):
         return "cell size <= 0"
+    if np.any(np.abs(np.linalg.norm(a["orientations"], axis=1) - 1) > 1e-6):
+        return "orientations are not unit quaternions"
+    # Two bodies at one place (a copied body): their contact has no normal.
+    r_min = float(a["radii"].min())
+    key = np.round(np.mod(a["positions"], a["cell_size"]) / (1e-6 * r_min))
+    if len(np.unique(key, axis=0)) != nb:
+        return "duplicate bodies (two bodies at the same place)"
     nc = a["c_member1"].shape[0]
+    shapes = dict(c_member2=(nc,), c_shift=(nc, 3), c_normal=(nc, 3), c_normal_force=(nc,), c_shear_force=(nc, 3))
+    for name, shape in shapes.items():
+        if a[name].shape != shape:
+            return "contact arrays of different lengths (%s has shape %s, not %s)" % (name, a[name].shape, shape)
+    for name in ("c_member1", "c_member2", "c_shift"):
+        if not np.issubdtype(a[name].dtype, np.integer):
+            return "%s must hold integers" % name
     for name in ("c_member1", "c_member2"):
         m = a[name]
-        if m.shape != (nc,) or (nc and (m.min() < 0 or m.max() >= nm)):
+        if nc and (m.min() < 0 or m.max() >= nm):
             return "contact member index out of range"
+    if nc == 0:
+        return None
+    body = a["member_body"]
+    if np.any(body[a["c_member1"]] == body[a["c_member2"]]):
+        return "a contact of a body with itself"
+    if np.any(a["c_normal_force"] <= 0):
+        return "a contact with normal force <= 0 (only active contacts are saved)"
+    if np.any(np.abs(np.linalg.norm(a["c_normal"], axis=1) - 1) > 1e-6):
+        return "contact normals are not unit vectors"
+    lo = np.minimum(a["c_member1"], a["c_member2"])
+    hi = np.maximum(a["c_member1"], a["c_member2"])
+    sign = np.where(a["c_member1"] <= a["c_member2"], 1, -1)[:, None]
+    pairs = np.column_stack([lo, hi, sign * a["c_shift"]])
+    if len(np.unique(pairs, axis=0)) != nc:
+        return "a contact listed twice"
+    return None
+
+
+def contacts_problem(scene, a):
+    """Saved contacts whose members do not touch with the saved periodic shift (an absurd shift,
+    or edited positions): an active contact overlaps, so its centre distance is below r1 + r2;
+    1.1 (r1 + r2) leaves room for the last step's motion, and a shift wrong by one cell puts the
+    members at least 1.4 (r1 + r2) apart (the cell is longer than 2.4 largest diameters)."""
+    if a["c_member1"].shape[0] == 0:
+        return None
+    pos = np.asarray(scene.member_positions)
+    r = np.asarray(scene.radii)
+    m1, m2 = a["c_member1"], a["c_member2"]
+    d = pos[m2] + a["c_shift"] * np.asarray(a["cell_size"]) - pos[m1]
+    far = np.linalg.norm(d, axis=1) > 1.1 * (r[m1] + r[m2])
+    if np.any(far):
+        k = int(np.argmax(far))
+        return ("contact %d (members %d, %d, shift %s) joins spheres that do not touch"
+                % (k, m1[k], m2[k], a["c_shift"][k].tolist()))
     return None
 
 
@@ -184,6 +291,9 @@ def load(path):
     s.velocities = a["velocities"]
     s.angular_velocities = a["angular_velocities"]
     s.strain_rate = a["strain_rate"]
+    problem = contacts_problem(s, a)
+    if problem:
+        raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     s.set_contact_history(a["c_member1"], a["c_member2"], a["c_shift"], a["c_normal"],
                           a["c_normal_force"], a["c_shear_force"])
     s.dt, s.time, s.step = meta["dt"], meta["time"], meta["step"]
@@ -193,3 +303,25 @@ def load(path):
     from . import dem
     dem.refresh(s)  # contact forces, normals and branches for the loaded positions
     return s, meta
+
+
+def summary_path(path):
+    """The .json summary beside a specimen .npz."""
+    return path[:-4] + ".json" if path.endswith(".npz") else path + ".json"
+
+
+def write_summary(path, meta):
+    """Write the .json summary derived from a specimen's metadata (atomically)."""
+    atomic.write_json(summary_path(path), dict(
+        specimen=os.path.basename(path), sha256=meta["sha256"], summary=meta.get("summary"),
+        parameters=meta.get("parameters"), versions=meta.get("versions"),
+        note="derived from the .npz beside it; written again from it when missing"))
+
+
+def ensure_summary(path, meta):
+    """Write the .json summary when it is missing (a run stopped between the two writes);
+    returns whether it was written."""
+    if os.path.exists(summary_path(path)):
+        return False
+    write_summary(path, meta)
+    return True

@@ -1,157 +1,295 @@
 """Runs true-triaxial states and their probes on a specimen, with results written as they come.
 
-Layout of an output directory:
-  probes.csv       one row per state and probe direction (written atomically after each state)
-  metadata.json    versions, specimen provenance, parameters
-  states/ID.npz    the specimen held at state ID (a checkpoint: a resumed run continues the
-                   path from the furthest state already reached)
-Rows already in probes.csv are not run again, so an interrupted study resumes where it stopped.
+Layout of a results directory (one study: trueaniso/study_dir.py, docs/runs.md):
+  metadata.json    the study's fingerprint, its states (id -> b, sigma_z), the runs that wrote it
+  probes.csv       one row per state and probe direction, appended as each probe ends
+  states/ID.npz    the specimen held at state ID (a checkpoint, with the steps that made it)
+  .lock            the lock a run holds while it writes here
+
+Every state and every probe starts from a file: a state from the checkpoint of the state before it
+on its loading path (or from the specimen), a probe from its state's checkpoint, re-loaded for
+each probe. A run that was interrupted and resumed therefore computes exactly what an
+uninterrupted run computes, bit for bit: both start every piece of work from the same bytes.
+Rows already in probes.csv are not run again.
 """
-import csv
+import inspect
 import os
+import sys
 import time
 
-import numpy as np
-
-from . import atomic, engines, fabric, specimen, specimen_file, triaxial
+from . import engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_dir, triaxial
+from .progress import EVERY, Progress, chunk_for
+from .refusal import InputError
 from .triaxial import AXES
 
 COLUMNS = ["state", "b", "sigma_z_goal", "sigma_x", "sigma_y", "sigma_z", "q", "probe", "sign",
            "d_sigma_x", "d_sigma_y", "d_sigma_z", "d_eps_x", "d_eps_y", "d_eps_z", "E", "nu_1", "nu_2",
            "nu_1_name", "nu_2_name", "gamma", "Zm", "void_ratio", "rotations", "detection", "damping",
-           "probe_steps", "probe_wall_time", "state_steps", "state_wall_time"]
+           "probe_steps", "probe_wall_time", "state_steps", "state_wall_time", "state_from"]
+WALL_TIME_COLUMNS = ("probe_wall_time", "state_wall_time")  # the only columns a rerun does not reproduce
+CSV_NAME = "probes.csv"
 
 
 def read_rows(path):
-    if not os.path.exists(path):
-        return []
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
-def _extra_columns(scene):
-    """Micro-structure columns (Zm, R, H, B, Nc/V, ...) of the held state."""
-    return fabric.fabric_row(scene)
-
-
-def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False,
-               skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None):
-    """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering or any)."""
-    for i, b, sz in states:
-        triaxial.validate_state(b, sz)  # every state checked before any work
-    probes = [triaxial.validate_probe(a, gamma) for a in probes]
-    if len(set(probes)) != len(probes):
-        raise ValueError("each probe axis may be given once")
-    base, meta = specimen_file.load(specimen_path)
-    os.makedirs(os.path.join(out, "states"), exist_ok=True)
-    csv_path = os.path.join(out, "probes.csv")
-    rows = read_rows(csv_path)
-    done = {(r["state"], r["probe"]) for r in rows}
-    columns = list(COLUMNS)
-    atomic.write_json(os.path.join(out, "metadata.json"), dict(
-        specimen=os.path.abspath(specimen_path), specimen_sha256=meta["sha256"], specimen_seed=meta["seed"],
-        specimen_summary=meta.get("summary"), versions=specimen_file.versions(),
-        parameters=dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
-                        damping=damping, probes="".join(AXES[a] for a in probes),
-                        state_options=_effective(triaxial.reach_state, state_options),
-                        probe_options=_effective(triaxial.probe, probe_options)),
-        states=[dict(id=i, b=b, sigma_z=sz) for i, b, sz in states]))
-
-    for (b, side), path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0])):
-        scene = None
-        for sid, bb, sz in path:
-            want = [AXES[a] for a in probes if (str(sid), AXES[a]) not in done]
-            ck = os.path.join(out, "states", "%s.npz" % sid)
-            if not want and os.path.exists(ck):
-                scene = None  # the next state of the path will load this checkpoint
-                continue
-            t0 = time.time()
-            info = dict(steps=0, wall_time=0.0)
-            if os.path.exists(ck):
-                scene, _ = specimen_file.load(ck)
-                log("state %s: checkpoint %s" % (sid, ck))
-            else:
-                if scene is None:
-                    scene = _start_of_path(base, path, sid, out)
-                log("state %s: b = %.2f, sigma_z = %.1f kPa ..." % (sid, bb, sz / 1e3))
-                info = triaxial.reach_state(scene, bb, sz, damping=damping, **(state_options or {}))
-                specimen_file.save(ck, scene, seed=meta["seed"], parameters=dict(state=sid, b=bb, sigma_z=sz),
-                                   summary=specimen.state(scene))
-                log("state %s: reached in %d steps (%.1f s)" % (sid, info["steps"], info["wall_time"]))
-            hold = engines.true_triaxial_stresses(bb, sz)
-            st = specimen.state(scene)
-            extra = _extra_columns(scene)
-            for name in want:
-                r = triaxial.probe(scene, hold, name, gamma=gamma, restrain_rotations=restrain_rotations,
-                                   skip_detection=skip_detection, damping=damping, **(probe_options or {}))
-                nus = sorted(k for k in r if k.startswith("nu_"))
-                row = dict(state=sid, b=bb, sigma_z_goal=sz, sigma_x=st["sigma_x"], sigma_y=st["sigma_y"],
-                           sigma_z=st["sigma_z"], q=engines.deviatoric_q(bb, sz), probe=name, sign=r["sign"],
-                           d_sigma_x=r["d_stress"][0], d_sigma_y=r["d_stress"][1], d_sigma_z=r["d_stress"][2],
-                           d_eps_x=r["d_strain"][0], d_eps_y=r["d_strain"][1], d_eps_z=r["d_strain"][2],
-                           E=r["E"], nu_1=r[nus[0]], nu_2=r[nus[1]], nu_1_name=nus[0], nu_2_name=nus[1],
-                           gamma=r["gamma"], Zm=st["Zm"], void_ratio=st["void_ratio"], rotations=r["rotations"],
-                           detection=r["detection"], damping=damping, probe_steps=r["steps"],
-                           probe_wall_time=r["wall_time"], state_steps=info["steps"],
-                           state_wall_time=info["wall_time"])
-                row.update(extra)
-                for k in extra:
-                    if k not in columns:
-                        columns.append(k)
-                rows.append(row)
-                done.add((str(sid), name))
-                log("state %s: probe %s  E = %.1f MPa  %s = %.4f  %s = %.4f  (%d steps, %.1f s)"
-                    % (sid, name, r["E"] / 1e6, nus[0], r[nus[0]], nus[1], r[nus[1]], r["steps"], r["wall_time"]))
-                atomic.write_csv(csv_path, rows, columns)
-            log("state %s: done (%.1f s)" % (sid, time.time() - t0))
-    return rows
+    """The complete rows of a probe table (a torn last row is left out; see results_csv)."""
+    return results_csv.read(path).rows
 
 
 def _effective(function, options):
     """The keyword values a protocol really runs with: its defaults, overridden by options, so
     the metadata states the tolerances (stress, unbalanced force, steps) behind every row."""
-    import inspect
     skip = {"scene", "hold", "axis", "sign", "gamma", "b", "sigma_z", "progress", "restrain_rotations",
-            "skip_detection", "damping"}
+            "skip_detection", "damping", "chunk"}  # chunk: changes no result (trueaniso/progress.py)
     out = {k: p.default for k, p in inspect.signature(function).parameters.items()
            if p.default is not inspect.Parameter.empty and k not in skip}
     out.update(options or {})
     return out
 
 
-def _start_of_path(base, path, sid, out):
-    """The scene to continue a path from: the last checkpoint before sid, else the specimen."""
-    prev = None
-    for s, _, _ in path:
-        if str(s) == str(sid):
-            break
-        ck = os.path.join(out, "states", "%s.npz" % s)
-        if os.path.exists(ck):
-            prev = ck
-    if prev:
-        scene, _ = specimen_file.load(prev)
-        return scene
-    return base.copy()
+def assembly_of(specimen_meta):
+    """sphere, clump1 or clump2: what prepare_specimen.py built (files from before clumps: sphere)."""
+    return specimen_meta.get("parameters", {}).get("assembly", "sphere")
+
+
+def fingerprint(specimen_meta, gamma, restrain_rotations, skip_detection, damping, state_options=None,
+                probe_options=None, recipe=None):
+    """What every row and checkpoint of a study depends on (study_dir compares it on reruns)."""
+    # The assembly is also behind the specimen's checksum; named here so a refusal can say it.
+    fp = dict(specimen=specimen_meta["sha256"], assembly=assembly_of(specimen_meta),
+              code=provenance.code_version(), threads=engines.threads(),
+              state=dict(damping=damping, **_effective(triaxial.reach_state, state_options)),
+              probe=dict(gamma=gamma, rotations="restrained" if restrain_rotations else "free",
+                         detection="off" if skip_detection else "on", damping=damping,
+                         **_effective(triaxial.probe, probe_options)))
+    if recipe:
+        fp["recipe"] = recipe
+    return fp
+
+
+def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping, state_options,
+           probe_options, recipe):
+    """Every check that needs no work, then (ids, axes, specimen metadata, fingerprint)."""
+    for i, b, sz in states:
+        triaxial.validate_state(b, sz)  # every state checked before any work
+    ids = [str(i) for i, _, _ in states]
+    if len(set(ids)) != len(ids):
+        raise InputError("a state is given twice (ids %s)" % ", ".join(sorted({i for i in ids if ids.count(i) > 1})))
+    probes = [triaxial.validate_probe(a, gamma) for a in probes]
+    if len(set(probes)) != len(probes):
+        raise InputError("each probe axis may be given once")
+    axes = "".join(AXES[a] for a in probes)
+    _, spec_meta = specimen_file.read(specimen_path)
+    if spec_meta["block_rotations"] and not restrain_rotations:
+        raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
+                         "restrained: ask for --rotations restrained" % specimen_path)
+    fp = fingerprint(spec_meta, gamma, restrain_rotations, skip_detection, damping, state_options,
+                     probe_options, recipe)
+    return ids, axes, spec_meta, fp
+
+
+def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False, skip_detection=False,
+          damping=0.4, state_options=None, probe_options=None, recipe=None):
+    """What run_states checks before any work, alone (run_study.py asks before it writes anything):
+    the metadata of the study in `out` (None for a new one), or a refusal. The caller holds the lock."""
+    assert lock.is_held(out)
+    _, _, _, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping,
+                         state_options, probe_options, recipe)
+    return study_dir.check(out, fp, states)
+
+
+def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False,
+               skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None,
+               wait=False, force_new=False, progress_every=EVERY, recipe=None):
+    """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering, or
+    ``state_id``). Returns the complete rows of probes.csv after the run."""
+    ids, axes, spec_meta, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection,
+                                      damping, state_options, probe_options, recipe)
+    record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),
+                  states=ids, probes=axes,
+                  versions=provenance.versions(),
+                  specimen=dict(path=os.path.abspath(specimen_path), sha256=spec_meta["sha256"],
+                                seed=spec_meta["seed"], summary=spec_meta.get("summary")))
+    csv_path = os.path.join(out, CSV_NAME)
+    with lock.held(out, wait=wait, log=log):
+        if force_new:
+            study_dir.supersede(out, log)
+        previous = study_dir.check(out, fp, states)  # a refusal changes nothing
+        study_dir.clean_strays(out, log)
+        try:
+            table = results_csv.repair(results_csv.read(csv_path), log)
+        except results_csv.TableError as exc:
+            raise study_dir.StudyMismatch("%s; %s" % (exc, study_dir.WAY_OUT % os.path.join(out, study_dir.SUPERSEDED)))
+        known = set((previous or {}).get("states", {}))
+        strange = sorted({r["state"] for r in table.rows} - known)
+        if strange:
+            raise study_dir.StudyMismatch("%s has rows of states %s that metadata.json does not define; %s"
+                                          % (csv_path, ", ".join(strange),
+                                             study_dir.WAY_OUT % os.path.join(out, study_dir.SUPERSEDED)))
+        study_dir.write_metadata(out, fp, states, axes, record, previous)
+        os.makedirs(os.path.join(out, "states"), exist_ok=True)
+        run = _Run(specimen_path, spec_meta, out, fp, axes, csv_path, table, log, progress_every,
+                   dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
+                        damping=damping, **(probe_options or {})),
+                   dict(damping=damping, **(state_options or {})))
+        for (b, side), path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0])):
+            run.path(path)
+        return results_csv.read(csv_path).rows
+
+
+class _Run:
+    """One run's walk over the loading paths (the caller holds the lock)."""
+
+    def __init__(self, specimen_path, spec_meta, out, fp, axes, csv_path, table, log, every, probe_kw, state_kw):
+        self.specimen_path, self.spec_meta, self.out, self.fp = specimen_path, spec_meta, out, fp
+        self.axes, self.csv_path, self.log, self.every = axes, csv_path, log, every
+        self.columns = list(table.columns)
+        self.done = {(r["state"], r["probe"]) for r in table.rows}
+        self.probe_kw, self.state_kw = probe_kw, state_kw
+
+    def checkpoint(self, sid):
+        return os.path.join(self.out, "states", "%s.npz" % sid)
+
+    def wanted(self, sid):
+        return [a for a in self.axes if (str(sid), a) not in self.done]
+
+    def path(self, path):
+        """States in loading order; a checkpoint is made when its state has probes to run or a
+        later state of the path starts from it (so the path is always the requested one)."""
+        self._path_states = path
+        need = [bool(self.wanted(sid)) for sid, _, _ in path]
+        start = None
+        for k, (sid, b, sz) in enumerate(path):
+            ck = self.checkpoint(sid)
+            if not os.path.exists(ck) and any(need[k:]):
+                self.reach(sid, b, sz, start, ck)
+            if need[k]:
+                self.probe_state(sid, b, sz, ck)
+            start = sid
+
+    def load(self, path, sid=None, b=None, sz=None):
+        """A scene from a file of this study: the specimen (checked against the fingerprint) or a
+        checkpoint (checked against its state's definition)."""
+        try:
+            scene, meta = specimen_file.load(path)
+        except specimen_file.SpecimenFileError as exc:
+            raise study_dir.StudyMismatch("%s; remove it and rerun to compute it again" % exc) from None
+        p = meta["parameters"]
+        if sid is None:
+            ok = meta["sha256"] == self.fp["specimen"]
+            what = "the specimen changed since this run started (checksum differs)"
+        else:
+            ok = (str(p.get("state")) == str(sid) and p.get("b") == b and p.get("sigma_z") == sz
+                  and p.get("specimen") == self.fp["specimen"])
+            what = "it is not state %s (b = %g, sigma_z = %g Pa) of this study's specimen" % (sid, b, sz)
+        if not ok:
+            raise study_dir.StudyMismatch("%s: %s; remove it and rerun" % (path, what))
+        return scene, meta
+
+    def reach(self, sid, b, sz, start, ck):
+        if start is None:
+            scene, _ = self.load(self.specimen_path)
+        else:
+            prev = next(s for s in self._path_states if str(s[0]) == str(start))
+            scene, _ = self.load(self.checkpoint(start), *prev)
+        self.log("state %s: b = %.2f, sigma_z = %.1f kPa, from %s ..."
+                 % (sid, b, sz / 1e3, "the specimen" if start is None else "state %s" % start))
+        progress = Progress("state %s" % sid, self.log, self.every)
+        info = triaxial.reach_state(scene, b, sz, progress=progress.servo, chunk=chunk_for(scene.num_bodies),
+                                    **self.state_kw)
+        specimen_file.save(ck, scene, seed=self.spec_meta["seed"], summary=specimen.state(scene),
+                           parameters=dict(state=str(sid), b=b, sigma_z=sz, steps=info["steps"],
+                                           wall_time=info["wall_time"],
+                                           start="specimen" if start is None else str(start),
+                                           specimen=self.fp["specimen"], code=self.fp["code"]))
+        self.log("state %s: reached in %d steps (%.1f s)" % (sid, info["steps"], info["wall_time"]))
+
+    def probe_state(self, sid, b, sz, ck):
+        t0 = time.time()
+        hold = engines.true_triaxial_stresses(b, sz)
+        scene, meta = self.load(ck, sid, b, sz)
+        p = meta["parameters"]
+        st = specimen.state(scene)
+        extra = fabric.fabric_row(scene)
+        for name in self.wanted(sid):
+            scene, _ = self.load(ck, sid, b, sz)  # every probe from the checkpoint's bytes
+            progress = Progress("state %s probe %s" % (sid, name), self.log, self.every)
+            r = triaxial.probe(scene, hold, name, progress=progress.probe, chunk=chunk_for(scene.num_bodies, 1_000_000,
+                                                                                          largest=500),
+                               **self.probe_kw)
+            nus = sorted(k for k in r if k.startswith("nu_"))
+            row = dict(state=sid, b=b, sigma_z_goal=sz, sigma_x=st["sigma_x"], sigma_y=st["sigma_y"],
+                       sigma_z=st["sigma_z"], q=engines.deviatoric_q(b, sz), probe=name, sign=r["sign"],
+                       d_sigma_x=r["d_stress"][0], d_sigma_y=r["d_stress"][1], d_sigma_z=r["d_stress"][2],
+                       d_eps_x=r["d_strain"][0], d_eps_y=r["d_strain"][1], d_eps_z=r["d_strain"][2],
+                       E=r["E"], nu_1=r[nus[0]], nu_2=r[nus[1]], nu_1_name=nus[0], nu_2_name=nus[1],
+                       gamma=r["gamma"], Zm=st["Zm"], void_ratio=st["void_ratio"], rotations=r["rotations"],
+                       detection=r["detection"], damping=r["damping"], probe_steps=r["steps"],
+                       probe_wall_time=r["wall_time"], state_steps=p["steps"], state_wall_time=p["wall_time"],
+                       state_from=p["start"])
+            row.update(extra)
+            if not self.columns:
+                self.columns = COLUMNS + list(extra)
+            if set(row) != set(self.columns):
+                raise study_dir.StudyMismatch("%s has other columns than this trueaniso writes; %s"
+                                              % (self.csv_path, study_dir.WAY_OUT
+                                                 % os.path.join(self.out, study_dir.SUPERSEDED)))
+            results_csv.append(self.csv_path, row, self.columns)
+            self.done.add((str(sid), name))
+            self.log("state %s: probe %s  E = %.1f MPa  %s = %.4f  %s = %.4f  (%d steps, %.1f s)"
+                     % (sid, name, r["E"] / 1e6, nus[0], r[nus[0]], nus[1], r[nus[1]], r["steps"], r["wall_time"]))
+        self.log("state %s: done (%.1f s)" % (sid, time.time() - t0))
+
+
+def state_id(b, sigma_z):
+    """The id of a state given by its definition: its Table C1 number when it is one of the
+    table's states, else 'b<b>_sz<sigma_z in Pa>' (exact: the shortest text that reads back as
+    the same float). Ids are functions of the state, never positions in a list, so the same id
+    means the same state in every run."""
+    for i, tb, tsz in triaxial.table_c1_states():
+        if tb == b and tsz == sigma_z:
+            return i
+
+    def text(x):
+        t = repr(float(x))
+        return t[:-2] if t.endswith(".0") else t
+    return "b%s_sz%s" % (text(b), text(sigma_z))
 
 
 def parse_states(text):
-    """'b:sigma_z,b:sigma_z' (sigma_z in Pa) -> [(id, b, sigma_z)], ids 's1', 's2', ..."""
+    """'b:sigma_z,b:sigma_z' (sigma_z in Pa) -> [(id, b, sigma_z)] with ids from ``state_id``."""
     out = []
-    for k, item in enumerate(t for t in text.split(",") if t.strip()):
+    for item in (t for t in text.split(",") if t.strip()):
         try:
             b, sz = (float(v) for v in item.split(":"))
         except ValueError:
             raise ValueError("state %r: expected b:sigma_z, e.g. 0.5:140e3" % item) from None
-        out.append(("s%d" % (k + 1), b, sz))
+        out.append((state_id(b, sz), b, sz))
     if not out:
         raise ValueError("no states given")
+    ids = [str(i) for i, _, _ in out]
+    twice = sorted({i for i in ids if ids.count(i) > 1})
+    if twice:
+        raise ValueError("state %s is given twice" % ", ".join(twice))
     return out
+
+
+def parse_ids(text):
+    """'1,5,21' -> [1, 5, 21]; an empty list or a non-number is refused (never "all states")."""
+    items = [t.strip() for t in text.split(",")]
+    if not any(items):
+        raise InputError("--ids names no state (give Table C1 numbers, e.g. 1,5,21, or --table-c1 for all)")
+    try:
+        return [int(t) for t in items if t]
+    except ValueError:
+        raise InputError("--ids %r: Table C1 states are numbers 1-39, e.g. 1,5,21" % text) from None
 
 
 def table_states(ids=None):
     states = triaxial.table_c1_states()
-    if ids:
+    if ids is not None:
         want = set(ids)
+        if not want:
+            raise ValueError("no states given")
         unknown = want - {i for i, _, _ in states}
         if unknown:
             raise ValueError("Table C1 has states 1-39; unknown: %s" % sorted(unknown))

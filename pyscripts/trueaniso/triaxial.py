@@ -111,6 +111,14 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
 
 AXES = "xyz"
 
+# The range of gamma (Eq. 12) a study accepts (docs/triaxial.md, "Probe size"): above 1e-5 the
+# probe is no longer a tangent (E grows with the increment: +0.5 % at 1e-5, +4.5 % at 1e-4 on 100
+# spheres at 100 kPa, as the secant of a modulus growing as sigma^(1/3) over d sigma = E gamma);
+# below 1e-8 the increment (E gamma ~ 3 Pa) nears the stress noise of a held state (~5e-5 Pa
+# measured, growing with the specimen; a 0.15 Pa drift was reported on larger ones). The library
+# itself accepts any gamma > 0 (studies of the probe size need to).
+GAMMA_RANGE = (1e-8, 1e-5)
+
 
 def validate_probe(axis, gamma):
     """The axis as 0, 1, 2 (from 0-2 or "x", "y", "z"); ValueError for any other axis (True
@@ -126,10 +134,11 @@ def validate_probe(axis, gamma):
 
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
-          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500):
+          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, progress=None):
     """One directional probe at a held state; the scene is restored afterwards.
 
     hold: the state's stresses (Pa) held during the probe on the two other axes.
+    progress: called with the StressProbe after every chunk of steps (the chunk changes no result).
     Returns a dict with increments, E_i (Eq. 10), nu_ij (Eq. 11), gamma (Eq. 12), steps, time.
     """
     axis = validate_probe(axis, gamma)
@@ -151,6 +160,8 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     try:
         while p.stage not in ("done", "failed"):
             chain.run(chunk)
+            if progress:
+                progress(p)
     finally:
         p.restore(scene)
         dem.refresh(scene)
@@ -161,7 +172,8 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
                d_stress=p.d_stress.tolist(), d_strain=de.tolist(), gamma=float(p.gamma),
                steps=int(p.steps), relax_steps=int(p.relax_steps), ramp_steps=int(p.ramp_steps_done),
                hold_steps=int(p.hold_steps), wall_time=time.time() - t0,
-               rotations="restrained" if restrain_rotations else "free",
+               # a scene that blocks rotations is restrained whatever was asked
+               rotations="restrained" if restrain_rotations or scene.block_rotations else "free",
                detection="off" if skip_detection else "on", damping=damping,
                detection_calls=int(chain.detection.applied))
     for j in range(3):

@@ -49,9 +49,10 @@ def test_corrupt_existing_output_is_reported_not_overwritten(tmp_path):
 
 
 def test_table_line_supplies_parameters(tmp_path):
+    """Lines are numbered as a text editor (and yade-batch) numbers them: the heading is line 1."""
     table = tmp_path / "params.table"
     table.write_text("n seed phi_cell\n100 3 0.9\n")
-    proc = run("--table", str(table), "--line", "1", "--out", str(tmp_path / "s.npz"))
-    assert proc.returncode == 2 and "--phi-cell 0.9" in proc.stderr  # the table's value was used
     proc = run("--table", str(table), "--line", "2", "--out", str(tmp_path / "s.npz"))
-    assert proc.returncode == 2 and "no data line 2" in proc.stderr
+    assert proc.returncode == 2 and "--phi-cell 0.9" in proc.stderr  # the table's value was used
+    proc = run("--table", str(table), "--line", "1", "--out", str(tmp_path / "s.npz"))
+    assert proc.returncode == 2 and "no data on line 1" in proc.stderr

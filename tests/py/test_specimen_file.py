@@ -48,7 +48,7 @@ def _rewrite(src, dst, edit_meta=None, edit_arrays=None, reseal=False):
     if edit_arrays:
         edit_arrays(arrays)
     if reseal:
-        meta["sha256"] = specimen_file._checksum(arrays)
+        meta["sha256"] = specimen_file._checksum(arrays, meta)
     np.savez(dst, meta=np.array(json.dumps(meta)), **arrays)
 
 

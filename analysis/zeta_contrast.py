@@ -1,0 +1,105 @@
+"""The rotation factor zeta fitted on the contrast a_i^2 (trueaniso.zeta.fit_contrast), from a
+study's probe table: the one route for the main job (run_study.py) and the benchmark (bench_zeta.py).
+
+Each state's DEM E_i are its x, y, z probe rows; its micromechanical parts (A_n, A_s of Eq. 37)
+are rebuilt from the fabric columns of the row (B, the M components of Appendix A, Nc/V), which
+trueaniso.fabric.fabric_row wrote, and the particle material. The rebuild is checked against the
+row's own micromechanical moduli (mic_E_*), which pins the material and the columns.
+"""
+import collections
+
+import numpy as np
+
+from .results import ResultsError, number, read_probes
+from trueaniso import fabric, zeta  # noqa: E402 - results.py put pyscripts/ on the path
+
+AXES = "xyz"
+DENSITIES = ("eq36", "count")
+NEEDED = (["state", "probe", "E", "rotations", "Np", "sigma_x", "sigma_y", "sigma_z", "NcV_eq36", "NcV_count",
+           "mic_zeta", "mic_density"] + ["B_%s" % c for c in ("xx", "yy", "zz", "xy", "xz", "yz")]
+          + ["M_" + "".join(AXES[k] for k in idx) for idx in fabric.M_COLUMNS] + ["mic_E_" + a for a in AXES])
+
+
+def read_probe_table(path, complete_only=False):
+    """{(rotations, state): {axis: row}} in file order. A state without all three probes is an
+    error, or left out with complete_only (a study still running, or resumed with fewer axes)."""
+    rows = read_probes(path, NEEDED)
+    states = collections.OrderedDict()
+    for r in rows:
+        per_axis = states.setdefault((r["rotations"], r["state"]), {})
+        if r["probe"] not in AXES or r["probe"] in per_axis:
+            raise ResultsError("%s: state %s has a probe %r that is not a single x, y or z probe"
+                               % (path, r["state"], r["probe"]))
+        E = number(r, "E", path)
+        if not (np.isfinite(E) and E > 0):  # Eq. (25) takes roots of E_i
+            raise ResultsError("%s: state %s probe %s has E = %r, not a positive number"
+                               % (path, r["state"], r["probe"], r["E"]))
+        per_axis[r["probe"]] = r
+    for key in list(states):
+        if len(states[key]) != 3:
+            if complete_only:
+                del states[key]
+                continue
+            rot, s = key
+            raise ResultsError("%s: state %s (rotations %s) lacks the %s probe(s)"
+                               % (path, s, rot, ", ".join(a for a in AXES if a not in states[key])))
+    return states
+
+
+def fabric_of_row(r):
+    """The fabric dict of a CSV row: B (symmetric) and the M components of Appendix A (the only
+    ones Eqs. A1-A9 use; the rest stay 0)."""
+    B = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(i, 3):
+            B[i, j] = B[j, i] = float(r["B_" + AXES[i] + AXES[j]])
+    M = np.zeros((3, 3, 3, 3))
+    for idx in fabric.M_COLUMNS:
+        M[idx] = float(r["M_" + "".join(AXES[k] for k in idx)])
+    return dict(B=B, M=M, NcV_eq36=float(r["NcV_eq36"]), NcV_count=float(r["NcV_count"]))
+
+
+def check_rebuild(path, state, f, r, shear_modulus, poisson):
+    """The rebuilt prediction must reproduce the row's mic_E_* (same zeta and Nc/V): this pins the
+    material and the reconstruction of B and M from the columns."""
+    p = fabric.prediction_from(f, shear_modulus, poisson, float(r["mic_zeta"]), r["mic_density"])
+    mic = np.array([float(r["mic_E_" + a]) for a in AXES])
+    if not np.allclose(p["E"], mic, rtol=1e-9, atol=0):
+        raise ResultsError("%s state %s: B, M and the material (shear modulus %g, Poisson's ratio %g) give E = %s, "
+                           "the row's mic_E = %s" % (path, state, shear_modulus, poisson, p["E"], mic))
+
+
+def sources(path, shear_modulus, poisson, complete_only=False):
+    """One source per rotations value of the table: states, E (n, 3), parts per Nc/V, stresses."""
+    out = collections.OrderedDict()
+    for (rot, state), per_axis in read_probe_table(path, complete_only).items():
+        r = per_axis["z"]
+        f = fabric_of_row(r)
+        check_rebuild(path, state, f, r, shear_modulus, poisson)
+        src = out.setdefault(rot, dict(label="dynamic probes, %s" % path.split("/")[-1], rotations=rot,
+                                       N=int(r["Np"]), states=[], E=[], sigma=[], parts={d: [] for d in DENSITIES}))
+        src["states"].append(state)
+        src["E"].append([float(per_axis[a]["E"]) for a in AXES])
+        src["sigma"].append([float(r["sigma_" + a]) for a in AXES])
+        for d in DENSITIES:
+            src["parts"][d].append(zeta.parts_from_fabric(f, shear_modulus, poisson, d))
+    return list(out.values())
+
+
+def parts_of(src, density="eq36"):
+    return tuple(np.array([p[k] for p in src["parts"][density]]) for k in (0, 1))
+
+
+def fit(path, shear_modulus, poisson, min_states=2):
+    """zeta_h, zeta_v over the complete states of a single-rotations table (fit_contrast's dict
+    without its arrays, plus the states used), or None with fewer than `min_states` states."""
+    found = sources(path, shear_modulus, poisson, complete_only=True)
+    if len(found) > 1:
+        raise ResultsError("%s mixes rotations %s; fit them one at a time" % (path, [s["rotations"] for s in found]))
+    if not found or len(found[0]["states"]) < min_states:
+        return None
+    src = found[0]
+    result = zeta.fit_contrast(np.array(src["E"], dtype=float), *parts_of(src), min_states=min_states)
+    out = {k: v for k, v in result.items() if not isinstance(v, np.ndarray)}
+    out["states"] = list(src["states"])
+    return out

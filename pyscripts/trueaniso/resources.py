@@ -1,0 +1,98 @@
+"""What this machine can run: cores, memory, and the cost of a specimen of N spheres.
+
+The per-sphere costs are measured (docs/runs.md, "Costs"), not derived; they are upper bounds
+with a margin so that a refusal is never wrong by a factor, and an estimate is printed before
+long work so a user can stop it.
+"""
+import os
+
+from .refusal import InputError
+
+THREADS_PER_CORE = 4  # more threads than this only slow the contact loops (measured: docs/runs.md)
+
+# Measured on 1,000-16,000 spheres (peak RSS of the preparation above the interpreter's, with the
+# contact list of the dense state): 1.7 kB per sphere; 2.5 kB leaves a margin.
+PREPARATION_BYTES_PER_SPHERE = 2500
+INTERPRETER_BYTES = 300e6  # python3 or yade-double with numpy and the module loaded, with a margin
+# The exact static solve (statics.static_stiffness, run by run_study.py on its specimen):
+# 7.6 GB at 53,004 spheres (docs/statics.md) = 143 kB per sphere; 160 kB with a margin.
+STATICS_BYTES_PER_SPHERE = 160e3
+# Preparation time: random placement ~3.5 ms per sphere (pure Python), then ~2e5 steps of
+# ~0.75 us per sphere on one thread (docs/specimens.md: 53,004 spheres in 58.5 min).
+PLACEMENT_SECONDS_PER_SPHERE = 3.5e-3
+STEP_SECONDS_PER_SPHERE = 0.75e-6
+PREPARATION_STEPS = 2.2e5
+MEMORY_SHARE = 0.8  # what a run may plan to use of the machine's memory (the rest: OS, other users)
+
+
+def cores():
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def max_threads():
+    return THREADS_PER_CORE * cores()
+
+
+def check_threads(threads, option="--threads"):
+    """0 (all cores) or 1..4 x cores; beyond, OpenMP only slows down and at ~1e5 threads crashes."""
+    if threads < 0 or threads > max_threads():
+        raise InputError("%s %d: give 0 (all %d cores) or at most %d (%d x the cores; more threads only slow "
+                         "the contact loops down)" % (option, threads, cores(), max_threads(), THREADS_PER_CORE))
+    return threads
+
+
+def memory_limit():
+    """(bytes, where the limit comes from): the cgroup's memory.max when set, else MemTotal."""
+    limits = []
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemTotal:"):
+                    limits.append((int(line.split()[1]) * 1024, "MemTotal in /proc/meminfo"))
+    except OSError:  # pragma: no cover - not Linux
+        pass
+    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            with open(path) as f:
+                text = f.read().strip()
+        except OSError:
+            continue
+        if text.isdigit() and int(text) < 2 ** 60:
+            limits.append((int(text), "the cgroup limit in %s" % path))
+    return min(limits) if limits else (float("inf"), "unknown")
+
+
+def human_bytes(b):
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6)):
+        if b >= size:
+            return "%.1f %s" % (b / size, unit)
+    return "%.0f kB" % (b / 1e3)
+
+
+def human_seconds(s):
+    if s >= 2 * 86400:
+        return "%.0f days" % (s / 86400)
+    if s >= 2 * 3600:
+        return "%.0f h" % (s / 3600)
+    if s >= 120:
+        return "%.0f min" % (s / 60)
+    return "%.0f s" % s
+
+
+def preparation_estimate(n, threads):
+    """(bytes, seconds) to prepare n spheres."""
+    memory = INTERPRETER_BYTES + PREPARATION_BYTES_PER_SPHERE * n
+    seconds = n * (PLACEMENT_SECONDS_PER_SPHERE + PREPARATION_STEPS * STEP_SECONDS_PER_SPHERE / max(1, threads))
+    return memory, seconds
+
+
+def check_memory(need, what):
+    """Refuse work whose estimated memory exceeds MEMORY_SHARE of the machine's limit."""
+    limit, source = memory_limit()
+    if need > MEMORY_SHARE * limit:
+        raise InputError("%s needs about %s of memory; this machine allows %s (%s), of which a run may plan "
+                         "%.0f %%" % (what, human_bytes(need), human_bytes(limit), source, 100 * MEMORY_SHARE))
+    return need

@@ -1,0 +1,184 @@
+"""A results directory is one study.
+
+``metadata.json`` holds the study's fingerprint: what every row and checkpoint in the directory
+depends on (the specimen's checksum, the code version, the engine thread count, the effective
+state and probe settings, and for run_study.py the specimen recipe) and the definitions of the
+states (id -> b, sigma_z). A run into an existing directory compares them with its own before any
+work; on a difference it refuses in one line that names the difference and the way out. Adding
+states or probe axes to a study is its normal way to grow and is allowed; redefining a state is not.
+
+All of this runs under the directory's lock (trueaniso/lock.py). Under the lock, the temporary
+files (``.tmp-*``) that a killed run left behind are removed: no live writer can own them.
+docs/runs.md states the contract.
+"""
+import json
+import os
+import shutil
+import time
+
+from . import atomic, lock
+from .refusal import Refusal
+
+METADATA = "metadata.json"
+SUPERSEDED = "superseded"
+LAYOUT = 2  # of metadata.json; 1 (before fingerprints) cannot prove what its rows were made with
+WAY_OUT = "use a new --out, or --force-new to move the old study aside into %s/"
+
+
+LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code": "the code version (code: a hash of engines/ and pyscripts/trueaniso/)",
+          "specimen": "the specimen (specimen: its checksum)", "threads": "the engine thread count (threads)"}
+
+
+class StudyMismatch(Refusal):
+    """The directory holds another study than the run asks for."""
+
+
+def _way_out(out):
+    return WAY_OUT % os.path.join(out, SUPERSEDED)
+
+
+def clean_strays(out, log=print, subdirs=("", "states", "figures")):
+    """Remove the temporary files of dead runs (the caller holds the lock)."""
+    assert lock.is_held(out), "strays can only be cleaned under the results directory's lock"
+    gone = []
+    for sub in subdirs:
+        d = os.path.join(out, sub)
+        if not os.path.isdir(d):
+            continue
+        for name in os.listdir(d):
+            if name.startswith(".tmp-"):
+                os.unlink(os.path.join(d, name))
+                gone.append(os.path.join(sub, name))
+    if gone:
+        log("%s: removed %d temporary file(s) of an interrupted run: %s" % (out, len(gone), ", ".join(gone)))
+    return gone
+
+
+def supersede(out, log=print):
+    """--force-new: move everything of the old study into out/superseded/<time>/ (nothing is
+    deleted); the caller holds the lock."""
+    assert lock.is_held(out)
+    names = [n for n in os.listdir(out) if n not in (lock.LOCK_NAME, SUPERSEDED)]
+    if not names:
+        return None
+    target = os.path.join(out, SUPERSEDED, time.strftime("%Y%m%d-%H%M%S"))
+    k = 1
+    while os.path.exists(target):
+        k += 1
+        target = os.path.join(out, SUPERSEDED, time.strftime("%Y%m%d-%H%M%S") + "-%d" % k)
+    os.makedirs(target)
+    for n in names:
+        os.rename(os.path.join(out, n), os.path.join(target, n))
+    log("%s: the earlier study moved to %s (--force-new)" % (out, target))
+    return target
+
+
+def read_metadata(out):
+    path = os.path.join(out, METADATA)
+    if not os.path.exists(path):
+        return None
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as exc:
+        raise StudyMismatch("%s is unreadable (%s): the study in %s cannot be checked; %s"
+                            % (path, exc, out, _way_out(out))) from None
+
+
+def _normal(x):
+    """JSON's view of a value (tuples become lists, numpy scalars numbers): what metadata holds."""
+    return json.loads(json.dumps(x, default=atomic._jsonable))
+
+
+def _flat(d, prefix=""):
+    out = {}
+    for k, v in d.items():
+        name = prefix + str(k)
+        if isinstance(v, dict):
+            out.update(_flat(v, name + "."))
+        else:
+            out[name] = v
+    return out
+
+
+def _show(v):
+    return "absent" if v is _ABSENT else json.dumps(v)
+
+
+_ABSENT = object()
+
+
+def differences(old, new):
+    """[(field, value in the study, value in this run)] over the flattened fingerprints."""
+    a, b = _flat(old), _flat(new)
+    return [(k, a.get(k, _ABSENT), b.get(k, _ABSENT)) for k in sorted(set(a) | set(b))
+            if a.get(k, _ABSENT) != b.get(k, _ABSENT)]
+
+
+def states_table(states):
+    """{id as text: {b, sigma_z}} of [(id, b, sigma_z)]."""
+    return {str(i): dict(b=float(b), sigma_z=float(sz)) for i, b, sz in states}
+
+
+def require_layout(out, meta):
+    if meta.get("layout") != LAYOUT or "fingerprint" not in meta:
+        raise StudyMismatch("%s was written by an older trueaniso without a study fingerprint: its rows cannot be "
+                            "proved to match this run; %s" % (out, _way_out(out)))
+
+
+def check(out, fingerprint, states):
+    """The existing metadata when the directory holds this study (or None when it holds none);
+    raises StudyMismatch naming the first difference."""
+    meta = read_metadata(out)
+    if meta is None:
+        others = [n for n in os.listdir(out) if n in ("probes.csv", "states")]
+        if others:
+            raise StudyMismatch("%s holds results (%s) but no %s: nothing proves which study they belong to; %s"
+                                % (out, ", ".join(others), METADATA, _way_out(out)))
+        return None
+    require_layout(out, meta)
+    diff = differences(meta["fingerprint"], _normal(fingerprint))
+    if diff:
+        field, there, here = diff[0]
+        more = " (and %d more difference%s)" % (len(diff) - 1, "s" if len(diff) > 2 else "") if len(diff) > 1 else ""
+        way = _way_out(out)
+        if field == "threads" and len(diff) == 1 and isinstance(there, int):
+            # The same study on another thread count: the last bits of every sum would differ.
+            way = "continue it with --threads %d (under yade-double: -j %d), or %s" % (there, there, way)
+        raise StudyMismatch("%s holds another study: %s is %s there, %s in this run%s; %s"
+                            % (out, LABELS.get(field, field), _show(there), _show(here), more, way))
+    have = meta.get("states", {})
+    for sid, d in states_table(states).items():
+        if sid in have and have[sid] != d:
+            raise StudyMismatch("%s holds another study: state %s is b = %g, sigma_z = %g Pa there, b = %g, sigma_z = "
+                                "%g Pa in this run; %s" % (out, sid, have[sid]["b"], have[sid]["sigma_z"], d["b"],
+                                                           d["sigma_z"], _way_out(out)))
+    return meta
+
+
+def write_metadata(out, fingerprint, states, probes, record, previous=None):
+    """metadata.json with the union of the states and probe axes done or asked so far, and this
+    run appended to the list of runs (atomic; the caller holds the lock)."""
+    previous = previous or {}
+    table = dict(previous.get("states", {}))
+    table.update(states_table(states))
+    axes = previous.get("probes", "")
+    axes += "".join(a for a in probes if a not in axes)
+    runs = list(previous.get("runs", [])) + [_normal(record)]
+    meta = dict(layout=LAYOUT, about="a trueaniso study: every row and checkpoint here was made with this "
+                                     "fingerprint (docs/runs.md)",
+                fingerprint=_normal(fingerprint), states=table, probes=axes, runs=runs)
+    for k in ("specimen", "versions", "parameters"):
+        if k in record:
+            meta[k] = _normal(record[k])
+    atomic.write_json(os.path.join(out, METADATA), meta)
+    return meta
+
+
+def remove(paths, log=print):
+    """Remove derived files (a summary that a new run will write again)."""
+    for p in paths:
+        if os.path.isdir(p):
+            shutil.rmtree(p)
+        elif os.path.exists(p):
+            os.unlink(p)

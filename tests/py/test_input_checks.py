@@ -1,0 +1,170 @@
+"""Validation before any work (issue 10) and the scripts' --help (issue 11 item 5): every bad
+input is one line 'error: ...' with exit status 2, before a preparation or a state starts, and
+nothing is written. Each case names what the code before did with it."""
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from conftest import REPO, SCRIPTS, one_line_error, run_script
+
+from trueaniso import cli, dem, fabric, specimen
+
+TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (trueaniso/resources.py)
+
+
+@pytest.mark.parametrize("args,words", [
+    (["--pressure", "nan"], ["--pressure", "finite"]),  # before: failed after the preparation started
+    (["--mu", "nan"], ["--mu", "finite"]),  # before: failed after the whole expansion
+    (["--d50", "inf"], ["--d50", "finite"]),
+    (["--seed=-1"], ["--seed", ">= 0"]),  # before: failed after the preparation started
+    (["--threads", "100000"], ["--threads", "at most"]),  # before: segfault
+    (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
+    (["--n", "1000000000"], ["memory", "this machine allows", "MemTotal"]),  # before: ran away past 7.8 GB
+])
+def test_prepare_specimen_refuses_before_work(tmp_path, args, words):
+    out = tmp_path / "s.npz"
+    proc = run_script("prepare_specimen.py", "--out", out, *args, timeout=120)
+    one_line_error(proc, *words)
+    assert proc.stdout == "" and list(tmp_path.iterdir()) == []
+
+
+def test_prepare_specimen_checks_its_output_before_preparing(tmp_path):
+    """Before: an unwritable --out was found only when the finished specimen was saved."""
+    one_line_error(run_script("prepare_specimen.py", "--out", "/sys/trueaniso/s.npz"), "cannot create files in /sys")
+    (tmp_path / "d.npz").mkdir()
+    one_line_error(run_script("prepare_specimen.py", "--out", tmp_path / "d.npz"), "is a directory")
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    one_line_error(run_script("prepare_specimen.py", "--out", blocker / "s.npz"), "is a file, not a directory")
+
+
+@pytest.fixture
+def blocker(tmp_path):
+    path = tmp_path / "a-file"
+    path.write_text("not a directory")
+    return path
+
+
+@pytest.mark.parametrize("args,words", [
+    (["--ids", ""], ["--ids names no state"]),  # before: ran all 39 states
+    (["--ids", " , "], ["--ids names no state"]),
+    (["--ids", "1", "--gamma", "1"], ["--gamma 1 is outside"]),  # before: 2,000,000 steps, then exit 1
+    (["--ids", "1", "--gamma", "1e-12"], ["--gamma 1e-12 is outside"]),
+    (["--ids", "1", "--gamma", "nan"], ["--gamma", "finite"]),
+    (["--ids", "1", "--damping", "nan"], ["--damping", "finite"]),
+    (["--ids", "1", "--mu", "nan"], ["--mu", "finite"]),
+    (["--ids", "1", "--mu", "0"], ["--mu must be > 0"]),
+    (["--ids", "1", "--threads", "100000"], ["--threads", "at most"]),
+    (["--states", "0:125e3,0:125e3"], ["given twice"]),
+    (["--ids", "1", "--assembly", "clump1"], ["is a sphere specimen, not clump1"]),  # the file says what it is
+    (["--ids", "1", "--assembly", "clump3"], ["--assembly", "invalid choice"]),
+])
+def test_run_states_refuses_before_work(specimen_100, tmp_path, args, words):
+    out = tmp_path / "out"
+    proc = run_script("run_states.py", "--specimen", specimen_100, "--out", out, *args, timeout=120)
+    one_line_error(proc, *words)
+    assert not out.exists()
+
+
+def test_run_states_out_must_be_a_writable_directory(specimen_100, blocker):
+    """Before: a traceback."""
+    for out, words in ((blocker, ["is a file"]), (blocker / "sub", ["is a file, not a directory"]),
+                       ("/sys/trueaniso-out", ["cannot create files in /sys"])):
+        one_line_error(run_script("run_states.py", "--specimen", specimen_100, "--ids", "1", "--out", out), *words)
+
+
+@pytest.mark.parametrize("args,words", [
+    (["--seed=-1"], ["--seed", ">= 0"]),
+    (["--n", "1000000000"], ["memory", "this machine allows"]),
+    (["--ids", ""], ["--ids names no state"]),
+    (["--threads", "1000"], ["--threads", "at most"]),
+    (["--out", "/sys/trueaniso-study"], ["cannot create files in /sys"]),
+])
+def test_run_study_refuses_before_work(tmp_path, args, words):
+    argv = args if "--out" in args else args + ["--out", str(tmp_path / "w")]
+    proc = run_script("run_study.py", *argv, timeout=120)
+    one_line_error(proc, *words)
+    assert proc.stdout == "" and list(tmp_path.iterdir()) == []
+
+
+def test_table_value_false_keeps_a_flag_off(specimen_100, tmp_path):
+    """Before: a table value False (any non-empty string) switched a flag on: here --force would
+    have prepared the specimen again instead of keeping it."""
+    spec = tmp_path / "s.npz"
+    shutil.copy(specimen_100, spec)
+    table = tmp_path / "t.table"
+    table.write_text("out force quiet\n'%s' False 0\n= 'no' =\n= 0 'yes'\n" % spec)
+    for line in (2, 3, 4):
+        proc = run_script("prepare_specimen.py", "--table", table, "--line", line, "--n", "100", "--seed", "3")
+        assert proc.returncode == 0 and "kept existing specimen" in proc.stdout, proc.stderr
+    bad = tmp_path / "bad.table"
+    bad.write_text("out force\n'%s' 'maybe'\n" % spec)
+    one_line_error(run_script("prepare_specimen.py", "--table", bad, "--line", 2), "not on or off")
+    unquoted = tmp_path / "unquoted.table"
+    unquoted.write_text("out\n%s\n" % spec)
+    one_line_error(run_script("prepare_specimen.py", "--table", unquoted, "--line", 2), "quote strings")
+
+
+def test_required_options_can_come_from_a_table(specimen_100, tmp_path):
+    """Before: --specimen and --out were required on the command line even with a table."""
+    table = tmp_path / "t.table"
+    table.write_text("specimen out ids gamma\n'%s' '%s' 1 1e-12\n" % (specimen_100, tmp_path / "o"))
+    one_line_error(run_script("run_states.py", "--table", table, "--line", 2), "--gamma 1e-12 is outside")
+
+
+def test_figures_on_missing_or_truncated_tables(tmp_path):
+    """Before: tracebacks."""
+    def figures(path):
+        return subprocess.run([sys.executable, "-m", "analysis.figures", str(path), "--out", str(tmp_path / "f")],
+                              capture_output=True, text=True, cwd=REPO, timeout=120)
+    one_line_error(figures(tmp_path / "none.csv"), "does not exist")
+    header = "state,probe,E,sigma_x,sigma_y,sigma_z,Zm,b,q,nu_1,nu_2,nu_1_name,nu_2_name\n"
+    row = "1,z,3e8,1e5,1e5,1e5,5.9,0,0,0.1,0.1,nu_zx,nu_zy\n"
+    (tmp_path / "cut.csv").write_text(header + row[:20])
+    one_line_error(figures(tmp_path / "cut.csv"), "no complete rows")
+    (tmp_path / "bad.csv").write_text(header + "1,z,3e8\n" + row)
+    one_line_error(figures(tmp_path / "bad.csv"), "line 2 has 3 fields")
+    (tmp_path / "word.csv").write_text(header + row.replace("3e8", "fast"))
+    one_line_error(figures(tmp_path / "word.csv"), "E = 'fast'")
+    (tmp_path / "partial.csv").write_text(header + row + row.replace("z,", "x,", 1)[:25])
+    proc = figures(tmp_path / "partial.csv")
+    assert proc.returncode == 0 and "cut short" in proc.stderr and (tmp_path / "f" / "E_vs_sigma.png").exists()
+
+
+def test_fabric_of_a_scene_without_contacts_is_refused():
+    """Before: Zm = NaN, quietly."""
+    s = specimen.new_scene(np.array([[1e-3, 1e-3, 1e-3], [3e-3, 3e-3, 3e-3]]), np.full(2, 1e-4), np.full(3, 5e-3))
+    dem.refresh(s)
+    for measure in (fabric.fabric, fabric.fabric_row, fabric.prediction):
+        with pytest.raises(ValueError, match="no contact"):  # fabric.NoContacts
+            measure(s)
+
+
+SCRIPT_NAMES = (sorted(n for n in os.listdir(SCRIPTS) if n.endswith(".py"))
+                + sorted("bench/" + n for n in os.listdir(os.path.join(SCRIPTS, "bench")) if n.endswith(".py")))
+
+
+@pytest.mark.parametrize("name", SCRIPT_NAMES)
+def test_help_shows_defaults_and_a_whole_description(name):
+    proc = run_script(name, "--help", timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    text = " ".join(proc.stdout.split())
+    assert "--table" in text and "--line" in text
+    doc = open(os.path.join(SCRIPTS, name)).read().split('"""')[1]
+    first = " ".join(doc.strip().split("\n\n")[0].split())
+    assert first in text  # before: bench/bench_statics.py's description stopped at "rotations free and"
+    if name in ("run_states.py", "prepare_specimen.py", "run_study.py"):
+        assert "(default: 0.5)" in text and "--mu" in text  # the loading friction, with its default
+        assert "--threads THREADS OpenMP threads" in text
+    if name in ("prepare_specimen.py", "run_study.py"):
+        assert "--seed SEED seed of the random packing (>= 0) (default: 1)" in text  # before: no help, no default
+
+
+def test_every_option_must_have_help():
+    """The parser refuses an option without help text, so no script can ship one."""
+    p = cli.Parser(description="x")
+    with pytest.raises(TypeError, match="no help text"):
+        p.add_argument("--silent")

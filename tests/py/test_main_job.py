@@ -1,0 +1,152 @@
+"""./main.sh on a small study (issues 10 and 11): run twice in a row, then again with a state
+added, then killed and resumed; a rerun asking for another specimen refuses; the contrast zeta in
+the summary is checked against an independent route; progress lines reach the job's log.
+
+One engine thread (--threads 1): these tests check the orchestration, not parallel speed."""
+import csv
+import json
+import os
+import shutil
+import signal
+import subprocess
+
+import numpy as np
+import pytest
+from conftest import REPO, SCRIPTS, one_line_error
+
+from trueaniso import specimen_file, zeta
+
+ARGS = ("--n", "100", "--seed", "2", "--threads", "1", "--progress-every", "0")
+
+
+def main_job(out, *args, timeout=900):
+    return subprocess.run([os.path.join(REPO, "main.sh"), *ARGS, "--out", str(out), *args], capture_output=True,
+                          text=True, timeout=timeout, cwd=REPO)
+
+
+def rows(out):
+    with open(out / "probes.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.fixture(scope="module")
+def first(tmp_path_factory):
+    out = tmp_path_factory.mktemp("main") / "W"
+    proc = main_job(out, "--ids", "1,5")
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return out, proc
+
+
+def test_first_run_writes_everything_and_reports_progress(first):
+    out, proc = first
+    for name in ("specimen.npz", "probes.csv", "metadata.json", "summary.json", "statics_isotropic.json",
+                 "figures/E_vs_sigma.png"):  # K and G against Zm need three states
+        assert (out / name).exists(), name
+    # Progress lines of the preparation, of a state and of a probe, in the job's own output.
+    for label in ("specimen: step", "state 5: step", "state 5 probe z: step"):
+        assert label in proc.stdout, label
+    line = next(x for x in proc.stdout.splitlines() if x.startswith("state 5: step"))
+    assert "stress error" in line and "unbalanced" in line
+
+
+def test_rerun_in_a_row_does_nothing_new(first, tmp_path):
+    out = tmp_path / "W"
+    shutil.copytree(first[0], out)
+    before = (out / "probes.csv").read_bytes()
+    proc = main_job(out, "--ids", "1,5")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "probe z  E" not in proc.stdout and "specimen: kept" in proc.stdout
+    assert (out / "probes.csv").read_bytes() == before
+
+
+def test_adding_states_continues_the_study(first, tmp_path):
+    """Before: TypeError: '<' not supported between 'int' and 'str' in contrast_zeta."""
+    out = tmp_path / "W"
+    shutil.copytree(first[0], out)
+    before = (out / "probes.csv").read_bytes()
+    proc = main_job(out, "--ids", "1,5,9")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert (out / "probes.csv").read_bytes().startswith(before)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["states"] == 3 and summary["probes"] == 9 and (out / "figures" / "K_G_vs_Zm.png").exists()
+    check_contrast_against_checkpoints(out, summary["zeta_contrast"])
+
+
+def check_contrast_against_checkpoints(out, got):
+    """The summary's zeta (fitted from the probe table's columns: analysis/zeta_contrast.py) must
+    equal a fit whose stiffness parts come from the held-state checkpoints themselves (B and M of
+    the scene, all 81 M components) and whose E_i come from the rows: the two routes share only
+    fit_contrast. 1e-6: the fit converges to 1e-15; the columns hold every digit (repr)."""
+    E, A_n, A_s = [], [], []
+    by_state = {}
+    for r in rows(out):
+        by_state.setdefault(r["state"], {})[r["probe"]] = float(r["E"])
+    for sid in got["states"]:
+        scene, _ = specimen_file.load(str(out / "states" / ("%s.npz" % sid)))
+        a_n, a_s = zeta.parts_from_scene(scene)
+        E.append([by_state[sid][a] for a in "xyz"])
+        A_n.append(a_n)
+        A_s.append(a_s)
+    assert sorted(got["states"]) == sorted(by_state) and got["n_states"] == len(by_state)
+    ref = zeta.fit_contrast(np.array(E), np.array(A_n), np.array(A_s))
+    for k in ("zeta_h", "zeta_v", "zeta"):
+        assert abs(got[k] - ref[k]) < 1e-6, (k, got[k], ref[k])
+    for k in ("rms", "rms_at_1", "rms_at_paper"):
+        assert abs(got[k] - ref[k]) < 1e-9, (k, got[k], ref[k])
+
+
+def test_other_specimen_recipe_is_refused_before_preparing(first, tmp_path):
+    """Before: --n 300 --seed 9 into the same --out silently kept the 100-sphere specimen."""
+    out = tmp_path / "W"
+    shutil.copytree(first[0], out)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"}
+    proc = subprocess.run([os.path.join(REPO, "main.sh"), "--n", "300", "--seed", "9", "--out", str(out)],
+                          capture_output=True, text=True, timeout=300, cwd=REPO)
+    one_line_error(proc, "another study", "--n 100 --seed 2", "--n 300 --seed 9", "--force-new", yade=True)
+    assert "preparing" not in proc.stdout
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"} == before
+    # Same specimen, other loading friction: refused before the summary or anything else is touched.
+    proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
+                           "--ids", "1,5,9", "--mu", "0.3"], capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    one_line_error(proc, "another study", "state.friction")
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"} == before
+    # Same --n and --seed, another assembly: the assembly is part of the study's recipe.
+    proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
+                           "--ids", "1,5", "--assembly", "clump2"], capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    one_line_error(proc, "another study", "--assembly sphere --n 100", "--assembly clump2 --n 100")
+    assert "preparing" not in proc.stdout
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"} == before
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["fingerprint"]["assembly"] == "sphere" and meta["fingerprint"]["recipe"]["assembly"] == "sphere"
+
+
+def test_kill_9_leaves_no_stale_summary_and_the_rerun_completes(first, tmp_path):
+    """Before: a kill -9 among the states left the summary of the earlier run beside new rows."""
+    out = tmp_path / "W"
+    shutil.copytree(first[0], out)
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    p = subprocess.Popen(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
+                          "--ids", "1,5,9,13"], env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    for line in p.stdout:  # kill as soon as the new work starts
+        if line.startswith("state 9: b ="):
+            break
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    assert not (out / "summary.json").exists()
+    proc = main_job(out, "--ids", "1,5,9,13")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["states"] == 4 and summary["probes"] == 12 == len(rows(out))
+
+
+def test_two_studies_cannot_share_a_directory(tmp_path):
+    """Before: two run_study.py runs on one --out mixed the specimens of two seeds."""
+    from trueaniso import lock
+    out = tmp_path / "W"
+    with lock.held(str(out)):
+        proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), "--n", "100", "--seed", "9",
+                               "--out", str(out)], capture_output=True, text=True, timeout=300)
+    one_line_error(proc, "in use by another run", "--wait")
+    assert sorted(p.name for p in out.iterdir()) == [".lock"]

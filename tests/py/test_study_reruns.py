@@ -1,0 +1,218 @@
+"""A results directory is one study (issue 10): reruns prove they continue it or refuse in one
+line; a resumed run gives exactly the rows of an uninterrupted one; a torn row is redone; two runs
+on one directory lose no row (a lock: refusal, or an orderly wait).
+
+Every study here runs on the 100-sphere specimen with few states and probes; each test says
+which behaviour of the code before this issue it catches."""
+import csv
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from conftest import SCRIPTS, one_line_error, run_script
+
+from trueaniso import specimen_file
+
+WALL = {"probe_wall_time", "state_wall_time"}  # study.WALL_TIME_COLUMNS: the only columns a rerun may change
+
+
+def states(spec, out, *args, **kw):
+    return run_script("run_states.py", "--specimen", spec, "--out", out, *args, **kw)
+
+
+def rows(out):
+    with open(os.path.join(out, "probes.csv"), newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def values(out):
+    """Every cell but the wall times, in file order: what a rerun must reproduce exactly."""
+    return [{k: v for k, v in r.items() if k not in WALL} for r in rows(out)]
+
+
+@pytest.fixture(scope="module")
+def base(specimen_100, tmp_path_factory):
+    """States 1, 2 and 3 (3 is reached from 2), probes z and x, uninterrupted."""
+    out = tmp_path_factory.mktemp("base") / "study"
+    proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
+def copy(base, tmp_path):
+    dst = tmp_path / "study"
+    shutil.copytree(base, dst)
+    return dst
+
+
+def test_resume_from_checkpoints_is_bit_identical(base, specimen_100, tmp_path):
+    """Before: probes after a resume came from a reloaded checkpoint while the uninterrupted run
+    probed the scene in memory; rows differed by up to 1.9e-4 and recorded state_steps = 0."""
+    out = copy(base, tmp_path)
+    text = (out / "probes.csv").read_text().splitlines(True)
+    (out / "probes.csv").write_text("".join(text[:4]))  # header, state 1 z and x, state 2 z
+    (out / "states" / "3.npz").unlink()
+    proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.count("probe x  E") == 2 and "state 3: b =" in proc.stdout  # state 2 x, state 3 z and x redone
+    assert values(out) == values(base)  # every digit of every non-time column
+    assert all(int(r["state_steps"]) > 0 for r in rows(out))
+    assert {r["state"]: r["state_from"] for r in rows(out)} == {"1": "specimen", "2": "specimen", "3": "2"}
+
+
+def test_kill_9_then_rerun_gives_the_uninterrupted_rows(base, specimen_100, tmp_path):
+    """A real kill -9 at whatever moment the first row appears; the rerun repairs and completes."""
+    out = tmp_path / "study"
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    p = subprocess.Popen([sys.executable, os.path.join(SCRIPTS, "run_states.py"), "--specimen", str(specimen_100),
+                          "--out", str(out), "--ids", "1,2,3", "--probes", "zx"], env=env,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 300
+    while p.poll() is None and time.time() < deadline:
+        if (out / "probes.csv").exists() and (out / "probes.csv").stat().st_size > 0:
+            break
+        time.sleep(0.05)
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
+    assert proc.returncode == 0, proc.stderr
+    assert values(out) == values(base)
+
+
+def test_torn_row_is_redone_not_counted(base, specimen_100, tmp_path):
+    """Before: a row cut mid-line (kill -9 during a write, a full disk) counted as done forever."""
+    out = copy(base, tmp_path)
+    text = (out / "probes.csv").read_text()
+    lines = text.splitlines(True)
+    (out / "probes.csv").write_text("".join(lines[:-1]) + lines[-1][:60])  # state 3 x cut after 60 characters
+    proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
+    assert proc.returncode == 0, proc.stderr
+    assert "cut short" in proc.stdout and proc.stdout.count("probe x  E") == 1
+    assert (out / "probes.csv").read_text().endswith("\n")
+    assert values(out) == values(base)
+
+
+def test_stray_temporaries_of_dead_runs_are_removed(base, specimen_100, tmp_path):
+    """Before: .tmp-* files of killed runs stayed forever."""
+    out = copy(base, tmp_path)
+    for p in (out / ".tmp-abc-probes.csv", out / "states" / ".tmp-def-2.npz"):
+        p.write_text("half")
+    proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
+    assert proc.returncode == 0, proc.stderr
+    assert not list(out.rglob(".tmp-*"))
+
+
+def test_rerun_of_a_finished_study_does_nothing(base, specimen_100, tmp_path):
+    out = copy(base, tmp_path)
+    before = (out / "probes.csv").read_bytes()
+    proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
+    assert proc.returncode == 0, proc.stderr
+    assert "probe" not in proc.stdout and (out / "probes.csv").read_bytes() == before
+
+
+@pytest.mark.parametrize("args,field", [
+    (["--gamma", "2e-6"], "probe.gamma"),
+    (["--rotations", "restrained"], "probe.rotations"),
+    (["--mu", "0.3"], "state.friction"),
+    (["--damping", "0.3"], "damping"),
+    (["--skip-detection"], "probe.detection"),
+])
+def test_other_settings_are_refused_in_one_line(base, specimen_100, tmp_path, args, field):
+    """Before: rows made with other settings were appended, and metadata listed only the last."""
+    out = copy(base, tmp_path)
+    before = (out / "probes.csv").read_bytes(), (out / "metadata.json").read_bytes()
+    proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", *args)
+    one_line_error(proc, "another study", field, "--force-new", "new --out")
+    assert ((out / "probes.csv").read_bytes(), (out / "metadata.json").read_bytes()) == before
+    assert not (out / "states" / "4.npz").exists()
+
+
+def test_other_specimen_is_refused(base, specimen_100, tmp_path):
+    """Before: --specimen other.npz --ids 2,3 computed state 3 from the old specimen's checkpoint."""
+    scene, meta = specimen_file.load(str(specimen_100))
+    other = tmp_path / "other.npz"
+    specimen_file.save(str(other), scene, seed=99, parameters=meta["parameters"])  # same grains, another file
+    out = copy(base, tmp_path)
+    proc = states(other, out, "--ids", "2,3,4", "--probes", "zx")
+    one_line_error(proc, "another study", "specimen", "--force-new")
+
+
+def test_code_version_and_old_layout_are_refused(base, specimen_100, tmp_path):
+    out = copy(base, tmp_path)
+    meta = json.loads((out / "metadata.json").read_text())
+    meta["fingerprint"]["code"] = "src-0000000000000000"
+    (out / "metadata.json").write_text(json.dumps(meta))
+    one_line_error(states(specimen_100, out, "--ids", "1", "--probes", "zx"), "code", "src-0000000000000000")
+    del meta["layout"]
+    (out / "metadata.json").write_text(json.dumps(meta))
+    one_line_error(states(specimen_100, out, "--ids", "1", "--probes", "zx"), "older trueaniso", "--force-new")
+
+
+def test_force_new_moves_the_old_study_aside(base, specimen_100, tmp_path):
+    out = copy(base, tmp_path)
+    old = (out / "probes.csv").read_bytes()
+    proc = states(specimen_100, out, "--ids", "1", "--probes", "z", "--gamma", "2e-6", "--force-new")
+    assert proc.returncode == 0, proc.stderr
+    (kept,) = (out / "superseded").iterdir()
+    assert (kept / "probes.csv").read_bytes() == old and (kept / "states" / "3.npz").exists()
+    assert [(r["state"], r["probe"], float(r["gamma"]) >= 2e-6) for r in rows(out)] == [("1", "z", True)]
+
+
+def test_states_ids_come_from_the_definition(specimen_100, tmp_path):
+    """Before: --states ids were list positions, so --states 0:125e3 then --states 0.5:85e3 made
+    both 's1': the second run computed nothing and metadata said s1 was 0.5:85 kPa."""
+    out = tmp_path / "study"
+    assert states(specimen_100, out, "--states", "0:125e3", "--probes", "z").returncode == 0
+    proc = states(specimen_100, out, "--states", "0.5:85e3,0.5:140e3", "--probes", "z")
+    assert proc.returncode == 0, proc.stderr
+    assert [r["state"] for r in rows(out)] == ["b0_sz125000", "b0.5_sz85000", "21"]  # 0.5:140e3 is Table C1's 21
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["states"]["b0_sz125000"] == dict(b=0.0, sigma_z=125e3)
+    assert meta["states"]["b0.5_sz85000"] == dict(b=0.5, sigma_z=85e3)
+
+
+def test_second_run_refuses_while_the_directory_is_locked(base, specimen_100, tmp_path):
+    """Before: two runs on one --out both exited 0 and the CSV lost rows (15 of 27)."""
+    from trueaniso import lock
+    out = copy(base, tmp_path)
+    before = (out / "probes.csv").read_bytes()
+    with lock.held(str(out)):
+        proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx")
+    one_line_error(proc, "in use by another run", "pid %d" % os.getpid(), "--wait")
+    assert (out / "probes.csv").read_bytes() == before
+
+
+def test_wait_queues_behind_the_holder(base, specimen_100, tmp_path):
+    from trueaniso import lock
+    out = copy(base, tmp_path)
+    before = (out / "probes.csv").read_bytes()
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    with lock.held(str(out)):
+        p = subprocess.Popen([sys.executable, os.path.join(SCRIPTS, "run_states.py"), "--specimen", str(specimen_100),
+                              "--out", str(out), "--ids", "1,2,3,6", "--probes", "zx", "--wait"], env=env,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        first = p.stdout.readline()  # the waiting run says so, then blocks
+        assert first.startswith("waiting for the run that holds"), first
+        assert p.poll() is None and (out / "probes.csv").read_bytes() == before
+    stdout, stderr = p.communicate(timeout=300)
+    assert p.returncode == 0, stderr
+    assert len(rows(out)) == 8 and (out / "probes.csv").read_bytes().startswith(before)
+
+
+def test_two_concurrent_runs_lose_no_row(specimen_100, tmp_path):
+    out = tmp_path / "study"
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    procs = [subprocess.Popen([sys.executable, os.path.join(SCRIPTS, "run_states.py"), "--specimen",
+                               str(specimen_100), "--out", str(out), "--ids", ids, "--probes", "zx", "--wait"],
+                              env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for ids in ("1,2", "6,7")]
+    for p in procs:
+        _, err = p.communicate(timeout=600)
+        assert p.returncode == 0, err
+    assert sorted((r["state"], r["probe"]) for r in rows(out)) == sorted(
+        (s, a) for s in ("1", "2", "6", "7") for a in "zx")
