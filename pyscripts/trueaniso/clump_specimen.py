@@ -223,6 +223,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
     steps_gas = 0
     while grow.pressure < 0.01 * pressure and steps_gas < max_steps:
         steps_gas += chain.run(500)
+        if progress:  # long specimens spend minutes here: say so
+            progress("expansion (gas)", chain.scene, grow, steps_gas)
     grow.max_growth_rate = rate
     # Stage 1 ends when the network first carries stage1_pressure: below the target, rotations are
     # then released and the expansion goes on to the target (the network formed with the stage-1
@@ -234,6 +236,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         steps_grow = steps_gas
         while grow.pressure < p1 and steps_grow < max_steps:
             steps_grow += chain.run(500)
+            if progress:
+                progress("stage 1 (rotations %s)" % r["stage1_rotations"], chain.scene, grow, steps_grow)
         scene.block_rotations = False
         steps_grow += _run_until(chain, grow, max_steps, 2000, "expansion (free)", progress)
     else:

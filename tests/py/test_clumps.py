@@ -82,6 +82,43 @@ def test_specimen_file_round_trips_clumps(tmp_path):
     np.testing.assert_array_equal(b["shear_force"][b["normal_force"] > 0], a["shear_force"][on])
 
 
+def _spread_members(a):
+    """Clump 0's second member moved out to three radii: two balls that no longer touch."""
+    a["member_offsets"] = a["member_offsets"].copy()
+    k = int(a["member_begin"][0]) + 1
+    a["member_offsets"][k] *= 3 * a["radii"][k] / np.linalg.norm(a["member_offsets"][k])
+
+
+def _nan_offset(a):
+    a["member_offsets"] = a["member_offsets"].copy()
+    a["member_offsets"][1, 2] = np.nan
+
+
+def _negative_radius(a):
+    a["radii"] = a["radii"].copy()
+    a["radii"][1] = -a["radii"][1]
+
+
+@pytest.mark.parametrize("edit,message", [
+    (_spread_members, "clump 0: its 2 members do not overlap into one body"),
+    (_nan_offset, "non-finite values in member_offsets"),
+    (_negative_radius, "radius <= 0"),
+], ids=["members_apart", "nan", "negative_radius"])
+def test_clump_file_with_bad_members_is_refused(tmp_path, edit, message):
+    """A specimen file whose checksum is right (resealed: written by another tool) but whose clump
+    is not one rigid body, or has a NaN or a negative radius: refused on read, naming it, before a
+    scene exists."""
+    from test_specimen_file import _rewrite
+    s = _clump_gas(20, 7)
+    path, bad = str(tmp_path / "c.npz"), str(tmp_path / "bad.npz")
+    specimen_file.save(path, s, seed=7)
+    _rewrite(path, bad, edit_arrays=edit, reseal=True)
+    with pytest.raises(specimen_file.SpecimenFileError, match=message):
+        specimen_file.read(bad)
+    with pytest.raises(specimen_file.SpecimenFileError, match=message):
+        specimen_file.load(bad)
+
+
 @pytest.fixture(scope="module")
 def packing(tmp_path_factory):
     """A small clump specimen at 100 kPa in force and moment balance, made the quick way (nothing
