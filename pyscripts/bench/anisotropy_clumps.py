@@ -35,9 +35,10 @@ def measure(path, probes=True):
                long_axis=np.diag(clump_shapes.long_axis_fabric(s)).tolist(),
                prep_time=meta.get("parameters", {}).get("wall_time"), threads=meta.get("parameters", {}).get("threads"))
     hold = np.diag(engines.stress(s)).copy()
+    solved = {}
     for rot in ("restrained", "free"):
         t = time.time()
-        r = statics.static_stiffness(s, rotations=(rot == "free"))
+        r = solved[rot] = statics.static_stiffness(s, rotations=(rot == "free"))
         out["static_" + rot] = [float(x) for x in r["E"]]
         out["static_time_" + rot] = time.time() - t
         if probes:
@@ -48,16 +49,21 @@ def measure(path, probes=True):
                 print("  %s probe %s: E = %.1f MPa (%d steps, %.0f s)" % (rot, "xyz"[axis], p["E"] / 1e6, p["steps"],
                                                                      p["wall_time"]), flush=True)
             out["probe_" + rot] = E
+    # The magnitude zeta (docs/statics.md): NaN where no zeta in its range reproduces E_free.
+    z = statics.rotation_factor(s, free=solved["free"], blocked=solved["restrained"])
+    out.update(zeta_h=float(z["zeta_h"]), zeta_v=float(z["zeta_v"]), rattlers=len(solved["free"]["rattlers"]),
+               E_kinematic=[float(x) for x in z["E_kinematic"]])
     return out
 
 
 def table(rows):
-    lines = ["| assembly | source | e | R_xx, R_yy, R_zz | H_ii / tr H | rotations | E_x, E_y, E_z (MPa) | E_z/E_x | E_z/E_y |",
-             "|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| assembly | source | e | Zm | <u_z^2> | R_xx, R_yy, R_zz | H_ii / tr H | rotations | E_x, E_y, E_z (MPa) "
+             "| E_z/E_x | E_z/E_y |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         p = PAPER.get(r["assembly"])
         if p:
-            lines.append("| %s | paper (Table B1) | %.3f | %s | %s | restrained | %.1f, %.1f, %.1f | %.3f | %.3f |" % (
+            lines.append("| %s | paper (Table B1) | %.3f | | | %s | %s | restrained | %.1f, %.1f, %.1f | %.3f | %.3f |" % (
                 r["assembly"], p["e"], p["R"], p["H"], *p["E"], p["E"][2] / p["E"][0], p["E"][2] / p["E"][1]))
         for rot in ("restrained", "free"):
             for src in ("probe", "static"):
@@ -65,19 +71,20 @@ def table(rows):
                 if key not in r:
                     continue
                 E = np.array(r[key]) / 1e6
-                lines.append("| %s | ours, %d clumps, %s | %.3f | %s | %s | %s | %.1f, %.1f, %.1f | %.3f | %.3f |" % (
-                    r["assembly"], r["n"], "dynamic probe" if src == "probe" else "static solve", r["e"],
+                lines.append("| %s | ours, %d clumps, %s | %.3f | %.2f | %.2f | %s | %s | %s | %.1f, %.1f, %.1f | %.3f | %.3f |" % (
+                    r["assembly"], r["n"], "dynamic probe" if src == "probe" else "static solve", r["e"], r["Zm"],
+                    r["long_axis"][2],
                     ", ".join("%.3f" % x for x in r["R"]), ", ".join("%.3f" % x for x in r["H_over_trace"]), rot,
                     *E, E[2] / E[0], E[2] / E[1]))
     return "\n".join(lines)
 
 
 def main():
-    p = cli.Parser(description=__doc__.splitlines()[0])
-    p.add_argument("--specimen", action="append", required=True)
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimen", action="append", required=True, help="clump specimen file (repeatable)")
     p.add_argument("--no-probes", action="store_true", help="static solves only")
-    p.add_argument("--doc")
-    p.add_argument("--json")
+    p.add_argument("--doc", help="Markdown file whose anisotropy table is replaced")
+    p.add_argument("--json", help="write every measured number here")
     o = cli.parse(p)
     rows = []
     for path in o.specimen:

@@ -53,13 +53,13 @@ def worker_yade(o):
 
 
 def options():
-    p = cli.Parser(description=__doc__.splitlines()[0])
+    p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--specimen", action="append", required=True, help="clump specimen (repeatable)")
-    p.add_argument("--worker", choices=("ours", "yade"))
+    p.add_argument("--worker", choices=("ours", "yade"), help="internal: run one timed process of this code")
     p.add_argument("--dt", type=float, default=0.0, help="time step (s); 0: half the stiffness bound")
     p.add_argument("--steps", type=int, default=0, help="timed steps (0: 10000 ours, 1000 YADE)")
-    p.add_argument("--threads", default="1,2")
-    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--threads", default="1,2", help="OpenMP thread counts to time, comma separated")
+    p.add_argument("--repeats", type=int, default=3, help="interleaved repeats per thread count (median)")
     p.add_argument("--shared", action="store_true", help="note in the table that the machine was shared")
     p.add_argument("--doc", help="Markdown file whose clumps table is replaced")
     return cli.parse(p)
