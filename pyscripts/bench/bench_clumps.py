@@ -111,8 +111,10 @@ def main():
             lines.append("| %s (%s) | %d (%d) | %.3f | %s | %d | %.3f | %.4f | %.1f |" % (
                 os.path.basename(path), par.get("assembly", "?"), s.num_bodies, s.num_members,
                 engines.void_ratio(s), prep, th, ours / 1e6, yade / 1e6, ours / yade))
-    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_clumps.py %s --doc docs/benchmarks.md`"
-              % " ".join("--specimen %s" % os.path.relpath(p) for p in o.specimen)]
+    lines += ["", "Reproduce: `OMP_NUM_THREADS=1 /usr/bin/python3 pyscripts/bench/bench_clumps.py %s --threads %s "
+              "--repeats %d%s --doc docs/benchmarks.md`"
+              % (" ".join("--specimen %s" % os.path.relpath(p) for p in o.specimen), o.threads, o.repeats,
+                 " --shared" if o.shared else "")]
     table = "\n".join(lines)
     print(table)
     if o.doc:
