@@ -239,9 +239,9 @@ def test_run_states_on_a_clump_specimen(packing, tmp_path, rotations):
     """run_states.py on a clump specimen: the isotropic state and its three probes, one row each,
     with E from the dynamic probe within 5e-3 of the static solve, and the assembly in the study's
     fingerprint. The probe is one-sided (gamma 1e-6), so it carries the packing's nonlinearity:
-    measured 1e-4..9e-4 on one fixture packing and 2.4e-3 (x, rotations free) on another (the
-    clump preparation is not reproducible across processes, docs/specimens.md); the +/- mean test
-    above is the tight one."""
+    measured 1e-4..9e-4 on one fixture packing and 2.4e-3 (x, rotations free) on another (two
+    packings the fixture gave before the clump templates were made bit-reproducible across
+    processes, docs/specimens.md); the +/- mean test above is the tight one."""
     import csv
     import json
     from conftest import run_script
