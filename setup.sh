@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 PACKAGES=(g++ cmake make yade libeigen3-dev libboost-python-dev libboost-numpy-dev libgtest-dev
-          libsuitesparse-dev python3-numpy python3-scipy python3-matplotlib python3-pytest
+          libsuitesparse-dev libcgal-dev python3-numpy python3-scipy python3-matplotlib python3-pytest
           python3-mpi4py openmpi-bin)
 missing=()
 for p in "${PACKAGES[@]}"; do

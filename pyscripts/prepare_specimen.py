@@ -2,6 +2,7 @@
 
     yade-double -n -x pyscripts/prepare_specimen.py --n 4000 --seed 1 --out specimens/spheres-4000.npz
     /usr/bin/python3 pyscripts/prepare_specimen.py --n 1000 --out specimens/spheres-1000.npz
+    /usr/bin/python3 pyscripts/prepare_specimen.py --assembly clump1 --n 4000 --out specimens/clump1-4000.npz
 
 The recipe and the reasons for its parameters are in docs/specimens.md. An existing valid output
 is kept and reported (runs are resumable); use --force to prepare it again. Memory and time are
@@ -14,23 +15,34 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import cli, engines, lock, progress, psd, resources, specimen, specimen_file  # noqa: E402
+from trueaniso import clump_specimen, cli, engines, lock, progress, psd, resources, specimen, specimen_file  # noqa: E402
 
-ASSEMBLIES = ("spheres",)  # clump1 and clump2 arrive with the clump issue
+ASSEMBLIES = ("sphere", "clump1", "clump2")
+ALIASES = {"spheres": "sphere"}
+# Defaults of the options that depend on the assembly (the clumps' are their recipes').
+SPHERE_DEFAULTS = dict(d50=0.195e-3, cu=1.25, mu_prep=0.015, phi_cell=0.60)
+
+
+def assembly_defaults(assembly):
+    if assembly == "sphere":
+        return dict(SPHERE_DEFAULTS)
+    r = clump_specimen.RECIPES[assembly]
+    return dict(d50=r["d50"], cu=r["cu"], mu_prep=r["mu_prep"], phi_cell=r["phi_cell"])
 
 
 def options(argv=None):
     p = cli.Parser(description=cli.description(__doc__))
-    p.add_argument("--assembly", default="spheres", help="particle type: %s" % ", ".join(ASSEMBLIES))
+    p.add_argument("--assembly", default="sphere", help="particle type: %s (docs/specimens.md)" % ", ".join(ASSEMBLIES))
     p.add_argument("--n", type=cli.count, default=1000, help="number of particles")
     p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
     p.add_argument("--pressure", type=cli.finite, default=100e3, help="isotropic stress (Pa)")
-    p.add_argument("--d50", type=cli.finite, default=0.195e-3, help="median diameter by mass (m)")
-    p.add_argument("--cu", type=cli.finite, default=1.25, help="uniformity coefficient D60/D10")
-    p.add_argument("--mu-prep", type=cli.finite, default=0.015, help="friction while radii grow")
+    p.add_argument("--d50", type=cli.finite, help="median diameter by mass (m; clumps: of the equal-volume sphere); "
+                   "default 0.195e-3, clump2 0.216e-3")
+    p.add_argument("--cu", type=cli.finite, help="uniformity coefficient D60/D10; default 1.25, clump2 1.43")
+    p.add_argument("--mu-prep", type=cli.finite, help="friction while radii grow; default per assembly")
     p.add_argument("--mu", type=cli.finite, default=0.5, help="friction of the consolidated state")
-    p.add_argument("--phi-cell", type=cli.finite, default=0.60,
-                   help="solid fraction at which the final radii would fill the cell")
+    p.add_argument("--phi-cell", type=cli.finite,
+                   help="solid fraction at which the final sizes would fill the cell; default per assembly")
     p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
                    help="cap of the expansion/compression rate as an inertial number")
     p.add_argument("--unbalanced", type=cli.finite, default=1e-3, help="unbalanced force of the final state")
@@ -48,10 +60,19 @@ def options(argv=None):
 
 
 def validate(o):
+    o.assembly = ALIASES.get(o.assembly, o.assembly)
     if o.assembly not in ASSEMBLIES:
         raise cli.InputError("unknown assembly %r (available: %s)" % (o.assembly, ", ".join(ASSEMBLIES)))
+    for k, v in assembly_defaults(o.assembly).items():
+        if getattr(o, k) is None:
+            setattr(o, k, v)
     if o.n < 1:
         raise cli.InputError("--n must be >= 1 (an empty cell cannot be consolidated)")
+    if o.assembly != "sphere":
+        try:
+            clump_specimen.check_count(o.assembly, o.n)
+        except ValueError as exc:
+            raise cli.InputError(str(exc)) from None
     if o.d50 <= 0:
         raise cli.InputError("--d50 must be > 0 (a radius <= 0 is not a particle)")
     if o.pressure <= 0:
@@ -70,17 +91,21 @@ def validate(o):
         dist = psd.SizeDistribution.from_d50_cu(o.d50, o.cu)
     except ValueError as exc:
         raise cli.InputError(str(exc)) from None
-    # The cell must be longer than the interaction range of the largest pair.
+    # The cell must be longer than the interaction range of the largest pair (a clump's length:
+    # its bounding diameter at the largest size).
     side = (o.n * 3.14159265 / 6 * dist.d50 ** 3 / o.phi_cell) ** (1 / 3)
-    if side < 1.2 * 2 * dist.d[-1]:
+    length = dist.d[-1] * (1.0 if o.assembly == "sphere" else clump_specimen.bounding_diameter(o.assembly))
+    if side < 1.2 * 2 * length:
         raise cli.InputError("%d particles of D50 %.3g m make a cell of %.3g m, shorter than the contact "
                              "range of the largest spheres: the size distribution cannot fit the box"
                              % (o.n, o.d50, side, ))
     problem = cli.output_problem(o.out, directory=False)
     if problem:
         raise cli.InputError(problem)
-    memory, _ = resources.preparation_estimate(o.n, o.threads or resources.cores())
-    resources.check_memory(memory, "a specimen of %d spheres" % o.n)
+    # Memory goes with the member spheres (contacts, cell lists), not with the bodies.
+    spheres = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
+    memory, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
+    resources.check_memory(memory, "a specimen of %d %s (%d member spheres)" % (o.n, o.assembly, spheres))
     return dist
 
 
@@ -120,13 +145,20 @@ def prepare(o, dist):
                  resources.human_seconds(seconds)), flush=True)
     t0 = time.time()
     try:
-        scene, log = specimen.prepare_spheres(
-            o.n, seed=o.seed, size_distribution=dist, pressure=o.pressure, mu_prep=o.mu_prep,
-            mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
-            unbalanced=o.unbalanced, progress=None if o.quiet else bar.preparation)
-    except (ValueError, specimen.PreparationError) as exc:
+        if o.assembly == "sphere":
+            scene, log = specimen.prepare_spheres(
+                o.n, seed=o.seed, size_distribution=dist, pressure=o.pressure, mu_prep=o.mu_prep,
+                mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
+                unbalanced=o.unbalanced, progress=None if o.quiet else bar.preparation)
+        else:
+            scene, log = clump_specimen.prepare_clumps(
+                o.assembly, o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu, mu_prep=o.mu_prep,
+                mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number, unbalanced=o.unbalanced,
+                progress=None if o.quiet else bar.preparation)
+    except (ValueError, specimen.PreparationError, clump_specimen.PreparationError) as exc:
         cli.fail(str(exc), 1)
     log["threads"] = engines.threads()  # the count used, not the option (0 means all cores)
+    log.setdefault("assembly", o.assembly)
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)
     specimen_file.write_summary(o.out, meta)  # derived from the .npz; rewritten from it if lost

@@ -25,6 +25,8 @@ from trueaniso import cli, progress, resources, specimen_file, study, triaxial  
 def parser():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--specimen", required=True, help="specimen file from prepare_specimen.py (.npz)")
+    p.add_argument("--assembly", choices=("sphere", "clump1", "clump2"),
+                   help="refuse a specimen of another assembly (the specimen file says which it is)")
     p.add_argument("--states", help="b:sigma_z pairs, sigma_z in Pa, comma separated (e.g. 0.5:140e3,0:60e3); "
                                     "a state's id is its Table C1 number, else b<b>_sz<sigma_z>")
     p.add_argument("--table-c1", action="store_true", help="all 39 states of the paper's Table C1")
@@ -97,9 +99,12 @@ def validate(o):
     if problem:
         raise cli.InputError(problem)
     try:
-        specimen_file.read(o.specimen)
+        _, meta = specimen_file.read(o.specimen)
     except specimen_file.SpecimenFileError as exc:
         raise cli.InputError(str(exc)) from None
+    if o.assembly and study.assembly_of(meta) != o.assembly:
+        raise cli.InputError("%s is a %s specimen, not %s (--assembly)" % (o.specimen, study.assembly_of(meta),
+                                                                         o.assembly))
     return states
 
 

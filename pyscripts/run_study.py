@@ -1,9 +1,10 @@
 """The default study, run by ./main.sh: a specimen, Table C1 states probed on x, y, z, statics, zeta, figures.
 
-    yade-double -n -x pyscripts/run_study.py [--n 1000] [--seed 1] [--ids 1,5,9,13,17,21,25,35,39]
-                                             [--out results/default]
+    yade-double -n -x pyscripts/run_study.py [--assembly sphere] [--n 1000] [--seed 1]
+                                             [--ids 1,5,9,13,17,21,25,35,39] [--out results/default]
 
-1. a sphere specimen consolidated isotropically to 100 kPa (docs/specimens.md);
+1. a specimen (spheres, or clumps with --assembly clump1|clump2) consolidated isotropically to
+   100 kPa (docs/specimens.md);
 2. a selection of the paper's Table C1 states, each reached by the b-controlled servo and probed
    on z, x and y (docs/triaxial.md), with the micro-structure of each state (docs/fabric.md);
 3. the exact static stiffness at the isotropic state and the rotation factor zeta it implies
@@ -22,16 +23,18 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
 from analysis import figures, report, zeta_contrast  # noqa: E402
-from trueaniso import (atomic, cli, engines, lock, progress, resources, specimen, specimen_file,  # noqa: E402
-                       study, study_dir, triaxial)
+from trueaniso import (atomic, clump_specimen, cli, engines, lock, progress, resources, specimen,  # noqa: E402
+                       specimen_file, study, study_dir, triaxial)
 
 DEFAULT_IDS = "1,5,9,13,17,21,25,35,39"
+ASSEMBLIES = ("sphere", "clump1", "clump2")
 SPECIMEN = "specimen.npz"
 
 
 def parser():
     p = cli.Parser(description=cli.description(__doc__))
-    p.add_argument("--n", type=cli.count, default=1000, help="spheres in the specimen (>= 100)")
+    p.add_argument("--assembly", default="sphere", help="sphere (default), clump1 or clump2 (docs/specimens.md)")
+    p.add_argument("--n", type=cli.count, default=1000, help="particles in the specimen (>= 100)")
     p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
     p.add_argument("--ids", default=DEFAULT_IDS, help="Table C1 states to run, by number")
     p.add_argument("--mu", type=cli.finite, default=0.5,
@@ -53,6 +56,14 @@ def parser():
 def validate(o):
     if o.n < 100:
         raise cli.InputError("--n must be >= 100 for a study specimen")
+    o.assembly = {"spheres": "sphere"}.get(o.assembly, o.assembly)
+    if o.assembly not in ASSEMBLIES:
+        raise cli.InputError("unknown assembly %r (available: %s)" % (o.assembly, ", ".join(ASSEMBLIES)))
+    if o.assembly != "sphere":
+        try:
+            clump_specimen.check_count(o.assembly, o.n)
+        except ValueError as exc:
+            raise cli.InputError(str(exc)) from None
     try:
         states = study.table_states(study.parse_ids(o.ids))
     except ValueError as exc:
@@ -63,15 +74,26 @@ def validate(o):
     problem = cli.output_problem(o.out)
     if problem:
         raise cli.InputError(problem)
-    prep, _ = resources.preparation_estimate(o.n, o.threads or resources.cores())
-    statics_memory = resources.INTERPRETER_BYTES + resources.STATICS_BYTES_PER_SPHERE * o.n
-    resources.check_memory(max(prep, statics_memory), "a study of %d spheres (its exact static solve)" % o.n)
+    spheres = o.n * members(o.assembly)
+    prep, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
+    # The static solve's memory goes with the bodies' degrees of freedom and the contacts (members).
+    statics_memory = resources.INTERPRETER_BYTES + resources.STATICS_BYTES_PER_SPHERE * spheres
+    resources.check_memory(max(prep, statics_memory), "a study of %d %s (its exact static solve)"
+                           % (o.n, o.assembly))
     return states
+
+
+def members(assembly):
+    return 1 if assembly == "sphere" else clump_specimen.members_per_clump(assembly)
 
 
 def recipe(o):
     """What the study's specimen is made from (part of the study's fingerprint)."""
-    return dict(n=o.n, seed=o.seed)
+    return dict(assembly=o.assembly, n=o.n, seed=o.seed)
+
+
+def describe(r):
+    return "--assembly %s --n %s --seed %s" % (r.get("assembly", "sphere"), r.get("n"), r.get("seed"))
 
 
 def check_recipe(o, log):
@@ -81,10 +103,12 @@ def check_recipe(o, log):
     if meta is not None:
         study_dir.require_layout(o.out, meta)
         have = meta.get("fingerprint", {}).get("recipe")
+        if have is not None:
+            have = dict(dict(assembly="sphere"), **have)  # studies written before clumps are sphere studies
         if have is not None and have != want:
             raise study_dir.StudyMismatch(
-                "%s holds another study: its specimen is --n %s --seed %s, this run asks --n %d --seed %d; %s"
-                % (o.out, have.get("n"), have.get("seed"), o.n, o.seed,
+                "%s holds another study: its specimen is %s, this run asks %s; %s"
+                % (o.out, describe(have), describe(want),
                    study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
     path = os.path.join(o.out, SPECIMEN)
     if not os.path.exists(path):
@@ -96,11 +120,12 @@ def check_recipe(o, log):
         scene, spec_meta = specimen_file.load(path)
     except specimen_file.SpecimenFileError as exc:
         raise study_dir.StudyMismatch("%s; %s" % (exc, study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
-    have = dict(n=spec_meta["parameters"].get("n"), seed=spec_meta["seed"])
+    have = dict(assembly=spec_meta["parameters"].get("assembly", "sphere"), n=spec_meta["parameters"].get("n"),
+                seed=spec_meta["seed"])
     if have != want:
         raise study_dir.StudyMismatch(
-            "%s holds another study: its specimen is --n %s --seed %s, this run asks --n %d --seed %d; %s"
-            % (o.out, have["n"], have["seed"], o.n, o.seed,
+            "%s holds another study: its specimen is %s, this run asks %s; %s"
+            % (o.out, describe(have), describe(want),
                study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
     log("specimen: kept %s" % path)
     return scene
@@ -108,12 +133,16 @@ def check_recipe(o, log):
 
 def prepare(o, log):
     path = os.path.join(o.out, SPECIMEN)
-    memory, seconds = resources.preparation_estimate(o.n, o.threads or resources.cores())
-    log("specimen: preparing %d spheres (seed %d): about %s of memory and %s ..."
-        % (o.n, o.seed, resources.human_bytes(memory), resources.human_seconds(seconds)))
+    memory, seconds = resources.preparation_estimate(o.n * members(o.assembly), o.threads or resources.cores())
+    log("specimen: preparing %d %s (seed %d): about %s of memory and %s ..."
+        % (o.n, o.assembly, o.seed, resources.human_bytes(memory), resources.human_seconds(seconds)))
     t0 = time.time()
     bar = progress.Progress("specimen", log, o.progress_every)
-    scene, params = specimen.prepare_spheres(o.n, seed=o.seed, progress=bar.preparation)
+    if o.assembly == "sphere":
+        scene, params = specimen.prepare_spheres(o.n, seed=o.seed, progress=bar.preparation)
+    else:
+        scene, params = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, progress=bar.preparation)
+    params.setdefault("assembly", o.assembly)
     params["threads"] = engines.threads()
     specimen_file.save(path, scene, seed=o.seed, parameters=params, summary=specimen.state(scene))
     log("specimen: saved %s (%.1f s)" % (path, time.time() - t0))
@@ -180,7 +209,7 @@ def main(argv=None):
     if cli.in_yade():
         from trueaniso import yade_bridge
         yade_bridge.yade_scene_from(scene, import_contacts=False)
-        log("specimen written into YADE's O (%d spheres) for viewing/export" % scene.num_bodies)
+        log("specimen written into YADE's O (%d particles) for viewing/export" % scene.num_bodies)
 
 
 def isotropic_statics(out, scene):

@@ -10,10 +10,14 @@ namespace trueaniso {
 void RadiusExpansion::apply(Scene& s) {
   require(targetPressure > 0, "radius expansion target pressure must be > 0");
   require(gain > 0 && gain <= 1, "radius expansion gain must lie in (0, 1]");
-  require(!s.hasClumps(), "radius expansion applies to single spheres");
   const int nb = s.bodies.size();
-  if (base_.size() != static_cast<size_t>(nb)) {
+  const bool clumps = s.hasClumps();
+  if (base_.size() != s.members.radius.size() || baseMass_.size() != static_cast<size_t>(nb)) {
     base_ = s.members.radius;
+    baseOffset_ = s.members.offset;
+    baseMass_ = s.bodies.mass;
+    baseInertia_ = s.bodies.inertia;
+    baseVolume_ = s.bodies.volume;
     scale = 1.0;
   }
   pressure = loveWeberStress(s).trace() / 3.0;
@@ -24,11 +28,31 @@ void RadiusExpansion::apply(Scene& s) {
   rate = std::clamp(rate, -maxGrowthRate, maxGrowthRate);
   const Real grow = 1.0 + rate * s.dt;
   scale *= grow;
-  for (int b = 0; b < nb; ++b) s.setSphereRadius(b, scale * base_[b]);
+  if (clumps) growClumps(s);
+  else for (int b = 0; b < nb; ++b) s.setSphereRadius(b, scale * base_[b]);
   for (Real& r : s.contacts.rbar) r *= grow;  // Eq. (7) is homogeneous in the radii
   unbalanced = unbalancedForce(s);
   reached = std::abs(err) < stressTolerance && unbalanced < unbalancedTolerance;
   if (reached && stopWhenReached) done = true;
+}
+
+}  // namespace trueaniso
+
+namespace trueaniso {
+
+void RadiusExpansion::growClumps(Scene& s) const {
+  const Real f3 = scale * scale * scale, f5 = f3 * scale * scale;
+  const int nm = s.members.size(), nb = s.bodies.size();
+  for (int m = 0; m < nm; ++m) {
+    s.members.radius[m] = scale * base_[m];
+    s.members.offset[m] = scale * baseOffset_[m];
+  }
+  for (int b = 0; b < nb; ++b) {
+    s.bodies.mass[b] = f3 * baseMass_[b];
+    s.bodies.inertia[b] = f5 * baseInertia_[b];
+    s.bodies.volume[b] = f3 * baseVolume_[b];
+  }
+  s.refreshMembers();  // members moved with their offsets
 }
 
 }  // namespace trueaniso

@@ -3,6 +3,8 @@
 // the mean stress, until the target mean stress is held in equilibrium. The factor is relative to
 // the radii when the engine was attached; Scene::rescale then restores the size distribution
 // exactly, which Hertz contacts allow without changing any stress (see Scene.hpp).
+// A clump grows as a whole, about its centre of mass: member radii and offsets by the factor, its
+// volume and mass by its cube, its inertia by its fifth power, so its shape never changes.
 #include <vector>
 
 #include "core/Engine.hpp"
@@ -26,7 +28,11 @@ class RadiusExpansion : public Engine {
   std::string name() const override { return "RadiusExpansion"; }
 
  private:
-  std::vector<Real> base_;
+  void growClumps(Scene& scene) const;
+  std::vector<Real> base_;       // member radii when attached
+  // Clumps when attached: member offsets, body mass, inertia and volume.
+  std::vector<Vec3> baseOffset_, baseInertia_;
+  std::vector<Real> baseMass_, baseVolume_;
 };
 
 }  // namespace trueaniso

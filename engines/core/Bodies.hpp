@@ -15,6 +15,10 @@ struct Bodies {
   std::vector<Vec3> torque;
   std::vector<Real> mass;
   std::vector<Vec3> inertia;   // principal moments of inertia (body frame)
+  // Solid volume: the union of the member balls, overlaps counted once (clump/ClumpTemplate.hpp).
+  // The void ratio reads it; it is kept apart from the mass, which a user (or YADE, whose clumps
+  // sum their members' masses unless told to integrate) may set otherwise.
+  std::vector<Real> volume;
   std::vector<Quat> orientation;  // body frame -> world; only advanced for multi-sphere clumps
   std::vector<int> memberBegin{0};  // members of body b: [memberBegin[b], memberBegin[b+1])
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "clump/ClumpTemplate.hpp"
+
 namespace trueaniso {
 
 namespace {
@@ -18,6 +20,7 @@ int Scene::addSphere(const Vec3& pos, Real radius) {
   bodies.pos.push_back(pos);
   bodies.mass.push_back(m);
   bodies.inertia.push_back(Vec3::Constant(0.4 * m * radius * radius));
+  bodies.volume.push_back(sphereVolume(radius));
   bodies.orientation.push_back(Quat::Identity());
   bodies.memberBegin.push_back(members.size() + 1);
   bodies.resizeDynamics();
@@ -29,17 +32,31 @@ int Scene::addSphere(const Vec3& pos, Real radius) {
   return b;
 }
 
+int Scene::addClump(const Vec3& pos, const Quat& orientation, const ClumpTemplate& shape, Real scale) {
+  require(std::isfinite(scale) && scale > 0, "clump scale must be a finite number > 0");
+  require(shape.size() > 0 && shape.volume > 0, "clump template is empty");
+  const ClumpTemplate t = shape.scaled(scale);
+  const Real rho = material.density;
+  return addBody(pos, orientation, t.offsets, t.radii, rho * t.volume, rho * t.inertia, t.volume);
+}
+
 int Scene::addClump(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,
                     const std::vector<Real>& radii, Real mass, const Vec3& inertia) {
-  require(!offsets.empty() && offsets.size() == radii.size(),
-          "a clump needs as many member offsets as radii, at least one");
-  require(mass > 0 && (inertia.array() > 0).all(), "clump mass and inertia must be > 0");
-  for (Real r : radii) require(r > 0 && std::isfinite(r), "clump member radius must be > 0");
+  require(std::isfinite(mass) && mass > 0 && inertia.allFinite() && (inertia.array() > 0).all(),
+          "clump mass and inertia must be finite and > 0");
+  return addBody(pos, orientation, offsets, radii, mass, inertia, cachedClumpVolume(offsets, radii));
+}
+
+int Scene::addBody(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,
+                   const std::vector<Real>& radii, Real mass, const Vec3& inertia, Real volume) {
+  require(pos.allFinite(), "clump position must be finite");
+  require(orientation.coeffs().allFinite() && orientation.norm() > 0, "clump orientation must be a finite quaternion");
   const int b = bodies.size();
   bodies.pos.push_back(pos);
   bodies.mass.push_back(mass);
   bodies.inertia.push_back(inertia);
-  bodies.orientation.push_back(orientation.normalized());
+  bodies.volume.push_back(volume);
+  bodies.orientation.push_back(unitQuaternion(orientation));
   for (size_t k = 0; k < offsets.size(); ++k) {
     members.body.push_back(b);
     members.offset.push_back(offsets[k]);
@@ -58,6 +75,7 @@ void Scene::setSphereRadius(int b, Real radius) {
   const Real m = material.density * sphereVolume(radius);
   bodies.mass[b] = m;
   bodies.inertia[b] = Vec3::Constant(0.4 * m * radius * radius);
+  bodies.volume[b] = sphereVolume(radius);
   members.radius[bodies.memberBegin[b]] = radius;
 }
 
@@ -85,6 +103,7 @@ void Scene::rescale(Real f) {
     bodies.vel[b] *= f;  // same strain rate field, same angular velocities
     bodies.mass[b] *= f3;
     bodies.inertia[b] *= f3 * f2;
+    bodies.volume[b] *= f3;
     bodies.force[b] *= f2;
     bodies.torque[b] *= f3;
   }
@@ -108,7 +127,7 @@ void Scene::rescale(Real f) {
 
 Real Scene::solidVolume() const {
   Real v = 0;
-  for (Real r : members.radius) v += sphereVolume(r);
+  for (Real x : bodies.volume) v += x;
   return v;
 }
 

@@ -9,6 +9,10 @@
 #include "core/Material.hpp"
 
 namespace trueaniso {
+struct ClumpTemplate;
+}
+
+namespace trueaniso {
 
 struct Scene {
   Cell cell;
@@ -26,8 +30,12 @@ struct Scene {
   bool detectionInvalid = true;
 
   int addSphere(const Vec3& pos, Real radius);
-  // A rigid clump of member spheres with given offsets (body frame, about the centre of mass),
-  // mass and principal inertia; the caller computes them for overlapping members.
+  // A rigid clump of a template's shape (clump/ClumpTemplate.hpp), its lengths times `scale`:
+  // mass and inertia from the union's volume and moments and the material's density.
+  int addClump(const Vec3& pos, const Quat& orientation, const ClumpTemplate& shape, Real scale = 1.0);
+  // A rigid clump with given member offsets (body frame, about the centre of mass), mass and
+  // principal inertia (a saved scene, YADE's clumps). Its solid volume is the union's, from CGAL
+  // (cached per shape, cachedClumpVolume). Members are validated as for a template.
   int addClump(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,
                const std::vector<Real>& radii, Real mass, const Vec3& inertia);
   // Single spheres only: change the radius and the mass and inertia that follow from it.
@@ -47,9 +55,13 @@ struct Scene {
   // by radius expansion is brought back to the exact size distribution. Masses scale as f^3.
   void rescale(Real f);
 
-  Real solidVolume() const;  // sum of the member sphere volumes (clumps: see Fabric for overlap)
+  Real solidVolume() const;  // sum of the bodies' solid volumes (clumps: their union, Bodies::volume)
   Real maxRadius() const;
   void validate() const;     // throws InputError for an unusable scene
+
+ private:
+  int addBody(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,
+              const std::vector<Real>& radii, Real mass, const Vec3& inertia, Real volume);
 };
 
 }  // namespace trueaniso

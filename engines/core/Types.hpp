@@ -26,4 +26,11 @@ inline void require(bool ok, const std::string& what) {
   if (!ok) throw InputError(what);
 }
 
+// q scaled to unit norm, but returned as it is when it is a unit quaternion to round-off already:
+// normalising is not idempotent in the last bits, and a saved orientation must load bit for bit.
+inline Quat unitQuaternion(const Quat& q) {
+  const Real n2 = q.squaredNorm();
+  return (n2 > 1.0 - 1e-14 && n2 < 1.0 + 1e-14) ? q : q.normalized();
+}
+
 }  // namespace trueaniso

@@ -1,8 +1,10 @@
 #pragma once
 // Leap-frog integration of body motion with the local non-viscous damping of YADE's
-// NewtonIntegrator (each acceleration component scaled by 1 -/+ damping against the velocity),
-// plus the cell's deformation: positions follow the affine field of the cell's velocity gradient
-// (x -> (I + dt L) x, the cell vectors too) and velocities are stored as fluctuations about it.
+// NewtonIntegrator (each acceleration component scaled by 1 -/+ damping against the velocity; for
+// clumps the torque, as YADE's aspherical integrator), plus the cell's deformation: positions
+// follow the affine field of the cell's velocity gradient (x -> (I + dt L) x, the cell vectors
+// too) and velocities are stored as fluctuations about it. Clumps rotate by an
+// angular-momentum-conserving splitting (NewtonIntegrator.cpp).
 #include "core/Engine.hpp"
 
 namespace trueaniso {
@@ -20,6 +22,7 @@ class NewtonIntegrator : public Engine {
  private:
   template <bool Rotations, bool Clumps>
   void integrate(Scene& scene) const;
+  static void advanceClump(Bodies& bodies, int b, Real dt, Real damping);
   void checkStability(const Scene& scene);
   Real checkedDt_ = -1;
   long checkedStep_ = -1;

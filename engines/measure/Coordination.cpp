@@ -48,10 +48,13 @@ Coordination coordination(const Scene& s) {
   return z;
 }
 
-Real voidRatio(const Scene& s) {
+Real solidVolume(const Scene& s) {
   const Bodies& B = s.bodies;
-  const Real mass = blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.mass[b]; });
-  const Real solid = mass / s.material.density;
+  return blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.volume[b]; });
+}
+
+Real voidRatio(const Scene& s) {
+  const Real solid = solidVolume(s);
   return (s.cell.volume() - solid) / solid;
 }
 

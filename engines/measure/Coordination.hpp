@@ -19,8 +19,10 @@ struct Coordination {
 Coordination coordination(const Scene& scene);
 std::vector<int> contactsPerBody(const Scene& scene);
 
-// e = (V - V_s)/V_s with V_s the solid volume from the bodies' masses (exact for clumps whose
-// mass was computed for their overlapping members).
+// V_s: the bodies' solid volumes summed in fixed blocks (thread-count independent); a clump's is
+// the union of its member balls, overlaps counted once (Bodies::volume), never the members' sum.
+Real solidVolume(const Scene& scene);
+// e = (V - V_s)/V_s.
 Real voidRatio(const Scene& scene);
 
 }  // namespace trueaniso

@@ -115,9 +115,7 @@ Fabric fabric(const Scene& s) {
 
   f.volume = s.cell.volume();
   f.voidRatio = voidRatio(s);
-  const Real rho = s.material.density;
-  const Real mass = blockSum<Real>(nb, 0.0, [&](int b, Real& acc) { acc += Bd.mass[b]; });
-  f.meanRadiusCubed = nb > 0 ? 3.0 * mass / (4.0 * kPi * rho * nb) : kNaN;
+  f.meanRadiusCubed = nb > 0 ? 3.0 * solidVolume(s) / (4.0 * kPi * nb) : kNaN;
   return f;
 }
 

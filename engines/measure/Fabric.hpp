@@ -30,16 +30,17 @@ struct Fabric {
   Mat9 M = Mat9::Zero(); // Eq. (34), same unit as B
   Real meanNormalForce = 0;  // <N> over the Nc contacts (N)
   Real volume = 0;           // cell volume V (m^3)
-  Real voidRatio = 0;        // e from the bodies' masses (measure/Coordination.hpp)
+  Real voidRatio = 0;        // e from the bodies' solid volumes (measure/Coordination.hpp)
   // <r^3> over the Np particles. A clump enters with the radius of the sphere of equal volume,
-  // r^3 = 3 m / (4 pi rho): Eq. (36) was derived for spheres, for which V_s = (4/3) pi sum r^3,
-  // and this keeps that relation exact, so that Eq. (36) stays consistent with e.
+  // r^3 = 3 V_b / (4 pi) with V_b its union volume: Eq. (36) was derived for spheres, for which
+  // V_s = (4/3) pi sum r^3, and this keeps that relation exact, so that Eq. (36) stays consistent
+  // with e.
   Real meanRadiusCubed = 0;
 
   Real M4(int i, int j, int k, int l) const { return M(pairIndex(i, j), pairIndex(k, l)); }
   // Eq. (36) with the mean <r^3> in place of the printed sum over Np particles (the sum is
   // dimensionally the same but Np times too small: Chang et al. (1995) derive it for one radius
-  // r, Nc/V = 3 Z / (8 pi (1+e) r^3)). With r^3 from the masses it equals Zm Np / (2 V).
+  // r, Nc/V = 3 Z / (8 pi (1+e) r^3)). With r^3 from the volumes it equals Zm Np / (2 V).
   Real contactDensityEq36() const;
   // Nc / V, counted.
   Real contactDensityCount() const { return counts.contacts / volume; }

@@ -34,6 +34,25 @@ Real unbalancedForce(const Scene& s) {
   return (bodySum / B.size()) / (contact.f / contact.n);
 }
 
+Real unbalancedTorque(const Scene& s) {
+  const Bodies& B = s.bodies;
+  const Contacts& C = s.contacts;
+  struct Acc {
+    Real f = 0, arm = 0;
+    long n = 0;
+    Acc& operator+=(const Acc& o) { f += o.f; arm += o.arm; n += o.n; return *this; }
+  };
+  const Acc contact = blockSum<Acc>(C.size(), Acc{}, [&](int c, Acc& acc) {
+    if (C.normalForce[c] <= 0) return;
+    acc.f += C.force(c).norm();
+    acc.arm += s.members.radius[C.m1[c]] + s.members.radius[C.m2[c]] - C.overlap[c];
+    ++acc.n;
+  });
+  if (contact.n == 0 || contact.f == 0) return std::numeric_limits<Real>::quiet_NaN();
+  const Real torqueSum = blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.torque[b].norm(); });
+  return (torqueSum / B.size()) / ((contact.f / contact.n) * 0.5 * (contact.arm / contact.n));
+}
+
 Vec6 affineStiffness(const Scene& s) {
   const Contacts& C = s.contacts;
   const HertzMindlin law(s.material);

@@ -14,6 +14,12 @@ Mat3 loveWeberStress(const Scene& scene);
 // the mean |contact force| over contacts.
 Real unbalancedForce(const Scene& scene);
 
+// The same for moments about the body centres: mean |resultant torque| over bodies divided by
+// (mean |contact force| x mean lever arm, half the mean member-centre distance of the contacts).
+// Clumps held with rotations blocked keep torques that a probe with rotations free would relax.
+Real unbalancedTorque(const Scene& scene);
+
+
 // d sigma_I / d e_I of an affine strain of Voigt component I (xx, yy, zz, then engineering shears
 // yz, xz, xy): the diagonal of Eq. (32)'s stiffness (contact springs only), an upper bound of the
 // true stiffness that the cell controllers use to scale their gain.

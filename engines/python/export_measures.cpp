@@ -28,6 +28,8 @@ void exportMeasures() {
           "Diagonal of the affine (Eq. 32) stiffness per Voigt component xx, yy, zz, yz, xz, xy (Pa).");
   bp::def("principal_stresses", &principal, (bp::arg("sigma")),
           "Principal values of the symmetric part of a 3x3 stress, largest first.");
+  bp::def("unbalanced_torque", &unbalancedTorque,
+          "Mean |resultant torque| / (mean |contact force| x mean lever arm); valid after a force evaluation.");
   bp::def("coordination", &coordinationDict, "Nc, Np, Np0, Np1, Zm (Eq. 14) and Z = 2Nc/Np.");
   bp::def("contacts_per_body", &perBody);
   bp::def("void_ratio", &voidRatio);

@@ -54,7 +54,7 @@ void setOrientations(Scene& s, const bp::object& o) {
   const std::vector<Real> q = toRealList(bp::import("numpy").attr("ravel")(o), "orientations");
   require(q.size() == 4 * s.bodies.orientation.size(), "orientations must have shape (n_bodies, 4)");
   for (size_t b = 0; b < s.bodies.orientation.size(); ++b)
-    s.bodies.orientation[b] = Quat(q[4 * b], q[4 * b + 1], q[4 * b + 2], q[4 * b + 3]).normalized();
+    s.bodies.orientation[b] = unitQuaternion(Quat(q[4 * b], q[4 * b + 1], q[4 * b + 2], q[4 * b + 3]));
   s.refreshMembers();
   s.detectionInvalid = true;
 }
@@ -217,6 +217,8 @@ void exportScene() {
       .add_property("torques", &getBodyVec<&Bodies::torque>)
       .add_property("orientations", &orientations, &setOrientations)
       .add_property("masses", &masses)
+      .add_property("volumes", +[](const Scene& s) { return toNumpy(s.bodies.volume); },
+                    "Solid volume of each body (a clump's union, overlaps once).")
       .add_property("inertia", &inertia)
       .add_property("member_begin", &memberBegin)
       .add_property("radii", &radii, &setRadii)

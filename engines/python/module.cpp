@@ -13,6 +13,7 @@ void exportMeasures();
 void exportStatics();
 void exportFabric();
 void exportControl();
+void exportClump();
 
 np::ndarray toNumpy(const std::vector<Vec3>& v) {
   np::ndarray a = np::zeros(bp::make_tuple(v.size(), 3), np::dtype::get_builtin<double>());
@@ -128,4 +129,5 @@ BOOST_PYTHON_MODULE(_trueaniso) {
   exportStatics();
   exportFabric();
   exportControl();
+  exportClump();
 }

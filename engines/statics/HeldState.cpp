@@ -21,28 +21,9 @@ Scene heldState(const Scene& scene) {
 }
 
 Balance balance(const Scene& held) {
-  const Bodies& B = held.bodies;
-  const Contacts& C = held.contacts;
-  struct Acc {
-    Real f = 0, arm = 0;
-    long n = 0;
-    Acc& operator+=(const Acc& o) { f += o.f; arm += o.arm; n += o.n; return *this; }
-  };
-  const Acc contact = blockSum<Acc>(C.size(), Acc{}, [&](int c, Acc& acc) {
-    if (C.normalForce[c] <= 0) return;
-    acc.f += C.force(c).norm();
-    acc.arm += held.members.radius[C.m1[c]] + held.members.radius[C.m2[c]] - C.overlap[c];
-    ++acc.n;
-  });
   Balance b;
   b.forces = unbalancedForce(held);
-  if (contact.n == 0) {
-    b.torques = std::numeric_limits<Real>::quiet_NaN();
-    return b;
-  }
-  const Real torqueSum = blockSum<Real>(B.size(), 0.0, [&](int k, Real& acc) { acc += B.torque[k].norm(); });
-  // Mean lever arm: half the mean member-centre distance.
-  b.torques = (torqueSum / B.size()) / ((contact.f / contact.n) * 0.5 * (contact.arm / contact.n));
+  b.torques = unbalancedTorque(held);
   return b;
 }
 

@@ -8,6 +8,11 @@ summary and software versions. ``meta["sha256"]`` is a SHA-256 of the whole cont
 (name, dtype, shape, bytes) and every other metadata field, so an edited material or
 ``block_rotations`` fails the check just as an edited radius does.
 
+A clump is a body with several members: ``member_offsets`` (its principal frame) and ``radii`` are
+its template scaled to its size, ``masses`` and ``inertia`` its mass and principal moments; its
+solid volume (void ratio) is recomputed from the members (the union, by CGAL, once per shape).
+A clump whose members do not overlap into one body is refused like any other invalid field.
+
 Loading checks format, version, checksum, then every field (``meta_problem``, ``contents_problem``,
 and after the scene is built ``contacts_problem``) before anything is simulated, and refuses a
 file that fails any check with one line naming the field. Version-1 files (whose checksum left the
@@ -225,6 +230,9 @@ def contents_problem(a):
         return "moment of inertia <= 0"
     if np.any(np.abs(np.linalg.norm(a["orientations"], axis=1) - 1) > 1e-6):
         return "orientations are not unit quaternions"
+    problem = clump_members_problem(a["member_begin"], a["member_offsets"], a["radii"])
+    if problem:
+        return problem
     # Two bodies at one place (a copied body): their contact has no normal. Compared in the cell's
     # reduced coordinates (wrapped into [0, 1)), so that periodic images count as one place.
     r_min = float(a["radii"].min())
@@ -260,6 +268,26 @@ def contents_problem(a):
     pairs = np.column_stack([lo, hi, sign * a["c_shift"]])
     if len(np.unique(pairs, axis=0)) != nc:
         return "a contact listed twice"
+    return None
+
+
+def clump_members_problem(member_begin, offsets, radii):
+    """A clump whose members are not one rigid body, or None. Each clump's member balls must
+    overlap (strictly) into one connected union, as the engines' ClumpTemplate demands; checked
+    here too so that a file is refused as a whole, naming the body, before a scene is built."""
+    mb = np.asarray(member_begin)
+    count = np.diff(mb)
+    for b in np.flatnonzero(count > 1):
+        k = slice(mb[b], mb[b + 1])
+        o, r = offsets[k], radii[k]
+        touch = np.linalg.norm(o[:, None, :] - o[None, :, :], axis=2) < r[:, None] + r[None, :]
+        seen = np.zeros(len(r), bool)
+        seen[0] = True
+        for _ in range(len(r)):
+            seen = seen | touch[seen].any(axis=0)
+        if not seen.all():
+            return ("clump %d: its %d members do not overlap into one body (members %s touch no other)"
+                    % (b, len(r), np.flatnonzero(~seen).tolist()))
     return None
 
 
@@ -313,10 +341,15 @@ def load(path):
     if np.all(np.diff(mb) == 1):
         s.add_spheres(a["positions"], a["radii"])
     else:
+        # Clumps carry their members (offsets in the body's principal frame, radii), mass and
+        # principal inertia; the solid volume is the union's, from CGAL once per shape.
         for b in range(nb):
             k = slice(mb[b], mb[b + 1])
-            s.add_clump(a["positions"][b], a["orientations"][b], a["member_offsets"][k], a["radii"][k],
-                        float(a["masses"][b]), a["inertia"][b])
+            try:
+                s.add_clump(a["positions"][b], a["orientations"][b], a["member_offsets"][k], a["radii"][k],
+                            float(a["masses"][b]), a["inertia"][b])
+            except (ValueError, RuntimeError) as exc:
+                raise SpecimenFileError("invalid specimen file %s (body %d: %s)" % (path, b, exc)) from None
     s.orientations = a["orientations"]
     s.velocities = a["velocities"]
     s.angular_velocities = a["angular_velocities"]

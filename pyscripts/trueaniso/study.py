@@ -51,11 +51,18 @@ def _effective(function, options):
     return out
 
 
+def assembly_of(specimen_meta):
+    """sphere, clump1 or clump2: what prepare_specimen.py built (files from before clumps: sphere)."""
+    return specimen_meta.get("parameters", {}).get("assembly", "sphere")
+
+
 def fingerprint(specimen_meta, gamma, restrain_rotations, skip_detection, damping, state_options=None,
                 probe_options=None, recipe=None, path="true-triaxial"):
     """What every row and checkpoint of a study depends on (study_dir compares it on reruns); the
     loading path too, which gives a state definition (b, sigma_z) its mean stress."""
-    fp = dict(specimen=specimen_meta["sha256"], code=provenance.code_version(), threads=engines.threads(), path=path,
+    # The assembly is also behind the specimen's checksum; named here so a refusal can say it.
+    fp = dict(specimen=specimen_meta["sha256"], assembly=assembly_of(specimen_meta),
+              code=provenance.code_version(), threads=engines.threads(), path=path,
               state=dict(damping=damping, **_effective(triaxial.reach_state, state_options)),
               probe=dict(gamma=gamma, rotations="restrained" if restrain_rotations else "free",
                          detection="off" if skip_detection else "on", damping=damping,

@@ -25,7 +25,7 @@ LAYOUT = 2  # of metadata.json; 1 (before fingerprints) cannot prove what its ro
 WAY_OUT = "use a new --out, or --force-new to move the old study aside into %s/"
 
 
-LABELS = {"code": "the code version (code: a hash of engines/ and pyscripts/trueaniso/)",
+LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code": "the code version (code: a hash of engines/ and pyscripts/trueaniso/)",
           "specimen": "the specimen (specimen: its checksum)", "threads": "the engine thread count (threads)"}
 
 

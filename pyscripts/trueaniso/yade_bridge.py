@@ -59,6 +59,9 @@ def scene_from_yade(O=None, import_contacts=True):
     from yade import Sphere
     h = _cell(O)
     bodies = [b for b in O.bodies if b is not None]
+    if any(b.isClump or b.isClumpMember for b in bodies):
+        from . import yade_clumps
+        return yade_clumps.scene_from_yade_clumps(O, import_contacts)
     spheres = [b for b in bodies if isinstance(b.shape, Sphere) and not b.isClumpMember and not b.isClump]
     if len(spheres) != len(bodies):
         raise BridgeError("the bridge imports free spheres only; this scene has %d other bodies"
@@ -160,6 +163,9 @@ def write_to_yade(scene, O=None, ids=None):
     O = O or _yade()
     from yade import Vector3
     _check_homo_deform(O)
+    if scene.has_clumps:
+        from . import yade_clumps
+        return yade_clumps.write_clumps_to_yade(scene, O, ids)
     ids = ids if ids is not None else list(range(scene.num_bodies))
     if len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
@@ -208,7 +214,8 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
                       InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
                       Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator, Vector3, utils)
     if scene.has_clumps:
-        raise BridgeError("yade_scene_from handles sphere scenes only")
+        from . import yade_clumps
+        return yade_clumps.yade_clump_scene_from(scene, O, damping, import_contacts, mindlin_ratcheting)[0]
     O.reset()
     O.periodic = True
     O.cell.hSize = _yade_matrix(scene.cell)

@@ -166,9 +166,11 @@ TEST(Fabric, TwoClumpsMatchBruteForce) {
       for (int k = 0; k < 3; ++k)
         for (int l = 0; l < 3; ++l) asym = std::max(asym, std::abs(f.M4(i, j, k, l) - f.M4(j, i, k, l)));
   EXPECT_GT(asym, 0.01 * f.M.cwiseAbs().maxCoeff());
-  // Eq. (36) with the equal-volume radius of each clump, r^3 = 3 m / (4 pi rho).
+  // Eq. (36) with the equal-volume radius of each clump, r^3 = 3 V_b / (4 pi), V_b the union's
+  // volume (the overlap of the dimer's members counted once).
   Real r3 = 0;
-  for (int b = 0; b < 3; ++b) r3 += 3 * s->bodies.mass[b] / (4 * M_PI * s->material.density);
+  for (int b = 0; b < 3; ++b) r3 += 3 * s->bodies.volume[b] / (4 * M_PI);
+  EXPECT_LT(s->bodies.volume[0], 0.98 * 2 * 4.0 / 3.0 * M_PI * 1e-12);  // the members overlap (by 3 %)
   EXPECT_NEAR(f.meanRadiusCubed, r3 / 3, 1e-14 * r3);
 }
 

@@ -25,6 +25,8 @@ def run(*args, timeout=120):
     (["--cu", "0.9"], "Cu must lie"),
     (["--pressure=-5"], "pressure must be > 0"),
     (["--assembly", "clump9"], "unknown assembly"),
+    (["--assembly", "clump2", "--n", "1001"], "multiple of 4"),  # clump2 is four copies of a layer
+    (["--assembly", "clump1", "--n", "4"], "cannot fit the box"),  # a clump is longer than a sphere
     (["--out", "x.txt"], ".npz"),
 ])
 def test_bad_input_one_line_and_nothing_written(tmp_path, args, message):

@@ -59,6 +59,8 @@ def blocker(tmp_path):
     (["--ids", "1", "--mu", "0"], ["--mu must be > 0"]),
     (["--ids", "1", "--threads", "100000"], ["--threads", "at most"]),
     (["--states", "0:125e3,0:125e3"], ["given twice"]),
+    (["--ids", "1", "--assembly", "clump1"], ["is a sphere specimen, not clump1"]),  # the file says what it is
+    (["--ids", "1", "--assembly", "clump3"], ["--assembly", "invalid choice"]),
 ])
 def test_run_states_refuses_before_work(specimen_100, tmp_path, args, words):
     out = tmp_path / "out"

@@ -61,7 +61,8 @@ int main() {
     exe = tmp_path / "user"
     subprocess.run(["g++", "-std=c++17", "-O1", "-fopenmp", "-I", str(prefix / "include" / "trueaniso"),
                     "-I", "/usr/include/eigen3", str(src), str(prefix / "lib" / "libtrueaniso_engines.a"),
-                    "-lcholmod", "-o", str(exe)], check=True, capture_output=True)
+                    "-lcholmod", "-lmpfr", "-lgmp", "-o", str(exe)],  # MPFR, GMP: CGAL's (clump templates)
+                   check=True, capture_output=True)
     N = float(subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout)
     # Hertz of two r = 0.1 mm spheres overlapping by 0.1 um: (4/3) E* sqrt(r/2) delta^1.5, E* = G/(1-nu)
     estar = 18e9 / (1 - 0.15)

@@ -120,6 +120,15 @@ def test_other_specimen_recipe_is_refused_before_preparing(first, tmp_path):
                           env=dict(os.environ, OMP_NUM_THREADS="1"))
     one_line_error(proc, "another study", "state.friction")
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"} == before
+    # Same --n and --seed, another assembly: the assembly is part of the study's recipe.
+    proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
+                           "--ids", "1,5", "--assembly", "clump2"], capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    one_line_error(proc, "another study", "--assembly sphere --n 100", "--assembly clump2 --n 100")
+    assert "preparing" not in proc.stdout
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"} == before
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["fingerprint"]["assembly"] == "sphere" and meta["fingerprint"]["recipe"]["assembly"] == "sphere"
 
 
 def test_kill_9_leaves_no_stale_summary_and_the_rerun_completes(first, tmp_path):
