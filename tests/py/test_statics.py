@@ -209,15 +209,23 @@ def test_loose_packing_at_a_high_stress_ratio():
     seeds 5-8 carries the state, with mu = 1.0 three do (seed 5 creeps away from the path in both).
     Which seed carries it is chaos, not the subject here: the first of seeds 6, 7, 8 that does is
     taken, loading with mu = 1.0."""
-    for seed in (6, 7, 8):
-        scene, _ = specimen.prepare_spheres(150, seed=seed, mu_prep=1.0)
-        try:
-            triaxial.reach_state(scene, 0.5, 140e3, max_strain=0.15, friction=1.0)  # a loose packing strains more
-            break
-        except triaxial.StateNotReached:
-            continue
-    else:
-        pytest.fail("none of the loose packings carried state 21")
+    # One engine thread while preparing and loading: the packing then is the same on any machine
+    # and under any OMP_NUM_THREADS (the force sum's order changes the last bits, and this chaotic
+    # case amplifies them: with 2 threads the seed taken pinned its hinges to 4.8e-5, not 1e-5).
+    threads = engines.threads()
+    engines.set_threads(1)
+    try:
+        for seed in (6, 7, 8):
+            scene, _ = specimen.prepare_spheres(150, seed=seed, mu_prep=1.0)
+            try:
+                triaxial.reach_state(scene, 0.5, 140e3, max_strain=0.15, friction=1.0)  # a loose packing strains more
+                break
+            except triaxial.StateNotReached:
+                continue
+        else:
+            pytest.fail("none of the loose packings carried state 21")
+    finally:
+        engines.set_threads(threads)
     sig = np.diag(engines.stress(scene))
     assert sig[2] / sig[1] > 2.2 and engines.coordination(scene)["Zm"] < 4.8
     free = statics.static_stiffness(scene, rotations=True)
