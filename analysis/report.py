@@ -51,17 +51,12 @@ DEPARTURES = [
 ]
 
 
-def _plt():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
+_plt = figures._plt  # one home for matplotlib's backend choice
 
 
 def _save(fig, path):
-    tmp = path + ".tmp.png"
-    fig.savefig(tmp, dpi=120)
-    os.replace(tmp, path)
+    """figures._save (atomic), then the figure closed; returns the file's name for the report."""
+    figures._save(fig, path)
     _plt().close(fig)
     return os.path.basename(path)
 
