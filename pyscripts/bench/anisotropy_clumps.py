@@ -34,7 +34,7 @@ def measure(path, probes=True):
                e=st["void_ratio"], Zm=st["Zm"], R=R.tolist(), H_over_trace=(H / H.sum()).tolist(),
                long_axis=np.diag(clump_shapes.long_axis_fabric(s)).tolist(),
                prep_time=meta.get("parameters", {}).get("wall_time"), threads=meta.get("parameters", {}).get("threads"))
-    hold = np.diag(engines.stress(s)).copy()
+    hold = triaxial.stress_as_held(s)  # the specimen as it is, its shear stresses included
     solved = {}
     for rot in ("restrained", "free"):
         t = time.time()

@@ -119,6 +119,17 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     return info
 
 
+def stress_as_held(scene):
+    """The scene's stress as the six Voigt components a probe holds (sigma_xx, sigma_yy, sigma_zz,
+    sigma_yz, sigma_xz, sigma_xy; Pa, compression positive, the symmetric part): to probe a state
+    as it is, shear stresses included. Holding zero shear instead at a state that carries some
+    first moves it to another state (54 Pa of shear changed E_z of a clump packing by 5.4e-4,
+    docs/clumps.md)."""
+    sig = np.asarray(engines.stress(scene))
+    sym = 0.5 * (sig + sig.T)
+    return np.array([sym[0, 0], sym[1, 1], sym[2, 2], sym[1, 2], sym[0, 2], sym[0, 1]])
+
+
 def stress_record(scene, goal=None):
     """What a state record reports of the stress (Pa, compression positive): the six components,
     the three principal values (largest first), the largest off-diagonal, and with a goal (six
