@@ -11,6 +11,7 @@
 #include <tuple>
 
 #include "Drivers.hpp"
+#include "RandomGas.hpp"
 #include "Lattices.hpp"
 #include "control/StressProbe.hpp"
 #include "dynamics/TimeStepper.hpp"
@@ -28,19 +29,9 @@ namespace {
 
 using PairKey = std::tuple<int, int, int, int, int>;  // m1 < m2, image shift of m2
 
-// n random spheres (radii 0.8-1.2 r) at solid fraction phi in the cell h (overlaps allowed), placed
-// uniformly in reduced coordinates, so the cell's shape does not bias where they sit.
+// A random gas in the cell `shape` (RandomGas.hpp) with a time step set.
 std::shared_ptr<Scene> gasIn(const Mat3& shape, int n, Real phi, unsigned seed, Real r = 1e-4) {
-  auto s = std::make_shared<Scene>();
-  s->material = paperMaterial();
-  std::mt19937_64 gen(seed);
-  std::uniform_real_distribution<Real> U(0, 1);
-  std::vector<Real> radii(n);
-  Real vol = 0;
-  for (Real& x : radii) { x = r * (0.8 + 0.4 * U(gen)); vol += 4.0 / 3.0 * M_PI * x * x * x; }
-  const Mat3 h = shape * std::cbrt(vol / phi / shape.determinant());
-  s->cell.hSize = s->cell.refHSize = h;
-  for (int i = 0; i < n; ++i) s->addSphere(h * Vec3(U(gen), U(gen), U(gen)), radii[i]);
+  auto s = randomGasIn(shape, n, phi, seed, r);
   s->dt = 1e-9;
   return s;
 }
