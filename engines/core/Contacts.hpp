@@ -2,6 +2,7 @@
 // Candidate pairs from the Verlet list and the contacts among them, as flat arrays walked in
 // order by the force loop. A pair is a contact while its normal force is > 0. Pairs persist
 // between detections so the tangential force keeps its history.
+#include <numeric>
 #include <vector>
 
 #include "core/Types.hpp"
@@ -31,6 +32,19 @@ struct Contacts {
   bool active(int c) const { return normalForce[c] > 0; }
   Vec3 force(int c) const { return normalForce[c] * normal[c] + shearForce[c]; }  // on body 2
   // The contact law's stiffnesses come from contact/HertzMindlin (normalStiffness(N, delta)).
+
+  // The incidence lists of nb bodies from b1, b2 (each body's pairs in pair order).
+  void buildIncidence(int nb) {
+    incBegin.assign(nb + 1, 0);
+    for (int k = 0; k < size(); ++k) { ++incBegin[b1[k] + 1]; ++incBegin[b2[k] + 1]; }
+    std::partial_sum(incBegin.begin(), incBegin.end(), incBegin.begin());
+    incidence.resize(2 * size());
+    std::vector<int> fill(incBegin.begin(), incBegin.end() - 1);
+    for (int k = 0; k < size(); ++k) {
+      incidence[fill[b1[k]]++] = ~k;
+      incidence[fill[b2[k]]++] = k;
+    }
+  }
 
   void resize(int n) {
     m1.resize(n); m2.resize(n); b1.resize(n); b2.resize(n); shift.resize(n); rbar.resize(n);

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "clump/ClumpTemplate.hpp"
+#include "core/Parallel.hpp"
 
 namespace trueaniso {
 
@@ -85,7 +86,7 @@ void Scene::refreshMembers() {
     members.pos = bodies.pos;
     return;
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (worthThreads(nb))
   for (int b = 0; b < nb; ++b) {
     const Quat& q = bodies.orientation[b];
     for (int m = bodies.memberBegin[b]; m < bodies.memberBegin[b + 1]; ++m)

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <tuple>
 
+#include "core/Parallel.hpp"
 #include "dynamics/CellFlip.hpp"
 
 #ifdef _OPENMP
@@ -144,7 +145,7 @@ void ContactDetection::rebuild(Scene& s) {
   nthreads = omp_get_max_threads();
 #endif
   std::vector<std::vector<Candidate>> found(nthreads);
-#pragma omp parallel
+#pragma omp parallel if (worthThreads(nm))
   {
     int t = 0;
 #ifdef _OPENMP
@@ -210,17 +211,7 @@ void ContactDetection::rebuild(Scene& s) {
   lostContacts += lost;
 
   // 5. Incidence lists (body -> its pairs) so forces are gathered per body, conflict-free.
-  N.incBegin.assign(nb + 1, 0);
-  for (int k = 0; k < N.size(); ++k) { ++N.incBegin[N.b1[k] + 1]; ++N.incBegin[N.b2[k] + 1]; }
-  std::partial_sum(N.incBegin.begin(), N.incBegin.end(), N.incBegin.begin());
-  N.incidence.resize(2 * N.size());
-  {
-    std::vector<int> fill(N.incBegin.begin(), N.incBegin.end() - 1);
-    for (int k = 0; k < N.size(); ++k) {
-      N.incidence[fill[N.b1[k]]++] = ~k;
-      N.incidence[fill[N.b2[k]]++] = k;
-    }
-  }
+  N.buildIncidence(nb);
   C = std::move(N);
 
   refPos_ = M.pos;

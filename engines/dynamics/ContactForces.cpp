@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "core/Parallel.hpp"
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -30,7 +32,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   // ran this step hold this step's forces, so only they are summed below.
   int team = 1;
 
-#pragma omp parallel reduction(+ : sliding)
+#pragma omp parallel reduction(+ : sliding) if (worthThreads(nc))
   {
     int t = 0;
 #ifdef _OPENMP
@@ -111,7 +113,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   for (int t = 1; t < team; ++t) {
     const std::vector<Vec3>& Ft = forceBuffers_[t];
     const std::vector<Vec3>& Tt = torqueBuffers_[t];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (worthThreads(nb))
     for (int q = 0; q < nb; ++q) {
       B.force[q] += Ft[q];
       if (Rotations) B.torque[q] += Tt[q];

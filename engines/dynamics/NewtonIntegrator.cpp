@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/Parallel.hpp"
 #include "dynamics/TimeStepper.hpp"
 
 namespace trueaniso {
@@ -75,7 +76,7 @@ void NewtonIntegrator::integrate(Scene& s) const {
   const Vec3 stretch = map.diagonal();
   const int nb = B.size();
   const Real damp = damping;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (worthThreads(nb))
   for (int b = 0; b < nb; ++b) {
     Vec3 acc = B.force[b] / B.mass[b];
     if (damp != 0) dampLocal(acc, B.vel[b], dt, damp);

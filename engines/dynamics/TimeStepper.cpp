@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "contact/HertzMindlin.hpp"
+#include "core/Parallel.hpp"
 
 namespace trueaniso {
 
@@ -15,7 +16,7 @@ Real TimeStepper::stiffnessBound(const Scene& s) {
   const bool rot = !s.blockRotations;
   Real best = std::numeric_limits<Real>::infinity();
   const int nb = B.size();
-#pragma omp parallel for schedule(static) reduction(min : best)
+#pragma omp parallel for schedule(static) reduction(min : best) if (worthThreads(nb))
   for (int b = 0; b < nb; ++b) {
     Real kt = 0, kr = 0;
     for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
@@ -43,7 +44,7 @@ Real TimeStepper::criticalPairStep(const Scene& s) {
   const HertzMindlin law(s.material);
   Real best = std::numeric_limits<Real>::infinity();
   const int nc = C.size();
-#pragma omp parallel for schedule(static) reduction(min : best)
+#pragma omp parallel for schedule(static) reduction(min : best) if (worthThreads(nc))
   for (int c = 0; c < nc; ++c) {
     const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
     if (kn <= 0) continue;

@@ -2,6 +2,7 @@
 
 #include <limits>
 
+#include "core/Parallel.hpp"
 #include "measure/Reduce.hpp"
 
 namespace trueaniso {
@@ -22,7 +23,7 @@ std::vector<int> contactsPerBody(const Scene& s) {
       if (C.normalForce[c] > 0) { ++count[C.b1[c]]; ++count[C.b2[c]]; }
     return count;
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (worthThreads(nb))
   for (int b = 0; b < nb; ++b) {
     int k = 0;
     for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {

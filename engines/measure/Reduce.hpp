@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/Parallel.hpp"
 #include "core/Types.hpp"
 
 namespace trueaniso {
@@ -13,7 +14,7 @@ T blockSum(int n, const T& zero, F&& term) {
   constexpr int kBlock = 512;
   const int blocks = (n + kBlock - 1) / kBlock;
   std::vector<T> partial(blocks, zero);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (worthThreads(n))
   for (int k = 0; k < blocks; ++k) {
     T acc = zero;
     const int end = std::min(n, (k + 1) * kBlock);
