@@ -5,6 +5,7 @@
 
 #include "contact/HertzMindlin.hpp"
 #include "core/Scene.hpp"
+#include "core/SpaceOrder.hpp"
 #include "python/Numpy.hpp"
 
 namespace trueaniso::py {
@@ -28,6 +29,13 @@ int addClump(Scene& s, const bp::object& pos, const bp::object& quat, const bp::
   return s.addClump(toVec3(pos, "position"), Quat(q[0], q[1], q[2], q[3]), toVec3List(offsets, "offsets"),
                     toRealList(radii, "radii"), mass, toVec3(inertia, "inertia"));
 }
+
+np::ndarray orderInSpace(Scene& s) {
+  const std::vector<int> order = spaceOrder(s);
+  reorderBodies(s, order);
+  return toNumpy(order);
+}
+void reorder(Scene& s, const bp::object& order) { reorderBodies(s, toIntList(order, "body order")); }
 
 template <std::vector<Vec3> Bodies::*F>
 np::ndarray getBodyVec(const Scene& s) { return toNumpy(s.bodies.*F); }
@@ -204,6 +212,11 @@ void exportScene() {
             bp::arg("inertia")))
       .def("copy", &copyScene, "Deep copy (state snapshot).")
       .def("assign", &assignScene, "Overwrite this scene with another's state.")
+      .def("order_in_space", &orderInSpace,
+           "Renumber the bodies along a Morton curve (core/SpaceOrder.hpp), contacts and their history kept; "
+           "returns the order (new body k was body order[k]).")
+      .def("reorder_bodies", &reorder, (bp::arg("order")),
+           "Renumber the bodies: new body k is old body order[k]; contacts and their history kept.")
       .def("rescale", &Scene::rescale, "Geometric similarity of all lengths; Hertz stresses are unchanged.")
       .def("invalidate_contacts", &invalidate, "Force a contact list rebuild before the next force evaluation.")
       .def("set_contact_history", &setContactHistory,

@@ -205,6 +205,7 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         return s
 
     scene = scene_at(start)
+    scene.order_in_space()  # bodies numbered along a Morton curve: the step's memory stays local
     rate = dem.strain_rate_for_inertial_number(inertial_number, r["d50"], scene.density, pressure)
 
     # Stage 1: compaction by radius expansion, rotations blocked or free.
