@@ -9,7 +9,6 @@ E_x, E_y, E_z with particle rotations restrained and free, from the exact static
 With --doc the table between <!-- anisotropy:begin --> and <!-- anisotropy:end --> is replaced.
 """
 import os
-import re
 import sys
 import time
 
@@ -18,6 +17,7 @@ sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]
 import numpy as np  # noqa: E402
 
 from trueaniso import cli  # noqa: E402
+import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
 
 # Table B1 (rotations restrained) and section 2.1 of the paper.
 PAPER = {"clump1": dict(e=0.445, E=(306.0, 306.0, 581.5), R="R_zz < R_xx ~ R_yy", H="H_zz > H_xx ~ H_yy"),
@@ -25,7 +25,7 @@ PAPER = {"clump1": dict(e=0.445, E=(306.0, 306.0, 581.5), R="R_zz < R_xx ~ R_yy"
 
 
 def measure(path, probes=True):
-    from trueaniso import clump_shapes, engines, fabric, specimen, specimen_file, statics, triaxial
+    from trueaniso import clump_shapes, fabric, specimen, specimen_file, statics, triaxial
     s, meta = specimen_file.load(path)
     st = specimen.state(s)
     f = fabric.fabric(s)
@@ -96,18 +96,9 @@ def main():
         from trueaniso import atomic
         atomic.write_json(o.json, rows)
     if o.doc:
-        from trueaniso import atomic
-        doc = open(o.doc).read()
         cmd = "/usr/bin/python3 pyscripts/bench/anisotropy_clumps.py %s --doc %s" % (
             " ".join("--specimen %s" % os.path.relpath(s) for s in o.specimen), os.path.relpath(o.doc))
-        block = "<!-- anisotropy:begin -->\n%s\n\nReproduce: `%s` (%s).\n<!-- anisotropy:end -->" % (
-            text, cmd, time.strftime("%Y-%m-%d"))
-        if "<!-- anisotropy:begin -->" in doc:
-            doc = re.sub(r"<!-- anisotropy:begin -->.*?<!-- anisotropy:end -->", lambda m: block, doc, flags=re.S)
-        else:
-            doc += "\n" + block + "\n"
-        with atomic.atomic_open(o.doc) as f:
-            f.write(doc)
+        _report.replace_block(o.doc, "anisotropy", "%s\n\nReproduce: `%s` (%s)." % (text, cmd, time.strftime("%Y-%m-%d")))
 
 
 if __name__ == "__main__" or cli.in_yade():

@@ -14,8 +14,6 @@ given (1 by default), timed in turns (best, median and slowest of --repeats). Wi
 import csv
 import glob
 import os
-import platform
-import re
 import statistics
 import sys
 import time
@@ -23,23 +21,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE)]
 from trueaniso import cli  # noqa: E402
+import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
 
 DATA = os.path.join(os.path.dirname(os.path.dirname(HERE)), "docs", "data")
-
-
-def machine():
-    model = platform.processor() or platform.machine()
-    try:
-        for ln in open("/proc/cpuinfo"):
-            if ln.startswith("model name"):
-                model = ln.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    debian = ""
-    if os.path.exists("/etc/debian_version"):
-        debian = ", Debian " + open("/etc/debian_version").read().strip()
-    return "%s, %d cores%s" % (model, os.cpu_count(), debian)
 
 
 def timings(o):
@@ -113,7 +97,7 @@ def main(argv=None):
     lines = ["Machine: %s; %d engine thread(s); %s. Specimen %s: %d spheres, cell shear %.1e (largest off-diagonal "
              "of hSize over its diagonal), time step %.3g s, damping 0.2, %d runs of %d steps each, interleaved. "
              "The machine is shared: the spread of the runs says how far a difference can be read."
-             % (machine(), o.threads, time.strftime("%Y-%m-%d"), os.path.basename(o.specimen), n, shear, dt,
+             % (_report.machine(), o.threads, time.strftime("%Y-%m-%d"), os.path.basename(o.specimen), n, shear, dt,
                 o.repeats, o.steps), "",
              "| cell | best steps/s | median | slowest | best M particle-steps/s | best relative to orthorhombic |",
              "|---|---|---|---|---|---|"]
@@ -132,14 +116,7 @@ def main(argv=None):
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        text = open(o.doc).read()
-        block = "<!-- cell-cost:begin -->\n" + table + "\n<!-- cell-cost:end -->"
-        if "<!-- cell-cost:begin -->" in text:
-            text = re.sub(r"<!-- cell-cost:begin -->.*?<!-- cell-cost:end -->", lambda m: block, text, flags=re.S)
-        else:
-            text += "\n" + block + "\n"
-        with open(o.doc, "w") as f:
-            f.write(text)
+        _report.replace_block(o.doc, "cell-cost", table)
 
 
 if __name__ == "__main__":

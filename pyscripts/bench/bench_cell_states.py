@@ -17,14 +17,13 @@ docs/data/cell-states-*.csv.
 import csv
 import glob
 import os
-import platform
-import re
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE)]
 from trueaniso import cli  # noqa: E402
+import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 DATA = os.path.join(ROOT, "docs", "data")
@@ -75,21 +74,6 @@ def run(o):
     print("wrote %s (%.0f s; specimen %s, sha256 %s)" % (out, time.time() - t_all, o.specimen, meta["sha256"][:12]))
 
 
-def machine():
-    model = platform.machine()
-    try:
-        for ln in open("/proc/cpuinfo"):
-            if ln.startswith("model name"):
-                model = ln.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    debian = ""
-    if os.path.exists("/etc/debian_version"):
-        debian = ", Debian " + open("/etc/debian_version").read().strip()
-    return "%s, %d cores%s" % (model, os.cpu_count(), debian)
-
-
 def _rows():
     out = {}
     for path in sorted(glob.glob(os.path.join(DATA, "cell-states-*.csv"))):
@@ -108,7 +92,7 @@ def tables():
              "run: `pyscripts/bench/bench_cell_states.py --specimen specimens/spheres-N-s1.npz [--control three]` "
              "(reach_state defaults: stress tolerance 100 Pa, unbalanced force 1e-4, mu = 0.5). State 1 of Table C1 "
              "is the isotropic state; `iso` is the same goal reached from the specimen, state 1 from `iso`."
-             % (machine(), time.strftime("%Y-%m-%d")), "",
+             % (_report.machine(), time.strftime("%Y-%m-%d")), "",
              "| N | control | states | max principal error (Pa) | max off-diagonal (Pa) | all within 0.5 kPa | "
              "steps per state (median, max) | wall time (s) |", "|---|---|---|---|---|---|---|---|"]
     for (n, control), rows in sorted(data.items()):
@@ -136,13 +120,7 @@ def tables():
 
 
 def write_doc(path):
-    text = open(path).read()
-    block = "<!-- cell-states:begin -->\n%s\n<!-- cell-states:end -->" % tables()
-    new, count = re.subn(r"<!-- cell-states:begin -->.*?<!-- cell-states:end -->", lambda m: block, text, flags=re.S)
-    if count != 1:
-        raise cli.InputError("%s has no <!-- cell-states:begin --> ... <!-- cell-states:end --> block" % path)
-    with open(path, "w") as f:
-        f.write(new)
+    _report.replace_block(path, "cell-states", tables())
     print("updated %s" % path)
 
 

@@ -15,7 +15,6 @@ specimen's metadata (wall time of prepare_specimen.py). With --doc the table bet
 """
 import json
 import os
-import re
 import statistics
 import subprocess
 import sys
@@ -24,6 +23,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # bench_stepper, trueaniso
 from trueaniso import cli  # noqa: E402
+import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
 
 
 def worker_ours(o):
@@ -84,11 +84,10 @@ def main():
         r = worker_ours(o) if o.worker == "ours" else worker_yade(o)
         print("BENCH " + json.dumps(r), flush=True)
         return
-    from bench_stepper import machine
     from trueaniso import engines, specimen_file
     threads = [int(t) for t in o.threads.split(",")]
     lines = ["Machine: %s%s. Medians of %d interleaved runs, damping 0.2, rotations free, time step half the "
-             "stiffness bound, %s." % (machine(), " (shared with other jobs while measured: rerun on a quiet "
+             "stiffness bound, %s." % (_report.machine(), " (shared with other jobs while measured: rerun on a quiet "
                                        "machine for final figures)" if o.shared else "", o.repeats,
                                        time.strftime("%Y-%m-%d")), "",
              "| specimen | clumps (members) | e | preparation | threads | trueaniso (M particle-steps/s) "
@@ -118,15 +117,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        from trueaniso import atomic
-        text = open(o.doc).read() if os.path.exists(o.doc) else ""
-        block = "<!-- clumps:begin -->\n" + table + "\n<!-- clumps:end -->"
-        if "<!-- clumps:begin -->" in text:
-            text = re.sub(r"<!-- clumps:begin -->.*?<!-- clumps:end -->", lambda m: block, text, flags=re.S)
-        else:
-            text += "\n## Clump assemblies (issue 13)\n\n" + block + "\n"
-        with atomic.atomic_open(o.doc) as f:
-            f.write(text)
+        _report.replace_block(o.doc, "clumps", table, heading="## Clump assemblies (issue 13)")
 
 
 if __name__ == "__main__" or cli.in_yade():

@@ -16,7 +16,6 @@ Error: max_i |E_i / E_i(static) - 1| and max_ij |nu_ij - nu_ij(static)| over the
 """
 import json
 import os
-import re
 import subprocess
 import sys
 import time
@@ -24,6 +23,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import cli  # noqa: E402
+import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
 
 OURS = [  # label, damping, ramp, gain, settle, relative tolerance, unbalanced, gamma, detection
     ("fast", 0.7, 50, 0.2, 20, 5e-3, 1e-4, 1e-6, True),
@@ -169,8 +169,7 @@ def run(o):
 
 
 def write(o, results):
-    from bench_stepper import machine
-    lines = ["Machine: %s; OpenMP threads: ours %s, YADE 1; %s." % (machine(), os.environ.get("OMP_NUM_THREADS", "all"),
+    lines = ["Machine: %s; OpenMP threads: ours %s, YADE 1; %s." % (_report.machine(), os.environ.get("OMP_NUM_THREADS", "all"),
                                                                   time.strftime("%Y-%m-%d")), "",
              "| N | method | E_x, E_y, E_z (MPa) | max error E_i | max error nu_ij | steps (x+y+z) | wall time x+y+z (s) |",
              "|---|---|---|---|---|---|---|"]
@@ -182,14 +181,8 @@ def write(o, results):
               % (" ".join(os.path.relpath(p) for p in o.specimens), o.doc, o.plot)]
     table = "\n".join(lines)
     print(table)
-    from trueaniso import atomic
     if o.doc:
-        text = open(o.doc).read() if os.path.exists(o.doc) else ""
-        block = "<!-- speed:begin -->\n" + table + "\n<!-- speed:end -->"
-        text = re.sub(r"<!-- speed:begin -->.*?<!-- speed:end -->", lambda m: block, text, flags=re.S) \
-            if "<!-- speed:begin -->" in text else text + "\n" + block + "\n"
-        with atomic.atomic_open(o.doc) as f:
-            f.write(text)
+        _report.replace_block(o.doc, "speed", table)
     if o.plot:
         import matplotlib
         matplotlib.use("Agg")

@@ -14,13 +14,13 @@ first: |dZm|, max |dE_i/E_i|, max |dnu_ij|, beside the default probe's own error
 """
 import csv
 import os
-import re
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import cli  # noqa: E402
+import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
 
 PROBE_ERROR_E, PROBE_ERROR_NU = 6.0e-4, 1.1e-4  # docs/speed-vs-error.md, default probe, 1000-16,000 spheres
 
@@ -98,15 +98,8 @@ def main():
     text = "\n".join(lines)
     print(text)
     if o.doc:
-        from trueaniso import atomic
-        old = open(o.doc).read() if os.path.exists(o.doc) else "# Steps to reach a state\n"
-        block = "<!-- state-speed:begin -->\n" + text + "\n<!-- state-speed:end -->"
-        if "<!-- state-speed:begin -->" in old:
-            old = re.sub(r"<!-- state-speed:begin -->.*?<!-- state-speed:end -->", lambda m: block, old, flags=re.S)
-        else:
-            old += "\n" + block + "\n"
-        with atomic.atomic_open(o.doc) as f:
-            f.write(old)
+        _report.replace_block(o.doc, "state-speed", text,
+                              heading=None if os.path.exists(o.doc) else "# Steps to reach a state")
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import runs nothing

@@ -8,8 +8,6 @@ docs/statics.md between their markers.
 Specimens from: pyscripts/prepare_specimen.py --n N --seed 1 --out /tmp/statics/sN.npz
 """
 import os
-import platform
-import re
 import resource
 import sys
 import time
@@ -18,7 +16,8 @@ HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py"
 sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 import numpy as np  # noqa: E402
 
-from trueaniso import atomic, cli, engines, specimen_file, statics  # noqa: E402
+from trueaniso import cli, engines, specimen_file, statics  # noqa: E402
+import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
 
 
 def options(argv=None):
@@ -27,16 +26,6 @@ def options(argv=None):
     p.add_argument("--doc", default=None, help="markdown file whose benchmark/results blocks are replaced")
     p.add_argument("--repeat", type=int, default=1, help="solves per case; the fastest is reported")
     return cli.parse(p, argv)
-
-
-def machine():
-    cpu = "unknown CPU"
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(l.split(":", 1)[1].strip() for l in f if l.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return "%s, %d cores, %s, Python %s" % (cpu, os.cpu_count(), platform.platform(), platform.python_version())
 
 
 def solve(scene, rotations, repeat):
@@ -54,19 +43,11 @@ def solve(scene, rotations, repeat):
     return best
 
 
-def replace_block(text, name, body):
-    begin, end = "<!-- %s -->" % name, "<!-- /%s -->" % name
-    block = "%s\n%s\n%s" % (begin, body.rstrip(), end)
-    if begin in text:
-        return re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: block, text, flags=re.S)
-    return text + "\n" + block + "\n"
-
-
 def main(o):
     bench = ["Machine: %s. Command: `%s`. Wall time of `static_stiffness` (held state, assembly and "
              "zero modes, METIS analysis, numeric factorisation, solves) and its CPU time (all threads); "
              "`load` is the 1-minute load average when the solve started (other jobs share the 2 cores)."
-             % (machine(), " ".join(["/usr/bin/python3"] + sys.argv)), "",
+             % (_report.machine(), " ".join(["/usr/bin/python3"] + sys.argv)), "",
              "| N | rotations | DOFs | contacts | nnz(L) | GFlop | analysis s | factor s | solve s | **total s** "
              "| CPU s | load | residual |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -97,12 +78,8 @@ def main(o):
             ", ".join("%.3f" % v for v in z["zeta_rotation"])))
         print(res[-1], flush=True)
     if o.doc:
-        with open(o.doc) as f:
-            text = f.read()
-        text = replace_block(text, "benchmark", "\n".join(bench))
-        text = replace_block(text, "results", "\n".join(res))
-        with atomic.atomic_open(o.doc, "w") as f:
-            f.write(text)
+        _report.replace_block(o.doc, "benchmark", "\n".join(bench))
+        _report.replace_block(o.doc, "results", "\n".join(res))
 
 
 if __name__ == "__main__":

@@ -16,8 +16,6 @@ between the markers <!-- stepper:begin --> and <!-- stepper:end --> of that file
 """
 import json
 import os
-import platform
-import re
 import statistics
 import subprocess
 import sys
@@ -27,6 +25,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import cli  # noqa: E402
+import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
 
 
 def worker_ours(o):
@@ -110,18 +109,6 @@ def run_worker(code, threads, o, dt):
     return json.loads(line[-1][6:])
 
 
-def machine():
-    model = "unknown CPU"
-    try:
-        for ln in open("/proc/cpuinfo"):
-            if ln.startswith("model name"):
-                model = ln.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return "%s, %d cores, %s" % (model, os.cpu_count(), platform.platform())
-
-
 def main():
     o = options()
     if o.worker:
@@ -149,7 +136,7 @@ def main():
     lines = ["Machine: %s. Specimen: %d spheres at 100 kPa (e = %.3f, Zm = %.2f), time step %.3g s, "
              "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
              "Figures in M particle-steps/s; ratios: ours / theirs."
-             % (machine(), n, meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
+             % (_report.machine(), n, meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d")), "",
              "| threads | %s |" % " | ".join(["trueaniso"] + ["%s | ratio" % names[c] for c in others]),
              "|" + "---|" * (2 + 2 * len(others))]
@@ -162,15 +149,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        from trueaniso import atomic
-        text = open(o.doc).read() if os.path.exists(o.doc) else ""
-        block = "<!-- stepper:begin -->\n" + table + "\n<!-- stepper:end -->"
-        if "<!-- stepper:begin -->" in text:
-            text = re.sub(r"<!-- stepper:begin -->.*?<!-- stepper:end -->", lambda m: block, text, flags=re.S)
-        else:
-            text += "\n" + block + "\n"
-        with atomic.atomic_open(o.doc) as f:
-            f.write(text)
+        _report.replace_block(o.doc, "stepper", table)
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import runs nothing

@@ -23,8 +23,8 @@ import numpy as np  # noqa: E402
 
 from analysis import zeta_contrast  # noqa: E402
 from analysis.zeta_contrast import DENSITIES, parts_of  # noqa: E402
-from bench_statics import machine, replace_block  # noqa: E402
-from trueaniso import atomic, cli, dem, engines, specimen_file, statics, zeta  # noqa: E402
+import _report  # noqa: E402
+from trueaniso import cli, dem, engines, specimen_file, statics, zeta  # noqa: E402
 
 ISOTROPIC = 0.01  # relative spread of the principal stresses below which a state is isotropic
 
@@ -207,7 +207,7 @@ def main(o):
         print("\n".join(bands[-2:]), flush=True)
     wall = time.time() - t0
     head = ("Machine: %s. Run %s, %.0f s wall (static solves included). Command: `OMP_NUM_THREADS=%s %s`."
-            % (machine(), datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), wall,
+            % (_report.machine(), datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), wall,
                os.environ.get("OMP_NUM_THREADS", "unset"), " ".join(["/usr/bin/python3"] + sys.argv)))
     notes = ("Contrast fits use the Nc/V of Eq. (36); with the counted Nc/V the fitted zeta_h, zeta_v move by at "
              "most %.1e (the fit's tolerance: Eq. 25 ignores a common factor of the E_i). se: standard error "
@@ -219,12 +219,8 @@ def main(o):
                   "states left out. Reference point: the a_i^2 of each state divided by those of the isotropic "
                   "state, DEM and micromechanical alike (Appendix B's (x0, y0)).")
     if o.doc:
-        with open(o.doc) as f:
-            text = f.read()
         block = "\n\n".join([head, notes, "\n".join(lines), band_notes, "\n".join(bands)])
-        text = replace_block(text, "zeta-contrast", block)
-        with atomic.atomic_open(o.doc, "w") as f:
-            f.write(text)
+        _report.replace_block(o.doc, "zeta-contrast", block)
     print(head)
 
 

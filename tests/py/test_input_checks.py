@@ -143,8 +143,10 @@ def test_fabric_of_a_scene_without_contacts_is_refused():
             measure(s)
 
 
+# Every script; modules the scripts share start with "_" (bench/_report.py) and have no command line.
 SCRIPT_NAMES = (sorted(n for n in os.listdir(SCRIPTS) if n.endswith(".py"))
-                + sorted("bench/" + n for n in os.listdir(os.path.join(SCRIPTS, "bench")) if n.endswith(".py")))
+                + sorted("bench/" + n for n in os.listdir(os.path.join(SCRIPTS, "bench"))
+                         if n.endswith(".py") and not n.startswith("_")))
 
 
 @pytest.mark.parametrize("name", SCRIPT_NAMES)
