@@ -6,6 +6,7 @@
 #include <omp.h>
 #endif
 
+#include "core/Parallel.hpp"
 #include "dynamics/ContactDetection.hpp"
 #include "dynamics/ContactForces.hpp"
 #include "dynamics/ContactRefresh.hpp"
@@ -59,6 +60,12 @@ void exportEngines() {
   bp::def("source_hash", +[]() { return std::string(kEngineSourceHash); },
           "SHA-256 of the engine sources this module was compiled from (cmake/EngineSourceHash.cmake).");
   bp::def("set_threads", &setThreads, "Set the OpenMP threads of the engines (OMP_NUM_THREADS is read only at start).");
+  bp::def("parallel_minimum", &parallelMinimum,
+          "Loops shorter than this many items (contacts, bodies) run on one thread (core/Parallel.hpp).");
+  bp::def("set_parallel_minimum", +[](int items) {
+    require(items >= 0, "the parallel minimum is a number of items >= 0");
+    setParallelMinimum(items);
+  }, "Set parallel_minimum (0: every loop in a team). Like the thread count, it changes the last bits of results.");
   bp::class_<Engine, std::shared_ptr<Engine>, boost::noncopyable>("Engine", bp::no_init)
       .def("apply", &Engine::apply)
       .add_property("name", &Engine::name)

@@ -126,11 +126,8 @@ def random_loose_clumps(n, template, size_distribution, seed, orientation_weight
         pos.append(turned)
         qs.append(np.array([clump_shapes.quaternion_product(rz, q) for q in quats]))
     pos, quats, d = np.vstack(pos), np.vstack(qs), np.tile(d, layers)
-    # Memory order along a cell grid: neighbours in space are neighbours in the arrays.
-    ncell = max(1, int(side // (2.0 * template.bounding_radius * d.max())))
-    key = np.floor(pos / (side / ncell)).astype(int)
-    along = np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
-    return pos[along], quats[along], d[along], start, np.full(3, side)
+    # In placement order; prepare_clumps numbers the bodies along a Morton curve.
+    return pos, quats, d, start, np.full(3, side)
 
 
 def _run_until(chain, engine, max_steps, chunk, label, progress, also=None):

@@ -72,10 +72,8 @@ def random_loose_packing(n, size_distribution, seed, phi_cell=0.60, phi_start=0.
             raise ValueError("the size distribution cannot fit the box: random placement failed")
         pos[i] = p
         grid.setdefault(tuple(c), []).append(i)
-    # Memory order along the cell grid: neighbours in space are neighbours in the arrays.
-    key = np.floor(pos / cell).astype(int)
-    along = np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
-    return pos[along], radii[along], scale, np.full(3, side)
+    # In placement order (largest first); prepare_spheres numbers the bodies along a Morton curve.
+    return pos, radii, scale, np.full(3, side)
 
 
 def new_scene(positions, radii, cell_size, shear_modulus=18e9, poisson=0.15, density=2500.0, friction=0.5):
@@ -92,7 +90,6 @@ def new_scene(positions, radii, cell_size, shear_modulus=18e9, poisson=0.15, den
 
 def _run_until(chain, engine, max_steps, chunk, label, progress):
     done = 0
-    t0 = time.time()
     while done < max_steps:
         done += chain.run(min(chunk, max_steps - done))
         if progress:

@@ -245,6 +245,7 @@ TEST(ContactForces, SmallScenesStayOnOneThread) {
   ContactDetection detection;
   detection.rebuild(*s);
   s->detectionInvalid = false;
+  ASSERT_EQ(parallelMinimum(), kDefaultParallelMinimum);
   ASSERT_FALSE(worthThreads(s->contacts.size()));
   Scene two = *s;
   omp_set_num_threads(1);
