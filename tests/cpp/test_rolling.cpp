@@ -122,23 +122,14 @@ TEST(RollingResistance, RigidRotationKeepsMomentMagnitude) {
   auto s = rollingPair(0.3, 1e3);
   Driver drv(s);
   drv.evaluate();
-  s->bodies.angVel[1] = Vec3(0, 40.0, 25.0);
-  for (int k = 0; k < 50; ++k) drv.evaluate();
-  s->bodies.angVel[1].setZero();
+  spinBody1(drv, Vec3(0, 40.0, 25.0), 50);
   drv.evaluate();
   const Vec3 M0 = s->contacts.rollingMoment[0];
   ASSERT_GT(M0.norm(), 0);
 
-  const Vec3 Omega = Vec3(0.7, 0.2, 1.0).normalized() * 2e4;
-  const Vec3 centre = 0.5 * (s->bodies.pos[0] + s->bodies.pos[1]);
-  const Vec3 x0 = s->bodies.pos[0] - centre, x1 = s->bodies.pos[1] - centre;
+  RigidRotation rigid(*s, Vec3(0.7, 0.2, 1.0).normalized() * 2e4);
   for (int k = 1; k <= 2000; ++k) {
-    const Eigen::AngleAxisd R(Omega.norm() * s->dt * k, Omega.normalized());
-    s->bodies.pos[0] = centre + R * x0;
-    s->bodies.pos[1] = centre + R * x1;
-    s->bodies.vel[0] = Omega.cross(R * x0);
-    s->bodies.vel[1] = Omega.cross(R * x1);
-    s->bodies.angVel[0] = s->bodies.angVel[1] = Omega;
+    const Eigen::AngleAxisd R = rigid.place(k);
     drv.evaluate();
     const Vec3 M = s->contacts.rollingMoment[0];
     ASSERT_NEAR(M.norm() / M0.norm(), 1.0, 1e-12) << "step " << k;
@@ -153,9 +144,7 @@ TEST(RollingResistance, HistoryKeptByDetectionForgottenWhenOpen) {
   auto s = rollingPair(0.3, 1e3);
   Driver drv(s);
   drv.evaluate();
-  s->bodies.angVel[1] = Vec3(0, 40.0, 0);
-  for (int k = 0; k < 20; ++k) drv.evaluate();
-  s->bodies.angVel[1].setZero();
+  spinBody1(drv, Vec3(0, 40.0, 0), 20);
   const Vec3 M = s->contacts.rollingMoment[0];
   s->detectionInvalid = true;  // forces a rebuild before the next evaluation
   const long before = drv.detection().rebuilds;

@@ -9,10 +9,11 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(sys.argv[0])), "..", "..", "..", "pyscripts"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
 import numpy as np  # noqa: E402
 from yade import O, Vector3  # noqa: E402
 
-from trueaniso import engines as E, yade_bridge  # noqa: E402
+from yade_scenes import two_spheres_both  # noqa: E402
 
 out = sys.argv[-1]
 r1, r2, delta0 = 1.0e-4, 0.8e-4, 1e-6
@@ -20,21 +21,7 @@ box, dt, steps = 2e-3, 1e-8, 400
 beta, eta_r = 0.3, 0.05
 spin = np.array([0.0, 3000.0, -2000.0])  # rad/s about y and z, normal along x
 
-ours = E.Scene()
-ours.shear_modulus, ours.poisson, ours.density, ours.friction = 18e9, 0.15, 2500.0, 1e23
-ours.cell_size = ours.cell_ref_size = [box] * 3
-c = np.full(3, 0.5 * box)
-ours.add_spheres(np.array([c, c + [r1 + r2 - delta0, 0, 0]]), np.array([r1, r2]))
-ours.dt = dt
-ours.rolling_stiffness, ours.rolling_friction = beta, eta_r
-ids = yade_bridge.yade_scene_from(ours, O, damping=0.0, import_contacts=False)
-for b in O.bodies:
-    b.state.blockedDOFs = "xyzXYZ"
-O.dt = dt
-
-sim = E.Simulation(ours)
-sim.add(E.ContactDetection())
-sim.add(E.ContactForces())
+ours, ids, sim = two_spheres_both(r1, r2, delta0, box, dt, 1e23, rolling_stiffness=beta, rolling_friction=eta_r)
 sim.run(1)  # the contact at rest: its k_s and N fix k_r and the cap
 ca = ours.contact_arrays()
 N0 = float(ca["normal_force"][0])
