@@ -7,6 +7,10 @@ path, is no trend). The paths are the constant-b paths of triaxial.paths, each w
 isotropic state (sigma_z = p) outwards by distance from it, as in docs/study-table-c1.md.
 
     /usr/bin/python3 -m analysis.path_fidelity results/x/probes.csv [more.csv ...]
+    /usr/bin/python3 -m analysis.path_fidelity --gaps 1e-5,1e-4,1e-3,1e-2 results/x [more study dirs ...]
+
+The second form recounts Zm with other gap tolerances on the study's state checkpoints
+(states/<id>.npz), which the table's single Zm_gap1e-3 column cannot give.
 """
 import sys
 
@@ -60,10 +64,38 @@ def summary(rows, path="probe table"):
     return out
 
 
+def gap_scan(study, tolerances):
+    """{state id: [Zm, Zm with each tolerance]} from the checkpoints of a study directory."""
+    import glob
+    import os
+    from trueaniso import engines, specimen_file
+    out = {}
+    for f in glob.glob(os.path.join(study, "states", "*.npz")):
+        s, _ = specimen_file.load(f)
+        out[os.path.basename(f)[:-4]] = [engines.coordination(s)["Zm"]] + \
+            [engines.coordination_gap(s, t)["Zm"] for t in tolerances]
+    if not out:
+        raise ResultsError("%s has no state checkpoints (states/*.npz)" % study)
+    return out
+
+
 def main(argv):
     if not argv:
-        sys.stderr.write("usage: python3 -m analysis.path_fidelity PROBES.csv [...]\n")
+        sys.stderr.write("usage: python3 -m analysis.path_fidelity PROBES.csv [...] | --gaps TOLS STUDY_DIR [...]\n")
         return 2
+    if argv[0] == "--gaps":
+        tols = [float(t) for t in argv[1].split(",")]
+        for d in argv[2:]:
+            try:
+                scan = gap_scan(d, tols)
+            except ResultsError as exc:
+                sys.stderr.write("error: %s\n" % exc)
+                return 2
+            from trueaniso.fabric import gap_column
+            for k, name in enumerate(["Zm"] + [gap_column(t) for t in tols]):
+                v = [z[k] for z in scan.values()]
+                print("%s: %-12s %.3f-%.3f over %d states" % (d, name, min(v), max(v), len(v)))
+        return 0
     for p in argv:
         try:
             s = summary(read_probes(p, need=("state", "probe", "E", "b", "sigma_z_goal", "Zm")), p)
