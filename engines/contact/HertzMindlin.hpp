@@ -81,8 +81,6 @@ class HertzMindlin {
   Real rollingStiffness(Real ks, Real rbar) const { return beta_ * ks * rbar * rbar; }
   // Largest rolling moment eta_r rbar N: the normal force's lever of eta_r rbar across the contact.
   Real rollingCap(Real N, Real rbar) const { return etaR_ * rbar * N; }
-  Real rollingStiffnessFactor() const { return beta_; }
-  Real rollingFriction() const { return etaR_; }
 
   // One touching contact, one step, of the rolling moment on sphere 2 (sphere 1 receives its
   // opposite). History as in `evaluate`; `dRoll`: the relative rolling rotation of the step,
@@ -119,12 +117,13 @@ class HertzMindlin {
     return v - b.dot(v) * b;  // keep it in the tangent plane against round-off drift
   }
 
-  // Coulomb: |Fs| <= mu N. Returns true if the force was capped (sliding). A force the cap has
-  // already scaled lies within a few ulps of it and is left as it is (slack 8 ulps of |Fs|^2):
-  // re-evaluating a contact without increment must not rescale it by 1 - 1e-16 each time.
+  // A vector the cap has already scaled lies within a few ulps of it and is left as it is (slack
+  // 8 ulps of its squared norm): re-evaluating a contact without increment must not rescale it
+  // by 1 - 1e-16 each time.
   static constexpr Real kCapSlack = 1.0 + 8.0 * std::numeric_limits<Real>::epsilon();
-  // Written out rather than calling capMagnitude: that call changed GCC 12's register allocation
-  // of the sheared force loop, and the paper's loop keeps its machine code (docs/rolling.md).
+  // Coulomb: |Fs| <= mu N. Returns true if the force was capped (sliding). Written out rather
+  // than calling capMagnitude: that call changed GCC 12's register allocation of the sheared
+  // force loop, and the paper's loop keeps its machine code (docs/rolling.md).
   bool capShear(Vec3& Fs, Real N) const {
     const Real cap = mu_ * N;
     const Real f2 = Fs.squaredNorm();

@@ -146,8 +146,7 @@ void ContactForces::apply(Scene& s) {
   require(!s.detectionInvalid, "contact forces need an up-to-date contact list: run ContactDetection first");
   const HertzMindlin law(s.material);
   const bool clumps = s.hasClumps(), rot = !s.blockRotations;
-  if (s.material.rolling()) {
-    s.material.validate();
+  if (s.material.rolling()) {  // beta and eta_r were validated with the scene at the detection
     require(!clumps, "rolling resistance is modelled between single spheres only, not for clumps: set the "
                      "rolling stiffness factor to 0");
     // Blocked rotations: no relative rotation, no rolling moment; the paper's loop below.
