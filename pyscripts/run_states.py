@@ -53,6 +53,12 @@ def parser():
     p.add_argument("--mu", type=cli.finite, default=0.5,
                    help="friction coefficient while states are reached (the paper's 0.5; probes always suppress "
                         "sliding)")
+    p.add_argument("--rolling-stiffness", type=cli.non_negative, default=0.0,
+                   help="rolling resistance (not in the paper; docs/rolling.md): beta of the rolling stiffness "
+                        "k_r = beta k_s rbar^2, from the specimen on through states and probes; 0 = off. Give "
+                        "--rolling-friction with it")
+    p.add_argument("--rolling-friction", type=cli.non_negative, default=0.0,
+                   help="rolling resistance: eta_r of the largest rolling moment eta_r rbar N; 0 = off")
     p.add_argument("--threads", type=cli.count, default=0,
                    help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
                         % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
@@ -102,6 +108,9 @@ def validate(o):
         _, meta = specimen_file.read(o.specimen)
     except specimen_file.SpecimenFileError as exc:
         raise cli.InputError(str(exc)) from None
+    problem = triaxial.rolling_problem(o.rolling_stiffness, o.rolling_friction, study.assembly_of(meta) != "sphere")
+    if problem:
+        raise cli.InputError(problem)
     if o.assembly and study.assembly_of(meta) != o.assembly:
         raise cli.InputError("%s is a %s specimen, not %s (--assembly)" % (o.specimen, study.assembly_of(meta),
                                                                          o.assembly))
@@ -169,7 +178,8 @@ def main(argv=None):
     try:
         study.run_states(o.specimen, states, o.out, probes=o.probe_axes, gamma=o.gamma, path=o.path,
                          restrain_rotations=o.rotations == "restrained", skip_detection=o.skip_detection,
-                         damping=o.damping, state_options=dict(friction=o.mu), wait=o.wait,
+                         damping=o.damping, state_options=dict(friction=o.mu, rolling_stiffness=o.rolling_stiffness,
+                                                                rolling_friction=o.rolling_friction), wait=o.wait,
                          force_new=o.force_new, progress_every=o.progress_every,
                          log=lambda m: print(m, flush=True), executor=executor)
     except triaxial.StateNotReached as exc:

@@ -5,7 +5,12 @@
 // back; the static solve (statics/) and the measures take their stiffnesses from here too.
 //  - normal sub-model: Hertz force in closed form from the overlap, whose tangent is Eq. (5);
 //  - tangential sub-model: incremental, k_s of Eq. (6), carried with the contact frame, capped
-//    at mu N (Coulomb).
+//    at mu N (Coulomb);
+//  - rolling sub-model (optional, not in the paper; off unless Material::rolling()): the
+//    elastic-plastic rolling spring of Iwashita & Oda (1998) as Ai et al. (2011) classify it
+//    ("type C", here without its dashpot): k_r = beta k_s rbar^2, the rolling moment
+//    incremented by -k_r times the relative rolling rotation and capped at eta_r rbar N.
+//    Carried with the contact frame like the shear force. No twisting resistance.
 #include <cmath>
 #include <limits>
 
@@ -18,7 +23,8 @@ class HertzMindlin {
  public:
   explicit HertzMindlin(const Material& m)
       : ratio_(m.stiffnessRatio()), mu_(m.friction), Cn_(m.Cn()), Cs_(m.Cs()),
-        hertzUnit_(4.0 / 3.0 * m.contactModulus() * std::sqrt(0.5)) {}
+        hertzUnit_(4.0 / 3.0 * m.contactModulus() * std::sqrt(0.5)), beta_(m.rollingStiffness),
+        etaR_(m.rollingFriction) {}
 
   // What one evaluation gives a touching contact.
   struct Response {
@@ -68,6 +74,27 @@ class HertzMindlin {
   Real knFromForce(Real N, Real rbar) const { return Cn_ * std::cbrt(rbar * N); }
   Real ksFromForce(Real N, Real rbar) const { return Cs_ * std::cbrt(rbar * N); }
 
+  // Rolling sub-model (docs/rolling.md).
+  // k_r = beta k_s rbar^2: Iwashita & Oda's rolling stiffness, which follows the Hertz-Mindlin
+  // k_s (so it grows with the contact force as the contact area does); rbar of Eq. (7) is the
+  // radius of two equal spheres.
+  Real rollingStiffness(Real ks, Real rbar) const { return beta_ * ks * rbar * rbar; }
+  // Largest rolling moment eta_r rbar N: the normal force's lever of eta_r rbar across the contact.
+  Real rollingCap(Real N, Real rbar) const { return etaR_ * rbar * N; }
+
+  // One touching contact, one step, of the rolling moment on sphere 2 (sphere 1 receives its
+  // opposite). History as in `evaluate`; `dRoll`: the relative rolling rotation of the step,
+  // (omega_2 - omega_1) dt in the plane normal to n; `ks`: this step's tangential stiffness.
+  // `capped` says whether the cap acted.
+  __attribute__((always_inline)) inline Vec3 rollingMoment(Real rbar, Real N, Real ks, const Vec3& n, bool loaded,
+                                                           const Vec3& nPrev, const Vec3& MPrev, const Vec3& dRoll,
+                                                           Real twist, bool& capped) const {
+    Vec3 M = loaded ? rotateWithContact(MPrev, nPrev, n, twist) : Vec3::Zero();
+    M -= rollingStiffness(ks, rbar) * dRoll;
+    capped = capMagnitude(M, rollingCap(N, rbar));
+    return M;
+  }
+
   // Carry the shear force with the contact frame: the minimal rotation taking the previous
   // normal a onto the current one b, then the spin of the pair about b. Both are exact
   // rotations, so a rigid rotation of a loaded pair never changes the force magnitude
@@ -90,15 +117,27 @@ class HertzMindlin {
     return v - b.dot(v) * b;  // keep it in the tangent plane against round-off drift
   }
 
-  // Coulomb: |Fs| <= mu N. Returns true if the force was capped (sliding). A force the cap has
-  // already scaled lies within a few ulps of it and is left as it is (slack 8 ulps of |Fs|^2):
-  // re-evaluating a contact without increment must not rescale it by 1 - 1e-16 each time.
+  // A vector the cap has already scaled lies within a few ulps of it and is left as it is (slack
+  // 8 ulps of its squared norm): re-evaluating a contact without increment must not rescale it
+  // by 1 - 1e-16 each time.
+  static constexpr Real kCapSlack = 1.0 + 8.0 * std::numeric_limits<Real>::epsilon();
+  // Coulomb: |Fs| <= mu N. Returns true if the force was capped (sliding). Written out rather
+  // than calling capMagnitude: that call changed GCC 12's register allocation of the sheared
+  // force loop, and the paper's loop keeps its machine code (docs/rolling.md).
   bool capShear(Vec3& Fs, Real N) const {
-    constexpr Real slack = 1.0 + 8.0 * std::numeric_limits<Real>::epsilon();
     const Real cap = mu_ * N;
     const Real f2 = Fs.squaredNorm();
-    if (f2 > cap * cap * slack) {
+    if (f2 > cap * cap * kCapSlack) {
       Fs *= cap / std::sqrt(f2);
+      return true;
+    }
+    return false;
+  }
+  // The same cap with the same slack for the rolling moment.
+  static bool capMagnitude(Vec3& v, Real cap) {
+    const Real v2 = v.squaredNorm();
+    if (v2 > cap * cap * kCapSlack) {
+      v *= cap / std::sqrt(v2);
       return true;
     }
     return false;
@@ -107,6 +146,7 @@ class HertzMindlin {
  private:
   Real ratio_, mu_, Cn_, Cs_;
   Real hertzUnit_;  // (4/3) E* sqrt(1/2): N = hertzUnit_ sqrt(rbar) delta^(3/2)
+  Real beta_, etaR_;  // rolling sub-model: k_r = beta_ k_s rbar^2, cap etaR_ rbar N
 };
 
 }  // namespace trueaniso

@@ -22,6 +22,9 @@ struct Contacts {
   std::vector<Real> overlap;     // delta, <= 0 when not touching
   std::vector<Real> normalForce; // N >= 0
   std::vector<Vec3> shearForce;  // tangential force on sphere 2 (history variable)
+  // Rolling moment on sphere 2 (history variable of the rolling sub-model, in the tangent plane);
+  // stays zero unless the material has rolling resistance (Material::rolling).
+  std::vector<Vec3> rollingMoment;
 
   // Incidence lists (pairs of each body) for per-body measures and the time step:
   // pairs of body b are incidence[incBegin[b] .. incBegin[b+1]), an entry c >= 0 means b is
@@ -50,6 +53,7 @@ struct Contacts {
     m1.resize(n); m2.resize(n); b1.resize(n); b2.resize(n); shift.resize(n); rbar.resize(n);
     normal.resize(n, Vec3::Zero()); branch.resize(n, Vec3::Zero()); overlap.resize(n, 0.0);
     normalForce.resize(n, 0.0); shearForce.resize(n, Vec3::Zero());
+    rollingMoment.resize(n, Vec3::Zero());
   }
 };
 

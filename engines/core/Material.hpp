@@ -18,12 +18,24 @@ struct Material {
   Real poisson = 0.15;       // nu_g
   Real density = 2500.0;     // kg/m^3
   Real friction = kLoadingFriction;  // mu, switchable at run time (kProbeFriction while probing)
+  // Rolling resistance (contact/HertzMindlin.hpp, docs/rolling.md), not in the paper and off by
+  // default: k_r = rollingStiffness k_s rbar^2 (Iwashita & Oda's beta), the rolling moment capped
+  // at rollingFriction rbar N (eta_r). rollingStiffness 0 turns the whole sub-model off.
+  Real rollingStiffness = 0.0;  // beta
+  Real rollingFriction = 0.0;   // eta_r
+
+  bool rolling() const { return rollingStiffness > 0; }
 
   void validate() const {
     require(shearModulus > 0, "shear modulus must be > 0");
     require(poisson > -1.0 && poisson < 0.5, "Poisson's ratio must lie in (-1, 0.5)");
     require(density > 0, "density must be > 0");
     require(friction >= 0, "friction coefficient must be >= 0");
+    // Written so that NaN fails too (every comparison with NaN is false).
+    require(rollingStiffness >= 0 && std::isfinite(rollingStiffness),
+            "rolling stiffness factor beta must be a finite number >= 0 (0: no rolling resistance)");
+    require(rollingFriction >= 0 && std::isfinite(rollingFriction),
+            "rolling friction eta_r must be a finite number >= 0");
   }
   // E* = G/(1-nu): the contact modulus of two identical spheres, E/(2(1-nu^2)).
   Real contactModulus() const { return shearModulus / (1.0 - poisson); }

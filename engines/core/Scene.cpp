@@ -122,6 +122,7 @@ void Scene::rescale(Real f) {
   for (int c = 0; c < C.size(); ++c) {
     C.rbar[c] *= f; C.branch[c] *= f; C.overlap[c] *= f;
     C.normalForce[c] *= f2; C.shearForce[c] *= f2;
+    C.rollingMoment[c] *= f2 * f;  // a force times a length (k_r ~ f^3, its cap eta_r rbar N too)
   }
   detectionInvalid = true;
 }

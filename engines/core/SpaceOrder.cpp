@@ -92,6 +92,7 @@ void reorderBodies(Scene& s, const std::vector<int>& order) {
       C.normal[c] = -C.normal[c];
       C.branch[c] = -C.branch[c];
       C.shearForce[c] = -C.shearForce[c];
+      C.rollingMoment[c] = -C.rollingMoment[c];  // the moment on side 2; side 1 bears its opposite
     }
   }
   std::vector<int> pairs(nc);
@@ -103,6 +104,7 @@ void reorderBodies(Scene& s, const std::vector<int>& order) {
   permute(C.m1, pairs); permute(C.m2, pairs); permute(C.b1, pairs); permute(C.b2, pairs);
   permute(C.shift, pairs); permute(C.rbar, pairs); permute(C.normal, pairs); permute(C.branch, pairs);
   permute(C.overlap, pairs); permute(C.normalForce, pairs); permute(C.shearForce, pairs);
+  permute(C.rollingMoment, pairs);
   C.buildIncidence(nb);
   s.detectionInvalid = true;  // the detection's reference positions are in the old order
 }

@@ -23,7 +23,7 @@ std::vector<int> spaceOrder(const Scene& s);
 // Renumbers the bodies (and their members, kept contiguous per body) to `order`, a permutation as
 // spaceOrder returns. Contacts keep their history: their member and body indices are mapped, a
 // pair whose sides swap (members are listed low index first) has its normal, branch, shear force
-// (the force on side 2) and image shift negated, and the list is sorted again as the detection
+// and rolling moment (both on side 2) and image shift negated, and the list is sorted again as the detection
 // keeps it, with its incidence lists. The detection is marked stale (its reference positions are
 // in the old order).
 void reorderBodies(Scene& s, const std::vector<int>& order);

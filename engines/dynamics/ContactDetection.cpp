@@ -179,7 +179,7 @@ void ContactDetection::rebuild(Scene& s) {
     }
   }
 
-  // 4. New arrays, keeping the history (shear force, normal) of pairs already listed.
+  // 4. New arrays, keeping the history (shear force, rolling moment, normal) of pairs already listed.
   Contacts N;
   size_t total = 0;
   for (auto& f : found) total += f.size();
@@ -199,6 +199,7 @@ void ContactDetection::rebuild(Scene& s) {
       if (old < nold && C.m1[old] == p.m1 && C.m2[old] == p.m2 && C.shift[old] == p.shift) {
         N.normal[c] = C.normal[old]; N.branch[c] = C.branch[old]; N.overlap[c] = C.overlap[old];
         N.normalForce[c] = C.normalForce[old]; N.shearForce[c] = C.shearForce[old];
+        N.rollingMoment[c] = C.rollingMoment[old];
         ++old;
       } else {
         const Vec3 d = M.pos[p.m2] + s.cell.shiftVector(p.shift) - M.pos[p.m1];

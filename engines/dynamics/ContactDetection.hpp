@@ -15,11 +15,15 @@
 
 namespace trueaniso {
 
+// The skin of every detection that does not set its own (contact refresh, the Python runner's
+// default); measures that read non-touching listed pairs rely on it (measure/Coordination.hpp).
+constexpr Real kDefaultSkinFactor = 0.2;
+
 class ContactDetection : public Engine {
  public:
   // Skin as a fraction of the largest member radius. Quasi-static runs move little per step,
   // so a modest skin keeps the list short and still rebuilds rarely.
-  Real skinFactor = 0.2;
+  Real skinFactor = kDefaultSkinFactor;
 
   void apply(Scene& scene) override;
   std::string name() const override { return "ContactDetection"; }

@@ -10,7 +10,7 @@
 
 namespace trueaniso {
 
-template <bool Clumps, bool Rotations, bool Sheared>
+template <bool Clumps, bool Rotations, bool Sheared, bool Rolling>
 void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   Contacts& C = s.contacts;
   Bodies& B = s.bodies;
@@ -27,7 +27,8 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
 #endif
   forceBuffers_.resize(nthreads);
   torqueBuffers_.resize(nthreads);
-  long sliding = 0;
+  static_assert(!Rolling || (Rotations && !Clumps), "rolling resistance acts on free single spheres only");
+  long sliding = 0, rollingAtCap = 0;  // the second is only counted with Rolling
   // The team may be smaller than asked (OMP_DYNAMIC, nesting): only the buffers of threads that
   // ran this step hold this step's forces, so only they are summed below.
   int team = 1;
@@ -53,6 +54,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     }
     std::fill(F, F + nb, Vec3::Zero());
     if (Rotations) std::fill(T, T + nb, Vec3::Zero());
+    long rollingCappedHere = 0;
 
 #pragma omp for schedule(static) nowait
     for (int c = 0; c < nc; ++c) {
@@ -68,6 +70,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         if (C.normalForce[c] != 0) {
           C.normalForce[c] = 0;
           C.shearForce[c].setZero();
+          if constexpr (Rolling) C.rollingMoment[c].setZero();
         }
         C.overlap[c] = rsum - std::sqrt(dist2);
         continue;
@@ -93,6 +96,19 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       const HertzMindlin::Response r =
           law.evaluate(delta, C.rbar[c], n, C.normalForce[c] > 0, C.normal[c], C.shearForce[c], dus, twist);
       if (r.sliding) ++sliding;
+      if constexpr (Rolling) {
+        // Relative rolling rotation of the step: the spin difference off the normal (the part
+        // along n is twist, which this sub-model does not resist).
+        const Vec3 dw = (B.angVel[b] - B.angVel[a]) * dt;
+        const Real ks = law.shearStiffness(HertzMindlin::normalStiffness(r.N, delta));
+        bool capped;
+        const Vec3 Mr = law.rollingMoment(C.rbar[c], r.N, ks, n, C.normalForce[c] > 0, C.normal[c], C.rollingMoment[c],
+                               dw - n.dot(dw) * n, twist, capped);
+        if (capped) ++rollingCappedHere;
+        C.rollingMoment[c] = Mr;
+        T[a] -= Mr;  // the moment on body b, its opposite on body a
+        T[b] += Mr;
+      }
 
       C.normal[c] = n;
       C.branch[c] = branch;
@@ -107,8 +123,14 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         T[b] += arm2.cross(Fc);
       }
     }
+    // Not a reduction clause: that would change the paper's loop (Rolling false) too.
+    if constexpr (Rolling) {
+#pragma omp atomic
+      rollingAtCap += rollingCappedHere;
+    }
   }
   slidingContacts = sliding;
+  rollingCapped = rollingAtCap;
   // Thread buffers into the bodies' arrays, in thread order.
   for (int t = 1; t < team; ++t) {
     const std::vector<Vec3>& Ft = forceBuffers_[t];
@@ -126,6 +148,16 @@ void ContactForces::apply(Scene& s) {
   require(!s.detectionInvalid, "contact forces need an up-to-date contact list: run ContactDetection first");
   const HertzMindlin law(s.material);
   const bool clumps = s.hasClumps(), rot = !s.blockRotations;
+  if (s.material.rolling()) {  // beta and eta_r were validated with the scene at the detection
+    require(!clumps, "rolling resistance is modelled between single spheres only, not for clumps: set the "
+                     "rolling stiffness factor to 0");
+    // Blocked rotations: no relative rotation, no rolling moment; the paper's loop below.
+    if (rot) {
+      if (s.cell.orthorhombic()) compute<false, true, false, true>(s, law);
+      else compute<false, true, true, true>(s, law);
+      return;
+    }
+  }
   if (!s.cell.orthorhombic()) {
     if (clumps) {
       if (rot) compute<true, true, true>(s, law); else compute<true, false, true>(s, law);

@@ -15,11 +15,14 @@ class ContactForces : public Engine {
   void apply(Scene& scene) override;
   std::string name() const override { return "ContactForces"; }
   long slidingContacts = 0;  // contacts at the Coulomb cap in the last evaluation
+  long rollingCapped = 0;    // contacts at the rolling cap in the last evaluation (rolling on)
 
  private:
   // Sheared: a cell with off-diagonal hSize or velGrad (core/Cell.hpp); the orthorhombic
-  // instantiation keeps the diagonal cell's cost.
-  template <bool Clumps, bool Rotations, bool Sheared>
+  // instantiation keeps the diagonal cell's cost. Rolling: the rolling sub-model of the contact
+  // law (Material::rolling; single spheres with free rotations only); off, the loop is the
+  // paper's law alone, its machine code untouched by the option.
+  template <bool Clumps, bool Rotations, bool Sheared, bool Rolling = false>
   void compute(Scene& scene, const HertzMindlin& law);
   std::vector<std::vector<Vec3>> forceBuffers_, torqueBuffers_;  // threads 1..n-1
 };

@@ -29,7 +29,9 @@ Real TimeStepper::stiffnessBound(const Scene& s) {
         // Lever arm of the contact point about this body's centre: member offset + radius.
         const int m = e >= 0 ? C.m2[c] : C.m1[c];
         const Real l = s.members.offset[m].norm() + s.members.radius[m];
-        kr += law.shearStiffness(kn) * l * l;
+        const Real ks = law.shearStiffness(kn);
+        // The rolling spring adds k_r to this body's rotational stiffness (0 when off: same bits).
+        kr += ks * l * l + law.rollingStiffness(ks, C.rbar[c]);
       }
     }
     if (kt > 0) best = std::min(best, std::sqrt(B.mass[b] / kt));
@@ -55,7 +57,10 @@ Real TimeStepper::criticalPairStep(const Scene& s) {
       const Real l1 = s.members.offset[C.m1[c]].norm() + s.members.radius[C.m1[c]];
       const Real l2 = s.members.offset[C.m2[c]].norm() + s.members.radius[C.m2[c]];
       inv += l1 * l1 / B.inertia[a].minCoeff() + l2 * l2 / B.inertia[b].minCoeff();
-      w2 = std::max(w2, law.shearStiffness(kn) * inv);
+      const Real ks = law.shearStiffness(kn);
+      // Shear spring and rolling spring in one rotational mode: their frequencies add (a bound).
+      w2 = std::max(w2, ks * inv + law.rollingStiffness(ks, C.rbar[c]) *
+                                     (1.0 / B.inertia[a].minCoeff() + 1.0 / B.inertia[b].minCoeff()));
     }
     best = std::min(best, 2.0 / std::sqrt(w2));
   }

@@ -1,8 +1,10 @@
 #include "measure/Coordination.hpp"
 
+#include <cmath>
 #include <limits>
 
 #include "core/Parallel.hpp"
+#include "dynamics/ContactDetection.hpp"
 #include "measure/Reduce.hpp"
 
 namespace trueaniso {
@@ -35,9 +37,11 @@ std::vector<int> contactsPerBody(const Scene& s) {
   return count;
 }
 
-Coordination coordination(const Scene& s) {
+namespace {
+
+// Eq. (14)'s counts from the contacts of each body.
+Coordination fromCounts(const std::vector<int>& count) {
   Coordination z;
-  const std::vector<int> count = contactsPerBody(s);
   z.particles = static_cast<long>(count.size());
   long ends = 0;
   for (int k : count) {
@@ -48,6 +52,31 @@ Coordination coordination(const Scene& s) {
   z.contacts = ends / 2;
   return z;
 }
+
+}  // namespace
+
+Coordination coordination(const Scene& s) { return fromCounts(contactsPerBody(s)); }
+
+std::vector<int> contactsPerBodyWithinGap(const Scene& s, Real tol) {
+  require(std::isfinite(tol) && tol >= 0, "the gap tolerance must be a finite number >= 0");
+  require(tol * 2.0 < 0.5 * kDefaultSkinFactor,
+          "the gap tolerance must stay below a quarter of the Verlet skin factor (" +
+              std::to_string(0.25 * kDefaultSkinFactor) + "): pairs farther apart may not be listed");
+  const Contacts& C = s.contacts;
+  const Members& M = s.members;
+  std::vector<int> count(s.bodies.size(), 0);
+  for (int c = 0; c < C.size(); ++c) {
+    // overlap > -tol (r1 + r2) written so that a touching pair (normalForce > 0) always counts,
+    // whatever round-off its overlap carries.
+    if (C.normalForce[c] > 0 || C.overlap[c] > -tol * (M.radius[C.m1[c]] + M.radius[C.m2[c]])) {
+      ++count[C.b1[c]];
+      ++count[C.b2[c]];
+    }
+  }
+  return count;
+}
+
+Coordination coordinationWithinGap(const Scene& s, Real tol) { return fromCounts(contactsPerBodyWithinGap(s, tol)); }
 
 Real solidVolume(const Scene& s) {
   const Bodies& B = s.bodies;

@@ -88,7 +88,8 @@ void exportEngines() {
   bp::scope().attr("LOADING_FRICTION") = kLoadingFriction;
 
   bp::class_<ContactForces, bp::bases<Engine>, std::shared_ptr<ContactForces>>("ContactForces")
-      .def_readonly("sliding_contacts", &ContactForces::slidingContacts);
+      .def_readonly("sliding_contacts", &ContactForces::slidingContacts)
+      .def_readonly("rolling_capped", &ContactForces::rollingCapped);
 
   bp::class_<NewtonIntegrator, bp::bases<Engine>, std::shared_ptr<NewtonIntegrator>>("NewtonIntegrator")
       .def_readwrite("damping", &NewtonIntegrator::damping)

@@ -10,13 +10,14 @@ namespace {
 np::ndarray stress(const Scene& s) { return toNumpy(loveWeberStress(s)); }
 np::ndarray stiffness6(const Scene& s) { return toNumpy(affineStiffness(s)); }
 np::ndarray principal(const bp::object& sigma) { return toNumpy(principalStresses(toMatrix3(sigma, "stress tensor"))); }
-bp::dict coordinationDict(const Scene& s) {
-  const Coordination z = coordination(s);
+bp::dict countsDict(const Coordination& z) {
   bp::dict d;
   d["Nc"] = z.contacts; d["Np"] = z.particles; d["Np0"] = z.noContact; d["Np1"] = z.oneContact;
   d["Zm"] = z.mechanical(); d["Z"] = z.plain();
   return d;
 }
+bp::dict coordinationDict(const Scene& s) { return countsDict(coordination(s)); }
+bp::dict coordinationGapDict(const Scene& s, Real tol) { return countsDict(coordinationWithinGap(s, tol)); }
 np::ndarray perBody(const Scene& s) { return toNumpy(contactsPerBody(s)); }
 
 }  // namespace
@@ -31,6 +32,10 @@ void exportMeasures() {
   bp::def("unbalanced_torque", &unbalancedTorque,
           "Mean |resultant torque| / (mean |contact force| x mean lever arm); valid after a force evaluation.");
   bp::def("coordination", &coordinationDict, "Nc, Np, Np0, Np1, Zm (Eq. 14) and Z = 2Nc/Np.");
+  bp::def("coordination_gap", &coordinationGapDict, (bp::arg("scene"), bp::arg("tolerance") = kGapTolerance),
+          "The counts of coordination() with near-contacts: a pair counts when its gap is below tolerance x (r1 + r2) "
+          "(measure/Coordination.hpp); needs forces evaluated after the last detection (a loaded or stepped scene).");
+  bp::scope().attr("GAP_TOLERANCE") = kGapTolerance;
   bp::def("contacts_per_body", &perBody);
   bp::def("void_ratio", &voidRatio);
 }

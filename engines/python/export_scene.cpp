@@ -138,6 +138,16 @@ Real getRho(const Scene& s) { return s.material.density; }
 void setRho(Scene& s, Real v) { s.setDensity(v); }
 Real getMu(const Scene& s) { return s.material.friction; }
 void setMu(Scene& s, Real v) { s.material.friction = v; s.material.validate(); }
+// Rolling resistance (Material): checked on a copy, so a refused value leaves the scene as it was.
+template <Real Material::*field>
+Real getMaterial(const Scene& s) { return s.material.*field; }
+template <Real Material::*field>
+void setMaterial(Scene& s, Real v) {
+  Material m = s.material;
+  m.*field = v;
+  m.validate();
+  s.material = m;
+}
 
 bp::dict contactArrays(const Scene& s) {
   const Contacts& C = s.contacts;
@@ -154,26 +164,30 @@ bp::dict contactArrays(const Scene& s) {
     force[c] = C.force(c);
   }
   d["kn"] = toNumpy(kn); d["shear_force"] = toNumpy(C.shearForce); d["force"] = toNumpy(force);
+  d["rolling_moment"] = toNumpy(C.rollingMoment);
   return d;
 }
 
 // History of existing contacts (from a specimen file or from YADE's interactions). The next
 // detection keeps it for every pair it lists again; nothing else of the contacts is trusted.
 void setContactHistory(Scene& s, const bp::object& m1o, const bp::object& m2o, const bp::object& shifto,
-                       const bp::object& normalo, const bp::object& normalForceo, const bp::object& shearo) {
+                       const bp::object& normalo, const bp::object& normalForceo, const bp::object& shearo,
+                       const bp::object& rollingo) {
   std::vector<int> m1 = toIntList(m1o, "member1"), m2 = toIntList(m2o, "member2");
   std::vector<Vec3i> sh = toVec3iList(shifto, "shift");
   std::vector<Vec3> n = toVec3List(normalo, "normal"), fs = toVec3List(shearo, "shear_force");
   std::vector<Real> N = toRealList(normalForceo, "normal_force");
   const size_t k = m1.size();
-  require(m2.size() == k && sh.size() == k && n.size() == k && fs.size() == k && N.size() == k,
+  // None: no rolling history (a scene without rolling resistance, or a file from before it).
+  std::vector<Vec3> mr = rollingo.is_none() ? std::vector<Vec3>(k, Vec3::Zero()) : toVec3List(rollingo, "rolling_moment");
+  require(m2.size() == k && sh.size() == k && n.size() == k && fs.size() == k && N.size() == k && mr.size() == k,
           "contact history arrays must have the same length");
   const int nm = s.members.size();
   std::vector<size_t> order(k);
   std::iota(order.begin(), order.end(), 0);
   for (size_t i = 0; i < k; ++i) {
     require(m1[i] >= 0 && m2[i] >= 0 && m1[i] < nm && m2[i] < nm, "contact member index out of range");
-    if (m1[i] > m2[i]) { std::swap(m1[i], m2[i]); sh[i] = -sh[i]; n[i] = -n[i]; fs[i] = -fs[i]; }
+    if (m1[i] > m2[i]) { std::swap(m1[i], m2[i]); sh[i] = -sh[i]; n[i] = -n[i]; fs[i] = -fs[i]; mr[i] = -mr[i]; }
   }
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
     return std::tie(m1[a], m2[a], sh[a][0], sh[a][1], sh[a][2]) < std::tie(m1[b], m2[b], sh[b][0], sh[b][1], sh[b][2]);
@@ -184,6 +198,7 @@ void setContactHistory(Scene& s, const bp::object& m1o, const bp::object& m2o, c
     const size_t i = order[q];
     C.m1[q] = m1[i]; C.m2[q] = m2[i]; C.b1[q] = s.members.body[m1[i]]; C.b2[q] = s.members.body[m2[i]];
     C.shift[q] = sh[i]; C.normal[q] = n[i]; C.normalForce[q] = N[i]; C.shearForce[q] = fs[i];
+    C.rollingMoment[q] = mr[i];
     const Real r1 = s.members.radius[m1[i]], r2 = s.members.radius[m2[i]];
     C.rbar[q] = 2 * r1 * r2 / (r1 + r2);
   }
@@ -221,7 +236,7 @@ void exportScene() {
       .def("invalidate_contacts", &invalidate, "Force a contact list rebuild before the next force evaluation.")
       .def("set_contact_history", &setContactHistory,
            (bp::arg("member1"), bp::arg("member2"), bp::arg("shift"), bp::arg("normal"), bp::arg("normal_force"),
-            bp::arg("shear_force")))
+            bp::arg("shear_force"), bp::arg("rolling_moment") = bp::object()))
       .def("contact_arrays", &contactArrays, "All listed pairs; a pair is a contact where normal_force > 0.")
       .add_property("positions", &getBodyVec<&Bodies::pos>, &setBodyVec<&Bodies::pos>)
       .add_property("velocities", &getBodyVec<&Bodies::vel>, &setBodyVec<&Bodies::vel>)
@@ -260,6 +275,13 @@ void exportScene() {
       .add_property("poisson", &getNu, &setNu)
       .add_property("density", &getRho, &setRho)
       .add_property("friction", &getMu, &setMu, "Coulomb coefficient of all contacts, switchable at run time.")
+      .add_property("rolling_stiffness", &getMaterial<&Material::rollingStiffness>,
+                    &setMaterial<&Material::rollingStiffness>,
+                    "Rolling resistance (not in the paper; docs/rolling.md): beta of k_r = beta k_s rbar^2; 0 (the "
+                    "default) turns it off.")
+      .add_property("rolling_friction", &getMaterial<&Material::rollingFriction>,
+                    &setMaterial<&Material::rollingFriction>,
+                    "Rolling resistance: eta_r of the cap eta_r rbar N on the rolling moment.")
       .add_property("Cn", &cn, "C_n of Eq. (5)")
       .add_property("Cs", &cs, "C_s of Eq. (6)")
       .def_readwrite("dt", &Scene::dt)

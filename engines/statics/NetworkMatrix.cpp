@@ -21,6 +21,8 @@ Real bodyScale(const Scene& s, int b) {
 }  // namespace
 
 NetworkMatrix assembleNetwork(const Scene& held, const std::vector<char>& rattler, bool rotations) {
+  require(!held.material.rolling(), "the static solve does not model rolling resistance (no rolling springs in "
+                                    "the network matrix)");
   const Contacts& C = held.contacts;
   const int nb = held.bodies.size();
   NetworkMatrix net;

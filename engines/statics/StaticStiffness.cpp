@@ -38,6 +38,10 @@ Real relativeResidual(const Eigen::MatrixXd& r, const Vec6& scale) {  // as Prec
 }  // namespace
 
 StaticStiffnessResult StaticStiffness::compute(const Scene& scene) const {
+  // The network matrix has no rolling springs (k_r on the relative rotations): refused rather than
+  // answered for another contact law (docs/rolling.md).
+  require(!scene.material.rolling(), "the static solve does not model rolling resistance: set the rolling "
+                                     "stiffness factor to 0, or measure the stiffness with stress probes");
   const auto t0 = Clock::now();
   StaticStiffnessResult res;
   res.rotations = rotations;

@@ -85,7 +85,24 @@ def fabric_row(scene, zeta=1.0, density="eq36"):
     p = engines.micromechanics(f["B"], f["M"], float(f["NcV_eq36"] if _check_density(density) == "eq36"
                                                      else f["NcV_count"]),
                                scene.Cn, scene.Cs, float(zeta))
-    return row(f, p, zeta, density)
+    out = row(f, p, zeta, density)
+    out.update(gap_columns(scene))
+    return out
+
+
+def gap_column(tolerance):
+    """'Zm_gap1e-3' for 1e-3: the column of Zm counted with that gap tolerance (issue 14)."""
+    mantissa, exponent = ("%.6e" % tolerance).split("e")
+    return "Zm_gap%se%d" % (mantissa.rstrip("0").rstrip("."), int(exponent))
+
+
+def gap_columns(scene, tolerance=None):
+    """Zm and N_c with near-contacts counted: pairs whose gap is below tolerance (default
+    engines.GAP_TOLERANCE) times their mean diameter (measure/Coordination.hpp)."""
+    tol = engines.GAP_TOLERANCE if tolerance is None else tolerance
+    z = engines.coordination_gap(scene, tol)
+    name = gap_column(tol)
+    return {name: float(z["Zm"]), "Nc" + name[2:]: int(z["Nc"])}
 
 
 def row(f, p, zeta, density):

@@ -43,6 +43,9 @@ _ARRAYS = ("positions", "velocities", "angular_velocities", "orientations", "mas
            "c_shear_force")
 # Version 2 stored an orthorhombic cell: its edge lengths, reference lengths and diagonal strain
 # rates. Such a file is still read (its checksum over these names), as the diagonal matrices.
+# Rolling resistance (docs/rolling.md): a scene with it on also stores its rolling moments, and
+# its material names beta and eta_r; a scene without it is written exactly as before.
+_ROLLING = "c_rolling_moment"
 _ARRAYS_V2 = tuple({"cell": "cell_size", "cell_ref": "cell_ref_size", "velocity_gradient": "strain_rate"}.get(k, k)
                    for k in _ARRAYS)
 
@@ -72,10 +75,23 @@ def _checksum(arrays, meta, names=_ARRAYS):
     return h.hexdigest()
 
 
+def _rolling(material):
+    return material.get("rolling_stiffness", 0.0) > 0
+
+
+def _names(meta):
+    """The arrays a file of this metadata holds (and its checksum covers)."""
+    names = _ARRAYS_V2 if meta.get("format_version") == 2 else _ARRAYS
+    m = meta.get("material")
+    return names + (_ROLLING,) if isinstance(m, dict) and _number(m.get("rolling_stiffness", 0.0), 0) and \
+        _rolling(m) else names
+
+
 def scene_arrays(scene):
     c = scene.contact_arrays()
     active = c["normal_force"] > 0
-    return dict(
+    rolling = {_ROLLING: c["rolling_moment"][active]} if scene.rolling_stiffness > 0 else {}
+    return dict(**rolling,
         positions=scene.positions, velocities=scene.velocities,
         angular_velocities=scene.angular_velocities, orientations=scene.orientations,
         masses=scene.masses, inertia=scene.inertia, member_begin=scene.member_begin,
@@ -95,12 +111,14 @@ def save(path, scene, seed=None, parameters=None, summary=None):
     meta = dict(format=FORMAT, format_version=FORMAT_VERSION, created=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
                 seed=seed, parameters=parameters or {}, summary=summary or {}, versions=versions(),
                 material=dict(shear_modulus=scene.shear_modulus, poisson=scene.poisson,
-                              density=scene.density, friction=scene.friction),
+                              density=scene.density, friction=scene.friction,
+                              **(dict(rolling_stiffness=scene.rolling_stiffness, rolling_friction=scene.rolling_friction)
+                                 if scene.rolling_stiffness > 0 else {})),
                 dt=scene.dt, time=scene.time, step=scene.step, block_rotations=bool(scene.block_rotations))
     problem = meta_problem(json.loads(json.dumps(meta, default=atomic._jsonable)))
     if problem:
         raise SpecimenFileError("refusing to save %s: %s" % (path, problem))
-    meta["sha256"] = _checksum(arrays, meta)
+    meta["sha256"] = _checksum(arrays, meta, _names(meta))
     with atomic.atomic_open(path, "wb") as f:
         np.savez(f, meta=np.array(json.dumps(meta, default=atomic._jsonable)), **arrays)
     return meta
@@ -132,10 +150,13 @@ def read(path):
     if meta.get("format_version") not in (2, FORMAT_VERSION):
         raise SpecimenFileError("%s has specimen format version %r; this trueaniso reads versions 2 and %d"
                                 % (path, meta.get("format_version"), FORMAT_VERSION))
-    names = _ARRAYS_V2 if meta["format_version"] == 2 else _ARRAYS
+    names = _names(meta)
     missing = [k for k in names if k not in data]
     if missing:
         raise SpecimenFileError("corrupt specimen file %s (missing arrays: %s)" % (path, ", ".join(missing)))
+    if _ROLLING in data and _ROLLING not in names:  # not covered by the checksum: never trusted
+        raise SpecimenFileError("corrupt specimen file %s (rolling moments stored, but its material has no rolling "
+                                "resistance)" % path)
     if not isinstance(meta.get("sha256"), str) or _checksum(data, meta, names) != meta["sha256"]:
         raise SpecimenFileError("corrupt specimen file %s (checksum mismatch: arrays or metadata were changed "
                                 "after it was written)" % path)
@@ -179,6 +200,9 @@ def meta_problem(meta):
         return "material.density must be a finite number > 0, not %r" % (m["density"],)
     if not _number(m["friction"], 0):
         return "material.friction must be a finite number >= 0, not %r" % (m["friction"],)
+    for k in ("rolling_stiffness", "rolling_friction"):
+        if k in m and not _number(m[k], 0):
+            return "material.%s must be a finite number >= 0, not %r" % (k, m[k])
     if not _number(meta["dt"], 0):
         return "dt must be a finite number >= 0, not %r" % (meta["dt"],)
     if not _number(meta["time"], 0):
@@ -219,7 +243,8 @@ def contents_problem(a):
     if problem:
         return problem
     for name in ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia", "radii",
-                 "member_offsets", "c_normal", "c_normal_force", "c_shear_force"):
+                 "member_offsets", "c_normal", "c_normal_force", "c_shear_force",
+                 *((_ROLLING,) if _ROLLING in a else ())):
         if not np.issubdtype(a[name].dtype, np.floating) or not np.all(np.isfinite(a[name])):
             return "non-finite values in %s" % name
     if np.any(a["radii"] <= 0):
@@ -243,6 +268,8 @@ def contents_problem(a):
         return "duplicate bodies (two bodies at the same place)"
     nc = a["c_member1"].shape[0]
     shapes = dict(c_member2=(nc,), c_shift=(nc, 3), c_normal=(nc, 3), c_normal_force=(nc,), c_shear_force=(nc, 3))
+    if _ROLLING in a:
+        shapes[_ROLLING] = (nc, 3)
     for name, shape in shapes.items():
         if a[name].shape != shape:
             return "contact arrays of different lengths (%s has shape %s, not %s)" % (name, a[name].shape, shape)
@@ -336,6 +363,8 @@ def load(path):
     m = meta["material"]
     s.shear_modulus, s.poisson, s.friction = m["shear_modulus"], m["poisson"], m["friction"]
     s.density = m["density"]
+    s.rolling_friction = m.get("rolling_friction", 0.0)
+    s.rolling_stiffness = m.get("rolling_stiffness", 0.0)
     s.cell = a["cell"]
     s.cell_ref = a["cell_ref"]
     if np.all(np.diff(mb) == 1):
@@ -358,7 +387,7 @@ def load(path):
     if problem:
         raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     s.set_contact_history(a["c_member1"], a["c_member2"], a["c_shift"], a["c_normal"],
-                          a["c_normal_force"], a["c_shear_force"])
+                          a["c_normal_force"], a["c_shear_force"], a.get(_ROLLING))
     s.dt, s.time, s.step = meta["dt"], meta["time"], meta["step"]
     s.block_rotations = meta["block_rotations"]
     if not np.allclose(s.masses, a["masses"], rtol=1e-12):

@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from . import dem, engines
+from .refusal import InputError
 
 # Table C1: (ID, sigma_x, sigma_y, sigma_z, q) in kPa, as printed (rounded to 0.1 kPa).
 TABLE_C1 = [
@@ -68,21 +69,52 @@ def validate_state(b, sigma_z, p=100e3):
     return engines.true_triaxial_stresses(b, sigma_z, p)
 
 
+def rolling_problem(stiffness, friction, clumps=False):
+    """Why rolling resistance (docs/rolling.md) with beta = stiffness, eta_r = friction cannot be
+    run, or None: both must be finite numbers, > 0 together (one zero gives no resistance, or no
+    cap) or both 0 (off, the paper); clumps have none."""
+    for name, x in (("stiffness factor beta", stiffness), ("friction eta_r", friction)):
+        if not (isinstance(x, (int, float)) and math.isfinite(x) and x >= 0):
+            return "the rolling %s must be a finite number >= 0, not %r" % (name, x)
+    if (stiffness > 0) != (friction > 0):
+        return ("rolling resistance needs both the stiffness factor beta and the rolling friction eta_r > 0 (or both "
+                "0: off); got beta = %r, eta_r = %r" % (stiffness, friction))
+    if stiffness > 0 and clumps:
+        return "rolling resistance is modelled between single spheres only, not for clumps"
+    return None
+
+
+def set_rolling(scene, stiffness, friction):
+    """Rolling resistance on the scene, refused before any work (rolling_problem)."""
+    problem = rolling_problem(stiffness, friction, scene.num_members != scene.num_bodies)
+    if problem:
+        raise InputError(problem)
+    try:
+        scene.rolling_friction = float(friction)
+        scene.rolling_stiffness = float(stiffness)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+
+
 def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0,
                 unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
                 stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
-                control_shear=True, shear=(0.0, 0.0, 0.0)):
+                control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0):
     """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
 
     Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
     within `tolerance` of `shear` (sigma_yz, sigma_xz, sigma_xy; zero: the cell's axes are the
     principal axes) and the unbalanced force is below `unbalanced`. control_shear=False holds the
     cell's shear strains instead (the orthorhombic servo, whose shear stresses nothing holds; a
-    non-zero `shear` is then refused). Raises StateNotReached if the specimen cannot get there: it
+    non-zero `shear` is then refused). rolling_stiffness, rolling_friction: the optional rolling
+    resistance of the contact law (beta, eta_r; docs/rolling.md), set on the scene for the loading
+    and kept in its checkpoint, so its probes run with it too; 0, 0 (the paper) turns it off.
+    Raises StateNotReached if the specimen cannot get there: it
     stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
     strains beyond `max_strain`, or runs `max_steps`.
     """
     validate_state(b, sigma_z, p)
+    set_rolling(scene, rolling_stiffness, rolling_friction)
     servo = engines.TrueTriaxialServo()
     servo.set_goal(b, sigma_z, p)
     servo.control_shear = bool(control_shear)

@@ -56,4 +56,35 @@ class Driver {
   ContactForces forces_;
 };
 
+// A rigid rotation of a two-body scene about its mid-point at angular velocity Omega: place(k)
+// sets the positions after k steps, the velocities of the rigid motion at the same instant (so
+// the contact point's relative velocity is zero and only the frame rotation acts on the
+// contact's history) and both spins to Omega; returns the rotation.
+class RigidRotation {
+ public:
+  RigidRotation(Scene& s, const Vec3& Omega)
+      : s_(s), Omega_(Omega), centre_(0.5 * (s.bodies.pos[0] + s.bodies.pos[1])),
+        x0_(s.bodies.pos[0] - centre_), x1_(s.bodies.pos[1] - centre_) {}
+  Eigen::AngleAxisd place(int k) {
+    const Eigen::AngleAxisd R(Omega_.norm() * s_.dt * k, Omega_.normalized());
+    s_.bodies.pos[0] = centre_ + R * x0_;
+    s_.bodies.pos[1] = centre_ + R * x1_;
+    s_.bodies.vel[0] = Omega_.cross(R * x0_);
+    s_.bodies.vel[1] = Omega_.cross(R * x1_);
+    s_.bodies.angVel[0] = s_.bodies.angVel[1] = Omega_;
+    return R;
+  }
+
+ private:
+  Scene& s_;
+  Vec3 Omega_, centre_, x0_, x1_;
+};
+
+// Spins body 1 at w for `steps` evaluations (positions fixed), then stops it.
+inline void spinBody1(Driver& drv, const Vec3& w, int steps) {
+  drv.scene().bodies.angVel[1] = w;
+  for (int k = 0; k < steps; ++k) drv.evaluate();
+  drv.scene().bodies.angVel[1].setZero();
+}
+
 }  // namespace trueaniso::testing

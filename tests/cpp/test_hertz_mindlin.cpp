@@ -164,19 +164,10 @@ TEST(HertzMindlin, RigidRotationKeepsForceMagnitudes) {
   const Real F0 = s->contacts.shearForce[0].norm();
   ASSERT_GT(F0, 0.1 * N0);
 
-  const Vec3 Omega = Vec3(0.7, 0.2, 1.0).normalized() * 2e4;  // rad/s, 2e-4 rad per step
-  const Vec3 centre = 0.5 * (s->bodies.pos[0] + s->bodies.pos[1]);
-  const Vec3 x0 = s->bodies.pos[0] - centre, x1 = s->bodies.pos[1] - centre;
+  RigidRotation rigid(*s, Vec3(0.7, 0.2, 1.0).normalized() * 2e4);  // rad/s, 2e-4 rad per step
   const Vec3 f0 = s->contacts.shearForce[0];
   for (int k = 1; k <= 2000; ++k) {
-    const Eigen::AngleAxisd R(Omega.norm() * s->dt * k, Omega.normalized());
-    s->bodies.pos[0] = centre + R * x0;
-    s->bodies.pos[1] = centre + R * x1;
-    // Velocities of the rigid motion at the same instant, so the contact point's relative
-    // velocity is zero and only the frame rotation acts on the shear force.
-    s->bodies.vel[0] = Omega.cross(R * x0);
-    s->bodies.vel[1] = Omega.cross(R * x1);
-    s->bodies.angVel[0] = s->bodies.angVel[1] = Omega;
+    const Eigen::AngleAxisd R = rigid.place(k);
     drv.evaluate();
     // Exact rotations: only round-off (1e-12) may change the magnitudes over 2000 steps.
     ASSERT_NEAR(s->contacts.normalForce[0] / N0, 1.0, 1e-9);

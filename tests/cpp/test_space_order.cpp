@@ -75,8 +75,12 @@ void expectSameDynamics(std::shared_ptr<Scene> s) {
     for (int d = 0; d < D.size() && !found; ++d) {
       if (D.normalForce[d] != C.normalForce[c]) continue;
       const bool same = D.b1[d] == b1 && D.b2[d] == b2, swapped = D.b1[d] == b2 && D.b2[d] == b1;
-      if (same) found = D.shearForce[d] == C.shearForce[c] && D.normal[d] == C.normal[c];
-      if (swapped) found = D.shearForce[d] == -C.shearForce[c] && D.normal[d] == -C.normal[c];
+      if (same)
+        found = D.shearForce[d] == C.shearForce[c] && D.normal[d] == C.normal[c] &&
+                D.rollingMoment[d] == C.rollingMoment[c];
+      if (swapped)
+        found = D.shearForce[d] == -C.shearForce[c] && D.normal[d] == -C.normal[c] &&
+                D.rollingMoment[d] == -C.rollingMoment[c];
     }
     ASSERT_TRUE(found) << "contact " << c << " lost its history in the renumbering";
   }
@@ -133,6 +137,17 @@ TEST(SpaceOrder, ContactingBodiesBecomeNearInMemory) {
 }
 
 TEST(SpaceOrder, RenumberedSpheresStepAsTheOriginal) { expectSameDynamics(randomGasIn(Mat3::Identity(), 400, 0.62, 5)); }
+
+// With rolling resistance (docs/rolling.md) the rolling moments are history too.
+TEST(SpaceOrder, RenumberedSpheresWithRollingResistanceStepAsTheOriginal) {
+  auto s = randomGasIn(Mat3::Identity(), 400, 0.62, 5);
+  s->material.rollingStiffness = 0.25;
+  s->material.rollingFriction = 0.1;
+  expectSameDynamics(s);
+  Real largest = 0;
+  for (const Vec3& m : s->contacts.rollingMoment) largest = std::max(largest, m.norm());
+  EXPECT_GT(largest, 0.0);  // the premise: moments were carried
+}
 
 TEST(SpaceOrder, RenumberedClumpsStepAsTheOriginal) { expectSameDynamics(randomGas(300, 0.6, 9, true)); }
 

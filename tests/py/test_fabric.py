@@ -180,6 +180,27 @@ def test_fabric_row_columns_are_the_measures():
     assert pc["nu"][0, 1] == pytest.approx(p["nu"][0, 1], rel=1e-13)
 
 
+def test_fabric_row_has_the_gap_tolerant_count():
+    """Zm_gap1e-3 (issue 14) beside Zm: the engine's count at the default tolerance; its column
+    name follows the tolerance; a brute-force count of pairs with gap < tol (r1 + r2) gives its
+    N_c; tolerance 0 gives back Zm; a tolerance the skin cannot hold is refused."""
+    s = _random_network(200, 0.6, 11)
+    row = fabric.fabric_row(s)
+    assert E.GAP_TOLERANCE == 1e-3 and fabric.gap_column(1e-3) == "Zm_gap1e-3"
+    assert fabric.gap_column(2.5e-2) == "Zm_gap2.5e-2"
+    assert row["Zm_gap1e-3"] == E.coordination_gap(s)["Zm"] and row["Zm_gap1e-3"] >= row["Zm"]
+    assert E.coordination_gap(s, 0.0)["Zm"] == row["Zm"]
+    pos, r, side = np.asarray(s.positions), np.asarray(s.radii), s.cell_size[0]
+    for tol in (1e-3, 2e-2):
+        d = pos[None, :, :] - pos[:, None, :]
+        d -= side * np.round(d / side)
+        rs = r[:, None] + r[None, :]
+        near = np.triu(np.linalg.norm(d, axis=2) - rs < tol * rs, 1)
+        assert fabric.gap_columns(s, tol)["Nc" + fabric.gap_column(tol)[2:]] == int(near.sum())
+    with pytest.raises(ValueError, match="gap tolerance"):
+        E.coordination_gap(s, 0.1)
+
+
 def test_recorder_samples_the_running_network():
     """Records at steps 0, 5, 10 of an 11-step run with the integrator moving the bodies; the
     last record equals the fabric of the last force evaluation, and the network did change."""

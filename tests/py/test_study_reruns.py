@@ -121,6 +121,7 @@ def test_rerun_of_a_finished_study_does_nothing(base, specimen_100, tmp_path):
     (["--mu", "0.3"], "state.friction"),
     (["--damping", "0.3"], "damping"),
     (["--skip-detection"], "probe.detection"),
+    (["--rolling-stiffness", "0.25", "--rolling-friction", "0.1"], "state.rolling_"),
 ])
 def test_other_settings_are_refused_in_one_line(base, specimen_100, tmp_path, args, field):
     """Before: rows made with other settings were appended, and metadata listed only the last."""

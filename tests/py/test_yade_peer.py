@@ -140,3 +140,15 @@ def test_scene_saved_by_yade_and_o_loaded_imports(yade_json, tmp_path):
     # (0.14 % measured; YADE's PeriTriaxController stops at its 1e-5 relative stress tolerance)
     assert r["yade"]["E"] == pytest.approx(r["ours"]["E"], rel=5e-3)
     assert r["ours"]["E"] > 20e6  # a loaded network, not a trivial one
+
+
+def test_rolling_resistance_matches_yade_include_moment(yade_json):
+    """Our rolling resistance (docs/rolling.md) against YADE 2023.02a's Law2_ScGeom_MindlinPhys_Mindlin
+    (includeMoment=True) with Ip2's krot set to our k_r and the cap to our eta_r rbar N: a sphere
+    spun off the normal for 400 steps, 37 elastic then at the cap. Same incremental law, same
+    frame (no rotation of the pair): the moments agree to round-off (measured 3.5e-16; 1e-12)."""
+    r = yade_json("peer_rolling")
+    assert r["yade_kr"] == pytest.approx(r["kr"], rel=1e-15)
+    assert r["R_yade"] == pytest.approx(0.9e-4, rel=1e-12)  # YADE's cap lever: eta times the mean radius
+    assert r["max_rel_moment"] < 1e-12
+    assert r["capped_steps_yade"] == r["capped_steps_ours"] > 300

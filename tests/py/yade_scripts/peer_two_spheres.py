@@ -8,10 +8,11 @@ import sys
 
 # under yade-double __file__ names yade itself; the script path is argv[0]
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(sys.argv[0])), "..", "..", "..", "pyscripts"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
 import numpy as np  # noqa: E402
 from yade import O, Matrix3, Vector3  # noqa: E402
 
-from trueaniso import engines as E, yade_bridge  # noqa: E402
+from yade_scenes import two_spheres_both  # noqa: E402
 
 out = sys.argv[-1]
 r1, r2, delta0 = 1.0e-4, 0.8e-4, 2e-7
@@ -21,20 +22,7 @@ steps_n, steps_t = 300, 600
 vn = 1.5e-6 / (steps_n * dt)      # approach: overlap 2e-7 -> 1.7e-6 m
 vt = 2.0e-6 / (steps_t * dt)      # tangential: 2 um, past the Coulomb cap with mu = 0.5
 
-ours = E.Scene()
-ours.shear_modulus, ours.poisson, ours.density, ours.friction = 18e9, 0.15, 2500.0, 0.5
-ours.cell_size = ours.cell_ref_size = [box] * 3
-c = np.full(3, 0.5 * box)
-ours.add_spheres(np.array([c, c + [r1 + r2 - delta0, 0, 0]]), np.array([r1, r2]))
-ours.dt = dt
-ids = yade_bridge.yade_scene_from(ours, O, damping=0.0)
-for b in O.bodies:
-    b.state.blockedDOFs = "xyzXYZ"
-O.dt = dt
-
-sim = E.Simulation(ours)
-sim.add(E.ContactDetection())
-sim.add(E.ContactForces())
+ours, ids, sim = two_spheres_both(r1, r2, delta0, box, dt, 0.5)
 
 rows = []
 for k in range(steps_n + steps_t):

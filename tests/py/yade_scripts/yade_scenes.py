@@ -33,6 +33,30 @@ def mindlin_cloud(n, seed, solid_fraction, extra_engines=(), damping=0.4, r=0.09
     return side
 
 
+def two_spheres_both(r1, r2, delta0, box, dt, friction, **material):
+    """Two spheres on the x axis (overlap delta0) in our scene and in YADE's O, through the bridge,
+    YADE's bodies blocked (the scripts drive them kinematically), and our detection-and-forces
+    loop on ours. `material`: further scene attributes (rolling_stiffness, ...); import_contacts
+    is off, so YADE makes its own interaction at its first step. Returns (ours, YADE ids, sim)."""
+    from trueaniso import engines as E, yade_bridge
+    ours = E.Scene()
+    ours.shear_modulus, ours.poisson, ours.density, ours.friction = 18e9, 0.15, 2500.0, friction
+    for k, v in material.items():
+        setattr(ours, k, v)
+    ours.cell_size = ours.cell_ref_size = [box] * 3
+    c = np.full(3, 0.5 * box)
+    ours.add_spheres(np.array([c, c + [r1 + r2 - delta0, 0, 0]]), np.array([r1, r2]))
+    ours.dt = dt
+    ids = yade_bridge.yade_scene_from(ours, O, damping=0.0, import_contacts=False)
+    for b in O.bodies:
+        b.state.blockedDOFs = "xyzXYZ"
+    O.dt = dt
+    sim = E.Simulation(ours)
+    sim.add(E.ContactDetection())
+    sim.add(E.ContactForces())
+    return ours, ids, sim
+
+
 def _log_strain(ref):
     h = np.array([O.cell.hSize[k][k] for k in range(3)])
     return -np.log(h / ref)

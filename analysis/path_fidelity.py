@@ -1,0 +1,113 @@
+"""Path fidelity of a Table C1 study (issue 14): how far Zm (and Zm with a gap tolerance) moves over
+the states, and where the stiffness trend reverses.
+
+A reversal is a step along one loading path where a modulus E_i falls while its own stress
+sigma_i rises (by more than `threshold`, 0.5 kPa: a stress that stays put, e.g. sigma_x on a b = 0
+path, is no trend). The paths are the constant-b paths of triaxial.paths, each walked from the
+isotropic state (sigma_z = p) outwards by distance from it, as in docs/study-table-c1.md.
+
+    /usr/bin/python3 -m analysis.path_fidelity results/x/probes.csv [more.csv ...]
+    /usr/bin/python3 -m analysis.path_fidelity --gaps 1e-5,1e-4,1e-3,1e-2 results/x [more study dirs ...]
+
+The second form recounts Zm with other gap tolerances on the study's state checkpoints
+(states/<id>.npz), which the table's single Zm_gap1e-3 column cannot give.
+"""
+import sys
+
+from .results import ResultsError, number, read_probes  # sets the path to pyscripts/ as well
+from trueaniso import triaxial  # noqa: E402  (after .results)
+
+NORMAL = ("x", "y", "z")
+
+
+def _states(rows, path):
+    """{state: dict(b, sigma_z_goal, sigma_i, E_i)} from the normal-probe rows."""
+    out = {}
+    for r in rows:
+        if r["probe"] not in NORMAL:
+            continue
+        s = out.setdefault(r["state"], dict(b=number(r, "b", path), sz=number(r, "sigma_z_goal", path), E={},
+                                            sigma={a: number(r, "sigma_" + a, path) for a in NORMAL}, row=r))
+        s["E"][r["probe"]] = number(r, "E", path)
+    return out
+
+
+def reversals(rows, threshold=500.0, path="probe table"):
+    """[(state_from, state_to, axis, E_from, E_to, sigma_from, sigma_to)] of every reversal."""
+    st = _states(rows, path)
+    groups = triaxial.paths([(k, v["b"], v["sz"]) for k, v in st.items()])
+    iso = [s for key, ss in groups.items() if key[1] == 0 for s in ss]
+    found = []
+    for key, states in sorted(groups.items(), key=lambda kv: (kv[0][1] != 0, kv[0])):
+        if key[1] == 0:
+            continue
+        walk = [s[0] for s in iso[:1] + states]
+        for a_id, b_id in zip(walk, walk[1:]):
+            a, b = st[a_id], st[b_id]
+            for ax in NORMAL:
+                if ax in a["E"] and ax in b["E"] and b["sigma"][ax] - a["sigma"][ax] > threshold \
+                        and b["E"][ax] < a["E"][ax]:
+                    found.append((a_id, b_id, ax, a["E"][ax], b["E"][ax], a["sigma"][ax], b["sigma"][ax]))
+    return found
+
+
+def summary(rows, path="probe table"):
+    """Zm and Zm_gap ranges over the states, the reversals, and the states' wall time."""
+    st = _states(rows, path)
+    out = dict(states=len(st), reversals=len(reversals(rows, path=path)))
+    for col in ("Zm", "Zm_gap1e-3"):
+        if all(col in s["row"] for s in st.values()):
+            vals = [number(s["row"], col, path) for s in st.values()]
+            out[col] = (min(vals), max(vals))
+    out["wall_time"] = sum(number(r, "probe_wall_time", path) for r in rows) + \
+        sum(number(s["row"], "state_wall_time", path) for s in st.values())
+    return out
+
+
+def gap_scan(study, tolerances):
+    """{state id: [Zm, Zm with each tolerance]} from the checkpoints of a study directory."""
+    import glob
+    import os
+    from trueaniso import engines, specimen_file
+    out = {}
+    for f in glob.glob(os.path.join(study, "states", "*.npz")):
+        s, _ = specimen_file.load(f)
+        out[os.path.basename(f)[:-4]] = [engines.coordination(s)["Zm"]] + \
+            [engines.coordination_gap(s, t)["Zm"] for t in tolerances]
+    if not out:
+        raise ResultsError("%s has no state checkpoints (states/*.npz)" % study)
+    return out
+
+
+def main(argv):
+    if not argv:
+        sys.stderr.write("usage: python3 -m analysis.path_fidelity PROBES.csv [...] | --gaps TOLS STUDY_DIR [...]\n")
+        return 2
+    if argv[0] == "--gaps":
+        tols = [float(t) for t in argv[1].split(",")]
+        for d in argv[2:]:
+            try:
+                scan = gap_scan(d, tols)
+            except ResultsError as exc:
+                sys.stderr.write("error: %s\n" % exc)
+                return 2
+            from trueaniso.fabric import gap_column
+            for k, name in enumerate(["Zm"] + [gap_column(t) for t in tols]):
+                v = [z[k] for z in scan.values()]
+                print("%s: %-12s %.3f-%.3f over %d states" % (d, name, min(v), max(v), len(v)))
+        return 0
+    for p in argv:
+        try:
+            s = summary(read_probes(p, need=("state", "probe", "E", "b", "sigma_z_goal", "Zm")), p)
+        except ResultsError as exc:
+            sys.stderr.write("error: %s\n" % exc)
+            return 2
+        zr = "Zm %.3f-%.3f" % s["Zm"]
+        gr = ("  Zm_gap1e-3 %.3f-%.3f" % s["Zm_gap1e-3"]) if "Zm_gap1e-3" in s else ""
+        print("%s: %d states  %s%s  reversals %d  wall %.0f s" % (p, s["states"], zr, gr, s["reversals"],
+                                                                  s["wall_time"]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
