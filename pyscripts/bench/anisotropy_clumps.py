@@ -17,7 +17,9 @@ sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]
 import numpy as np  # noqa: E402
 
 from trueaniso import cli  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 # Table B1 (rotations restrained) and section 2.1 of the paper.
 PAPER = {"clump1": dict(e=0.445, E=(306.0, 306.0, 581.5), R="R_zz < R_xx ~ R_yy", H="H_zz > H_xx ~ H_yy"),
@@ -98,7 +100,7 @@ def main():
     if o.doc:
         cmd = "/usr/bin/python3 pyscripts/bench/anisotropy_clumps.py %s --doc %s" % (
             " ".join("--specimen %s" % os.path.relpath(s) for s in o.specimen), os.path.relpath(o.doc))
-        _report.replace_block(o.doc, "anisotropy", "%s\n\nReproduce: `%s` (%s)." % (text, cmd, time.strftime("%Y-%m-%d")))
+        _bench.replace_block(o.doc, "anisotropy", "%s\n\nReproduce: `%s` (%s)." % (text, cmd, time.strftime("%Y-%m-%d")))
 
 
 if __name__ == "__main__" or cli.in_yade():

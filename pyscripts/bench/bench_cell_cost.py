@@ -21,7 +21,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE)]
 from trueaniso import cli  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 DATA = os.path.join(os.path.dirname(os.path.dirname(HERE)), "docs", "data")
 
@@ -97,7 +99,7 @@ def main(argv=None):
     lines = ["Machine: %s; %d engine thread(s); %s. Specimen %s: %d spheres, cell shear %.1e (largest off-diagonal "
              "of hSize over its diagonal), time step %.3g s, damping 0.2, %d runs of %d steps each, interleaved. "
              "The machine is shared: the spread of the runs says how far a difference can be read."
-             % (_report.machine(), o.threads, time.strftime("%Y-%m-%d"), os.path.basename(o.specimen), n, shear, dt,
+             % (_bench.machine(), o.threads, time.strftime("%Y-%m-%d"), os.path.basename(o.specimen), n, shear, dt,
                 o.repeats, o.steps), "",
              "| cell | best steps/s | median | slowest | best M particle-steps/s | best relative to orthorhombic |",
              "|---|---|---|---|---|---|"]
@@ -116,7 +118,7 @@ def main(argv=None):
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _report.replace_block(o.doc, "cell-cost", table)
+        _bench.replace_block(o.doc, "cell-cost", table)
 
 
 if __name__ == "__main__":

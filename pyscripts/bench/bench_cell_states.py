@@ -23,7 +23,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE)]
 from trueaniso import cli  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 DATA = os.path.join(ROOT, "docs", "data")
@@ -92,7 +94,7 @@ def tables():
              "run: `pyscripts/bench/bench_cell_states.py --specimen specimens/spheres-N-s1.npz [--control three]` "
              "(reach_state defaults: stress tolerance 100 Pa, unbalanced force 1e-4, mu = 0.5). State 1 of Table C1 "
              "is the isotropic state; `iso` is the same goal reached from the specimen, state 1 from `iso`."
-             % (_report.machine(), time.strftime("%Y-%m-%d")), "",
+             % (_bench.machine(), time.strftime("%Y-%m-%d")), "",
              "| N | control | states | max principal error (Pa) | max off-diagonal (Pa) | all within 0.5 kPa | "
              "steps per state (median, max) | wall time (s) |", "|---|---|---|---|---|---|---|---|"]
     for (n, control), rows in sorted(data.items()):
@@ -120,7 +122,7 @@ def tables():
 
 
 def write_doc(path):
-    _report.replace_block(path, "cell-states", tables())
+    _bench.replace_block(path, "cell-states", tables())
     print("updated %s" % path)
 
 

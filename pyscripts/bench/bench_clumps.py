@@ -16,14 +16,15 @@ specimen's metadata (wall time of prepare_specimen.py). With --doc the table bet
 import json
 import os
 import statistics
-import subprocess
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # bench_stepper, trueaniso
 from trueaniso import cli  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 
 def worker_ours(o):
@@ -68,14 +69,8 @@ def options():
 def run_worker(code, threads, o, specimen, dt):
     me = os.path.abspath(os.path.join(HERE, "bench_clumps.py"))
     steps = o.steps or (10000 if code == "ours" else 1000)
-    args = ["--specimen", specimen, "--worker", code, "--dt", repr(dt), "--steps", str(steps)]
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-    cmd = (["/usr/bin/python3", me] if code == "ours" else ["yade-double", "-j", str(threads), "-n", "-x", me]) + args
-    out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=7200)
-    line = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
-    if out.returncode != 0 or not line:
-        cli.fail("benchmark worker failed: %s\n%s" % (" ".join(cmd), out.stderr[-2000:]), 1)
-    return json.loads(line[-1][6:])
+    args = ["--specimen", specimen, "--dt", repr(dt), "--steps", str(steps)]
+    return _bench.run_worker(me, code, threads, args, timeout=7200)
 
 
 def main():
@@ -87,7 +82,7 @@ def main():
     from trueaniso import engines, specimen_file
     threads = [int(t) for t in o.threads.split(",")]
     lines = ["Machine: %s%s. Medians of %d interleaved runs, damping 0.2, rotations free, time step half the "
-             "stiffness bound, %s." % (_report.machine(), " (shared with other jobs while measured: rerun on a quiet "
+             "stiffness bound, %s." % (_bench.machine(), " (shared with other jobs while measured: rerun on a quiet "
                                        "machine for final figures)" if o.shared else "", o.repeats,
                                        time.strftime("%Y-%m-%d")), "",
              "| specimen | clumps (members) | e | preparation | threads | trueaniso (M particle-steps/s) "
@@ -117,7 +112,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _report.replace_block(o.doc, "clumps", table, heading="## Clump assemblies (issue 13)")
+        _bench.replace_block(o.doc, "clumps", table, heading="## Clump assemblies (issue 13)")
 
 
 if __name__ == "__main__" or cli.in_yade():

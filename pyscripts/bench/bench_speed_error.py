@@ -23,7 +23,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import cli  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 OURS = [  # label, damping, ramp, gain, settle, relative tolerance, unbalanced, gamma, detection
     ("fast", 0.7, 50, 0.2, 20, 5e-3, 1e-4, 1e-6, True),
@@ -169,7 +171,7 @@ def run(o):
 
 
 def write(o, results):
-    lines = ["Machine: %s; OpenMP threads: ours %s, YADE 1; %s." % (_report.machine(), os.environ.get("OMP_NUM_THREADS", "all"),
+    lines = ["Machine: %s; OpenMP threads: ours %s, YADE 1; %s." % (_bench.machine(), os.environ.get("OMP_NUM_THREADS", "all"),
                                                                   time.strftime("%Y-%m-%d")), "",
              "| N | method | E_x, E_y, E_z (MPa) | max error E_i | max error nu_ij | steps (x+y+z) | wall time x+y+z (s) |",
              "|---|---|---|---|---|---|---|"]
@@ -182,7 +184,7 @@ def write(o, results):
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _report.replace_block(o.doc, "speed", table)
+        _bench.replace_block(o.doc, "speed", table)
     if o.plot:
         import matplotlib
         matplotlib.use("Agg")

@@ -20,7 +20,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import cli  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 PROBE_ERROR_E, PROBE_ERROR_NU = 6.0e-4, 1.1e-4  # docs/speed-vs-error.md, default probe, 1000-16,000 spheres
 
@@ -98,7 +100,7 @@ def main():
     text = "\n".join(lines)
     print(text)
     if o.doc:
-        _report.replace_block(o.doc, "state-speed", text,
+        _bench.replace_block(o.doc, "state-speed", text,
                               heading=None if os.path.exists(o.doc) else "# Steps to reach a state")
 
 

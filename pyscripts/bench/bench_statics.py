@@ -17,7 +17,9 @@ sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  
 import numpy as np  # noqa: E402
 
 from trueaniso import cli, engines, specimen_file, statics  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 
 def options(argv=None):
@@ -47,7 +49,7 @@ def main(o):
     bench = ["Machine: %s. Command: `%s`. Wall time of `static_stiffness` (held state, assembly and "
              "zero modes, METIS analysis, numeric factorisation, solves) and its CPU time (all threads); "
              "`load` is the 1-minute load average when the solve started (other jobs share the 2 cores)."
-             % (_report.machine(), " ".join(["/usr/bin/python3"] + sys.argv)), "",
+             % (_bench.machine(), " ".join(["/usr/bin/python3"] + sys.argv)), "",
              "| N | rotations | DOFs | contacts | nnz(L) | GFlop | analysis s | factor s | solve s | **total s** "
              "| CPU s | load | residual |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -78,8 +80,8 @@ def main(o):
             ", ".join("%.3f" % v for v in z["zeta_rotation"])))
         print(res[-1], flush=True)
     if o.doc:
-        _report.replace_block(o.doc, "benchmark", "\n".join(bench))
-        _report.replace_block(o.doc, "results", "\n".join(res))
+        _bench.replace_block(o.doc, "benchmark", "\n".join(bench))
+        _bench.replace_block(o.doc, "results", "\n".join(res))
 
 
 if __name__ == "__main__":

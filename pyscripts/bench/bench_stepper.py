@@ -17,7 +17,6 @@ between the markers <!-- stepper:begin --> and <!-- stepper:end --> of that file
 import json
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -25,7 +24,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
 from trueaniso import cli  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 
 def worker_ours(o):
@@ -99,14 +100,8 @@ def run_worker(code, threads, o, dt):
     steps = o.steps or (2000 if code == "yade" else 20000)
     if code.startswith("lammps"):
         return worker_lammps(code.split(" ", 1)[1], threads, o, dt, steps)
-    args = ["--specimen", o.specimen, "--worker", code, "--dt", repr(dt), "--steps", str(steps)]
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-    cmd = (["/usr/bin/python3", me] if code == "ours" else ["yade-double", "-j", str(threads), "-n", "-x", me]) + args
-    out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=3600)
-    line = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
-    if out.returncode != 0 or not line:
-        cli.fail("benchmark worker failed: %s\n%s" % (" ".join(cmd), out.stderr[-2000:]), 1)
-    return json.loads(line[-1][6:])
+    args = ["--specimen", o.specimen, "--dt", repr(dt), "--steps", str(steps)]
+    return _bench.run_worker(me, code, threads, args, timeout=3600)
 
 
 def main():
@@ -136,7 +131,7 @@ def main():
     lines = ["Machine: %s. Specimen: %d spheres at 100 kPa (e = %.3f, Zm = %.2f), time step %.3g s, "
              "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
              "Figures in M particle-steps/s; ratios: ours / theirs."
-             % (_report.machine(), n, meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
+             % (_bench.machine(), n, meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d")), "",
              "| threads | %s |" % " | ".join(["trueaniso"] + ["%s | ratio" % names[c] for c in others]),
              "|" + "---|" * (2 + 2 * len(others))]
@@ -149,7 +144,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _report.replace_block(o.doc, "stepper", table)
+        _bench.replace_block(o.doc, "stepper", table)
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import runs nothing

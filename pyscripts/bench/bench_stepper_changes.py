@@ -24,7 +24,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [os.path.dirname(HERE)]
 from trueaniso import cli  # noqa: E402
-import _report  # noqa: E402  (pyscripts/bench: the script's own folder)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 
 
 def tiled(scene, k):
@@ -114,7 +116,7 @@ def main():
     if o.worker:
         return worker(o)
     lines = ["Machine: %s; %s. Each variant in its own process, %d interleaved runs, medians; time step 2.9e-8 s, "
-             "damping 0.2." % (_report.machine(), time.strftime("%Y-%m-%d"), o.repeats), "",
+             "damping 0.2." % (_bench.machine(), time.strftime("%Y-%m-%d"), o.repeats), "",
              "Body order, one engine thread (the specimen %s tiled):" % os.path.basename(o.specimen), "",
              "| spheres | random order (M particle-steps per CPU s) | grid rows (placement before) | Morton order (placement now) | Morton / rows |",
              "|---|---|---|---|---|"]
@@ -144,7 +146,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _report.replace_block(o.doc, "stepper-changes", table, heading="## Stepper changes (issue 15)")
+        _bench.replace_block(o.doc, "stepper-changes", table, heading="## Stepper changes (issue 15)")
 
 
 if __name__ == "__main__":

@@ -23,7 +23,9 @@ import numpy as np  # noqa: E402
 
 from analysis import zeta_contrast  # noqa: E402
 from analysis.zeta_contrast import DENSITIES, parts_of  # noqa: E402
-import _report  # noqa: E402
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402
 from trueaniso import cli, dem, engines, specimen_file, statics, zeta  # noqa: E402
 
 ISOTROPIC = 0.01  # relative spread of the principal stresses below which a state is isotropic
@@ -207,7 +209,7 @@ def main(o):
         print("\n".join(bands[-2:]), flush=True)
     wall = time.time() - t0
     head = ("Machine: %s. Run %s, %.0f s wall (static solves included). Command: `OMP_NUM_THREADS=%s %s`."
-            % (_report.machine(), datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), wall,
+            % (_bench.machine(), datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), wall,
                os.environ.get("OMP_NUM_THREADS", "unset"), " ".join(["/usr/bin/python3"] + sys.argv)))
     notes = ("Contrast fits use the Nc/V of Eq. (36); with the counted Nc/V the fitted zeta_h, zeta_v move by at "
              "most %.1e (the fit's tolerance: Eq. 25 ignores a common factor of the E_i). se: standard error "
@@ -220,7 +222,7 @@ def main(o):
                   "state, DEM and micromechanical alike (Appendix B's (x0, y0)).")
     if o.doc:
         block = "\n\n".join([head, notes, "\n".join(lines), band_notes, "\n".join(bands)])
-        _report.replace_block(o.doc, "zeta-contrast", block)
+        _bench.replace_block(o.doc, "zeta-contrast", block)
     print(head)
 
 

@@ -6,6 +6,8 @@
 #include "core/Scene.hpp"
 #include "dynamics/ContactDetection.hpp"
 #include "dynamics/ContactForces.hpp"
+#include "dynamics/NewtonIntegrator.hpp"
+#include "dynamics/Simulation.hpp"
 
 namespace trueaniso::testing {
 
@@ -85,6 +87,17 @@ inline void spinBody1(Driver& drv, const Vec3& w, int steps) {
   drv.scene().bodies.angVel[1] = w;
   for (int k = 0; k < steps; ++k) drv.evaluate();
   drv.scene().bodies.angVel[1].setZero();
+}
+
+// The stepper's chain as dem.Chain builds it in Python: detection, forces, a damped integrator.
+inline Simulation steppingChain(std::shared_ptr<Scene> s, Real damping) {
+  Simulation sim(std::move(s));
+  sim.add(std::make_shared<ContactDetection>());
+  sim.add(std::make_shared<ContactForces>());
+  auto newton = std::make_shared<NewtonIntegrator>();
+  newton->damping = damping;
+  sim.add(newton);
+  return sim;
 }
 
 }  // namespace trueaniso::testing

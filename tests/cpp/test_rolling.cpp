@@ -184,12 +184,7 @@ TEST(RollingResistance, ZeroMomentsLeaveThePaperLoopBitIdentical) {
   ASSERT_FALSE(off->material.rolling());
   ASSERT_TRUE(on->material.rolling());
   auto run = [](std::shared_ptr<Scene> s) {
-    Simulation sim(s);
-    sim.add(std::make_shared<ContactDetection>());
-    sim.add(std::make_shared<ContactForces>());
-    auto newton = std::make_shared<NewtonIntegrator>();
-    newton->damping = 0.2;
-    sim.add(newton);
+    Simulation sim = steppingChain(s, 0.2);
     s->dt = 2e-9;
     sim.run(300);
   };

@@ -22,16 +22,6 @@ using namespace trueaniso::testing;
 
 namespace {
 
-Simulation chainFor(std::shared_ptr<Scene> s) {
-  Simulation sim(s);
-  sim.add(std::make_shared<ContactDetection>());
-  sim.add(std::make_shared<ContactForces>());
-  auto newton = std::make_shared<NewtonIntegrator>();
-  newton->damping = 0.2;
-  sim.add(newton);
-  return sim;
-}
-
 // The median distance in memory (body indices) of the two bodies of a contact.
 int medianIndexDistance(const Scene& s) {
   const Contacts& C = s.contacts;
@@ -47,7 +37,7 @@ void expectSameDynamics(std::shared_ptr<Scene> s) {
   ContactDetection().apply(*s);
   ContactForces().apply(*s);  // the overlaps that set the stable step
   s->dt = 0.3 * TimeStepper::criticalPairStep(*s);
-  Simulation a = chainFor(s);
+  Simulation a = steppingChain(s, 0.2);
   a.run(300);  // contacts with shear history
   auto t = std::make_shared<Scene>(*s);
   const std::vector<int> order = spaceOrder(*t);
@@ -89,7 +79,7 @@ void expectSameDynamics(std::shared_ptr<Scene> s) {
 
   // Both step on; only the summation order of forces differs (round-off, ~1e-16 relative per
   // step, grown by the packing's instability over 300 steps): positions agree to 1e-9 of a radius.
-  Simulation b = chainFor(t);
+  Simulation b = steppingChain(t, 0.2);
   a.run(300);
   b.run(300);
   const Real r = s->maxRadius();

@@ -1,4 +1,4 @@
-"""The one writer of benchmark tables (pyscripts/bench/_report.py): a block between markers is
+"""The one writer of benchmark tables (pyscripts/bench/_bench.py): a block between markers is
 replaced and nothing else in the document changes; a document without the markers gets the block
 appended (after a heading if given); a new document is created."""
 import os
@@ -7,25 +7,25 @@ import sys
 from conftest import SCRIPTS
 
 sys.path.insert(0, os.path.join(SCRIPTS, "bench"))
-import _report  # noqa: E402
+import _bench  # noqa: E402
 
 
 def test_block_is_replaced_in_place_and_appended_when_missing(tmp_path):
     doc = tmp_path / "bench.md"
     doc.write_text("# Title\n\n<!-- speed:begin -->\nold table\n<!-- speed:end -->\n\nText after.\n")
-    _report.replace_block(str(doc), "speed", "new table\n")
+    _bench.replace_block(str(doc), "speed", "new table\n")
     assert doc.read_text() == "# Title\n\n<!-- speed:begin -->\nnew table\n<!-- speed:end -->\n\nText after.\n"
-    _report.replace_block(str(doc), "other", "second", heading="## Other")
+    _bench.replace_block(str(doc), "other", "second", heading="## Other")
     text = doc.read_text()
     assert text.endswith("Text after.\n\n## Other\n\n<!-- other:begin -->\nsecond\n<!-- other:end -->\n")
-    _report.replace_block(str(doc), "speed", "a table with a backslash \\1 and a group reference")
+    _bench.replace_block(str(doc), "speed", "a table with a backslash \\1 and a group reference")
     assert "a table with a backslash \\1 and a group reference" in doc.read_text()  # not a regex template
     new = tmp_path / "new.md"
-    _report.replace_block(str(new), "t", "x")
+    _bench.replace_block(str(new), "t", "x")
     assert new.read_text() == "\n<!-- t:begin -->\nx\n<!-- t:end -->\n"
     assert not [p for p in os.listdir(tmp_path) if p.startswith(".tmp-")]  # no temporary left behind
 
 
 def test_machine_names_cpu_and_cores():
-    line = _report.machine()
+    line = _bench.machine()
     assert "%d cores" % os.cpu_count() in line

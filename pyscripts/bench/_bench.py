@@ -1,9 +1,12 @@
-"""What every benchmark writes beside its figures: the machine it ran on, and its table in a
-Markdown file between the markers <!-- NAME:begin --> and <!-- NAME:end --> (a file without
-them gets the block appended), written atomically. A module, not a script."""
+"""What the benchmarks share (a module, not a script): the machine line every table states; the
+table written into a Markdown file between the markers <!-- NAME:begin --> and <!-- NAME:end -->
+(a file without them gets the block appended), atomically; and a timed worker run in its own
+process, ours under /usr/bin/python3 or YADE's under yade-double."""
+import json
 import os
 import platform
 import re
+import subprocess
 
 
 def machine():
@@ -35,3 +38,18 @@ def replace_block(path, name, body, heading=None):
         text += "\n" + ("%s\n\n" % heading if heading else "") + block + "\n"
     with atomic.atomic_open(path) as f:
         f.write(text)
+
+
+def run_worker(script, code, threads, args, timeout=7200):
+    """Runs `script --worker CODE ARGS` in its own process with `threads` OpenMP threads (ours
+    under /usr/bin/python3, "yade" under yade-double -j THREADS) and returns the dict the worker
+    printed on its line "BENCH {json}"; a failed worker stops the benchmark with its error."""
+    from trueaniso import cli
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    cmd = ((["yade-double", "-j", str(threads), "-n", "-x", script] if code == "yade" else ["/usr/bin/python3", script])
+           + ["--worker", code] + list(args))
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout)
+    line = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
+    if out.returncode != 0 or not line:
+        cli.fail("benchmark worker failed: %s\n%s" % (" ".join(cmd), out.stderr[-2000:]), 1)
+    return json.loads(line[-1][6:])
