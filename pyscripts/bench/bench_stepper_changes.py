@@ -94,7 +94,7 @@ def options():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--specimen", required=True, help="sphere specimen (.npz) to tile for the body-order table")
     p.add_argument("--small", help="small specimen (.npz; a few hundred spheres) for the threshold table")
-    p.add_argument("--tiles", type=int, nargs="+", default=[1, 2, 3], help="tilings K (K^3 copies)")
+    p.add_argument("--tiles", default="1,2,3", help="tilings K (K^3 copies), comma separated")
     p.add_argument("--repeats", type=int, default=3, help="runs of each variant, interleaved")
     p.add_argument("--particle-steps", type=float, default=2.4e7, help="particle-steps per timed run")
     p.add_argument("--doc", help="Markdown file whose stepper-changes block is replaced")
@@ -102,12 +102,16 @@ def options():
     p.add_argument("--variant", default="morton", help="(internal) random, morton, team-always, default")
     p.add_argument("--tile", type=int, default=1, help="(internal)")
     p.add_argument("--steps", type=int, default=1000, help="(internal)")
-    o = p.parse_args()
+    o = cli.parse(p)
+    try:
+        o.tiles = [int(k) for k in str(o.tiles).split(",")]
+    except ValueError:
+        cli.fail("--tiles takes whole numbers separated by commas, not %r" % o.tiles)
     for path in [o.specimen] + ([o.small] if o.small else []):
         if not os.path.isfile(path):
-            p.error("no specimen file %s (prepare it first, docs/benchmarks.md)" % path)
+            cli.fail("no specimen file %s (prepare it first, docs/benchmarks.md)" % path)
     if o.repeats < 1 or min(o.tiles) < 1 or max(o.tiles) > 4:
-        p.error("--repeats must be >= 1 and --tiles between 1 and 4 (4^3 x the specimen is already large)")
+        cli.fail("--repeats must be >= 1 and --tiles between 1 and 4 (4^3 x the specimen is already large)")
     return o
 
 
