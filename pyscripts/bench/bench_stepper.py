@@ -79,13 +79,17 @@ def options():
     p.add_argument("--specimen", required=True, help="specimen file (.npz) to step")
     p.add_argument("--worker", choices=("ours", "yade"), help="(internal) time one stepper in this process")
     p.add_argument("--dt", type=float, default=0.0, help="time step (s); 0: half the stiffness bound")
-    p.add_argument("--steps", type=int, default=0, help="timed steps (0: 20000 ours and LAMMPS, 2000 YADE)")
+    p.add_argument("--steps", type=int, default=0, help="timed steps of ours and LAMMPS (0: 20000)")
     p.add_argument("--codes", default="ours,yade,lammps granular,lammps gran/hertz/history",
                    help="codes to time, comma separated, from: " + ", ".join(CODES))
     p.add_argument("--threads", default="1,2", help="thread counts to time, comma separated")
     p.add_argument("--repeats", type=int, default=3, help="timed runs per setting (the best is kept)")
+    p.add_argument("--yade-steps", type=int, default=0, help="timed steps of YADE (0: 2000), slower by an order")
     p.add_argument("--doc", help="Markdown file whose stepper table is replaced")
+    p.add_argument("--block", default="stepper", help="name of the table's markers in --doc (one block per specimen)")
     o = cli.parse(p)
+    if not all(ch.isalnum() or ch == "-" for ch in o.block) or not o.block:
+        cli.fail("--block: a marker name of letters, digits and '-', not %r" % o.block)
     o.codes = [c.strip() for c in o.codes.split(",") if c.strip()]
     for c in o.codes:
         if c not in CODES:
@@ -97,7 +101,7 @@ def options():
 
 def run_worker(code, threads, o, dt):
     me = os.path.abspath(os.path.join(HERE, "bench_stepper.py"))
-    steps = o.steps or (2000 if code == "yade" else 20000)
+    steps = (o.yade_steps or 2000) if code == "yade" else (o.steps or 20000)
     if code.startswith("lammps"):
         return worker_lammps(code.split(" ", 1)[1], threads, o, dt, steps)
     args = ["--specimen", o.specimen, "--dt", repr(dt), "--steps", str(steps)]
@@ -139,12 +143,12 @@ def main():
         cells = ["%.2f" % (med["ours"] / 1e6)] + ["%.3f | %.2f" % (med[c] / 1e6, med["ours"] / med[c]) for c in others]
         lines.append("| %d | %s |" % (th, " | ".join(cells)))
 
-    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_stepper.py --specimen %s --doc docs/benchmarks.md`"
-              % os.path.relpath(o.specimen)]
+    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_stepper.py %s`"
+              % " ".join(os.path.relpath(a) if os.path.isfile(a) else ("'%s'" % a if " " in a else a) for a in sys.argv[1:])]
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _bench.replace_block(o.doc, "stepper", table)
+        _bench.replace_block(o.doc, o.block, table)
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import runs nothing
