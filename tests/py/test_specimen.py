@@ -36,8 +36,9 @@ def test_consolidated_state(small):
 def test_similarity_rescale_restores_exact_radii(small):
     scene, _ = small
     pos, radii, scale, side = specimen.random_loose_packing(150, psd.PAPER_SPHERES, 4)
-    # Same seed, same sampled radii: the expansion grew them, the rescale brought them back.
-    np.testing.assert_allclose(scene.radii, radii, rtol=1e-12)
+    # Same seed, same sampled radii: the expansion grew them, the rescale brought them back (the
+    # bodies are renumbered along the Morton curve after placement, so compared as sets).
+    np.testing.assert_allclose(np.sort(scene.radii), np.sort(radii), rtol=1e-12)
 
 
 def test_rescale_keeps_stress():
