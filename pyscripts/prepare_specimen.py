@@ -15,7 +15,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import clump_specimen, cli, engines, lock, progress, psd, resources, specimen, specimen_file  # noqa: E402
+from trueaniso import clump_specimen, cli, engines, lock, progress, provenance, psd, resources, specimen, specimen_file  # noqa: E402
 
 ASSEMBLIES = ("sphere", "clump1", "clump2")
 ALIASES = {"spheres": "sphere"}
@@ -137,9 +137,14 @@ def prepare(o, dist):
         report(scene, meta.get("parameters", {}), o)
         return
 
+    # The code version goes into the file; taken now, so that sources edited (and a module rebuilt)
+    # while a preparation of an hour runs cannot make its save refuse (a 16,000-sphere run was lost
+    # so), and a module built from other sources is refused before any work.
+    provenance.versions()
     bar = progress.Progress("  preparation", lambda m: print(m, flush=True), o.progress_every)
     if not o.quiet:
-        memory, seconds = resources.preparation_estimate(o.n, o.threads or resources.cores())
+        members = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
+        memory, seconds = resources.preparation_estimate(members, o.threads or resources.cores(), o.assembly)
         print("preparing %d %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s"
               % (o.n, o.assembly, o.seed, o.d50, o.cu, o.pressure / 1e3, resources.human_bytes(memory),
                  resources.human_seconds(seconds)), flush=True)

@@ -133,7 +133,8 @@ def check_recipe(o, log):
 
 def prepare(o, log):
     path = os.path.join(o.out, SPECIMEN)
-    memory, seconds = resources.preparation_estimate(o.n * members(o.assembly), o.threads or resources.cores())
+    memory, seconds = resources.preparation_estimate(o.n * members(o.assembly), o.threads or resources.cores(),
+                                                     o.assembly)
     log("specimen: preparing %d %s (seed %d): about %s of memory and %s ..."
         % (o.n, o.assembly, o.seed, resources.human_bytes(memory), resources.human_seconds(seconds)))
     t0 = time.time()

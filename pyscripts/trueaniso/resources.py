@@ -17,11 +17,13 @@ INTERPRETER_BYTES = 300e6  # python3 or yade-double with numpy and the module lo
 # The exact static solve (statics.static_stiffness, run by run_study.py on its specimen):
 # 7.6 GB at 53,004 spheres (docs/statics.md) = 143 kB per sphere; 160 kB with a margin.
 STATICS_BYTES_PER_SPHERE = 160e3
-# Preparation time: random placement ~3.5 ms per sphere (pure Python), then ~2e5 steps of
-# ~0.75 us per sphere on one thread (docs/specimens.md: 53,004 spheres in 58.5 min).
+# Preparation time: random placement ~3.5 ms per sphere (pure Python), then the recipe's steps of
+# ~0.75 us per member sphere on one thread (docs/specimens.md: 53,004 spheres in 58.5 min).
 PLACEMENT_SECONDS_PER_SPHERE = 3.5e-3
 STEP_SECONDS_PER_SPHERE = 0.75e-6
-PREPARATION_STEPS = 2.2e5
+# Steps of each recipe (docs/specimens.md, "Preparation cost"): spheres about 2e5; clump1's
+# rotation-free expansion creeps, 380,000 at 4000 clumps; clump2 215,500.
+PREPARATION_STEPS = {"sphere": 2.2e5, "clump1": 3.8e5, "clump2": 2.2e5}
 MEMORY_SHARE = 0.8  # what a run may plan to use of the machine's memory (the rest: OS, other users)
 
 
@@ -82,10 +84,12 @@ def human_seconds(s):
     return "%.0f s" % s
 
 
-def preparation_estimate(n, threads):
-    """(bytes, seconds) to prepare n spheres."""
+def preparation_estimate(n, threads, assembly="sphere"):
+    """(bytes, seconds) to prepare a specimen of n member spheres of an assembly (sphere, clump1,
+    clump2): memory and a step's cost go with the member spheres."""
     memory = INTERPRETER_BYTES + PREPARATION_BYTES_PER_SPHERE * n
-    seconds = n * (PLACEMENT_SECONDS_PER_SPHERE + PREPARATION_STEPS * STEP_SECONDS_PER_SPHERE / max(1, threads))
+    seconds = n * (PLACEMENT_SECONDS_PER_SPHERE
+                   + PREPARATION_STEPS[assembly] * STEP_SECONDS_PER_SPHERE / max(1, threads))
     return memory, seconds
 
 

@@ -44,3 +44,39 @@ def test_a_module_older_than_its_sources_is_refused(tmp_path):
         f.write("// an edit not yet built\n")
     with pytest.raises(provenance.StaleBuild, match="rebuild"):
         provenance.engine_source_hash(str(tmp_path))
+
+
+def test_a_preparation_keeps_the_code_version_it_started_with(tmp_path, monkeypatch):
+    """The version written into a specimen is taken before the preparation starts: sources edited
+    while an hour-long preparation runs (here: a check that refuses once the work has begun) no
+    longer make its save refuse and lose the run (a 16,000-sphere preparation was lost so)."""
+    import importlib.util
+    import sys
+    from conftest import SCRIPTS
+    from trueaniso import specimen
+    spec = importlib.util.spec_from_file_location("prepare_specimen_script", os.path.join(SCRIPTS, "prepare_specimen.py"))
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    started = []
+    real_hash, real_prepare = provenance.engine_source_hash, specimen.prepare_spheres
+
+    def hash_until_started(root=provenance.REPO_ROOT):
+        if started:
+            raise provenance.StaleBuild("engine sources edited during the run")
+        return real_hash(root)
+
+    def prepare(*args, **kw):
+        started.append(True)
+        return real_prepare(*args, **kw)
+
+    monkeypatch.setattr(provenance, "engine_source_hash", hash_until_started)
+    monkeypatch.setattr(specimen, "prepare_spheres", prepare)
+    provenance.code_version.cache_clear()
+    out = tmp_path / "s.npz"
+    monkeypatch.setattr(sys, "argv", ["prepare_specimen.py", "--n", "60", "--seed", "2", "--threads", "1", "--quiet",
+                                      "--out", str(out)])
+    try:
+        script.main()
+    finally:
+        provenance.code_version.cache_clear()  # later tests compute it from the real check again
+    assert started and out.exists()
