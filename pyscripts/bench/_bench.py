@@ -53,3 +53,21 @@ def run_worker(script, code, threads, args, timeout=7200):
     if out.returncode != 0 or not line:
         cli.fail("benchmark worker failed: %s\n%s" % (" ".join(cmd), out.stderr[-2000:]), 1)
     return json.loads(line[-1][6:])
+
+
+def tiled(scene, k):
+    """The specimen's packing repeated k times along each axis of its (nearly orthorhombic) cell:
+    reduced coordinates kept, the cell's diagonal times k (its shear terms, ~1e-6 of the edge,
+    dropped). A periodic packing tiled is a packing of k^3 times the particles at the same stress,
+    void ratio and Zm; the contacts are found anew, without their shear history. Spheres only."""
+    import numpy as np
+    from trueaniso import engines
+    h = np.array(scene.cell)
+    edge = np.diag(h).copy()
+    reduced = np.linalg.solve(h, np.array(scene.positions).T).T % 1.0
+    t = engines.Scene()
+    t.shear_modulus, t.poisson, t.density, t.friction = scene.shear_modulus, scene.poisson, scene.density, scene.friction
+    t.cell_size = t.cell_ref_size = edge * k
+    shifts = [np.array([i, j, l]) for i in range(k) for j in range(k) for l in range(k)]
+    t.add_spheres(np.vstack([(reduced + s) * edge for s in shifts]), np.tile(np.array(scene.radii), len(shifts)))
+    return t

@@ -29,9 +29,20 @@ if HERE not in sys.path:
 import _bench  # noqa: E402
 
 
-def worker_ours(o):
-    from trueaniso import dem, engines, specimen_file
+def load(o):
+    """The specimen, tiled --tile times along each axis (_bench.tiled) if asked."""
+    from trueaniso import dem, specimen_file
     s, _ = specimen_file.load(o.specimen)
+    if o.tile > 1:
+        s = _bench.tiled(s, o.tile)
+        s.order_in_space()  # numbered as a specimen of that size from prepare_specimen would be
+        dem.refresh(s)
+    return s
+
+
+def worker_ours(o):
+    from trueaniso import dem, engines
+    s = load(o)
     s.dt = o.dt
     c = dem.Chain(s, damping=0.2)
     c.timestep.dead = True
@@ -45,8 +56,8 @@ def worker_ours(o):
 
 def worker_yade(o):
     from yade import O, utils
-    from trueaniso import specimen_file, yade_bridge
-    s, _ = specimen_file.load(o.specimen)
+    from trueaniso import yade_bridge
+    s = load(o)
     s.dt = o.dt
     yade_bridge.yade_scene_from(s, O, damping=0.2)
     O.dt = o.dt
@@ -60,8 +71,8 @@ def worker_yade(o):
 
 def worker_lammps(style, threads, o, dt, steps):
     import lammps_peer
-    from trueaniso import engines, specimen_file
-    s, _ = specimen_file.load(o.specimen)
+    from trueaniso import engines
+    s = load(o)
     with tempfile.TemporaryDirectory(prefix="lammps-") as d:
         lammps_peer.write_inputs(s, d, style, dt, steps)
         r = lammps_peer.run(d, procs=threads)
@@ -84,10 +95,13 @@ def options():
                    help="codes to time, comma separated, from: " + ", ".join(CODES))
     p.add_argument("--threads", default="1,2", help="thread counts to time, comma separated")
     p.add_argument("--repeats", type=int, default=3, help="timed runs per setting (the best is kept)")
+    p.add_argument("--tile", type=int, default=1, help="step the specimen tiled K x K x K times (K^3 x its spheres)")
     p.add_argument("--yade-steps", type=int, default=0, help="timed steps of YADE (0: 2000), slower by an order")
     p.add_argument("--doc", help="Markdown file whose stepper table is replaced")
     p.add_argument("--block", default="stepper", help="name of the table's markers in --doc (one block per specimen)")
     o = cli.parse(p)
+    if not 1 <= o.tile <= 4:
+        cli.fail("--tile must be 1 to 4, not %d" % o.tile)
     if not all(ch.isalnum() or ch == "-" for ch in o.block) or not o.block:
         cli.fail("--block: a marker name of letters, digits and '-', not %r" % o.block)
     o.codes = [c.strip() for c in o.codes.split(",") if c.strip()]
@@ -104,7 +118,7 @@ def run_worker(code, threads, o, dt):
     steps = (o.yade_steps or 2000) if code == "yade" else (o.steps or 20000)
     if code.startswith("lammps"):
         return worker_lammps(code.split(" ", 1)[1], threads, o, dt, steps)
-    args = ["--specimen", o.specimen, "--dt", repr(dt), "--steps", str(steps)]
+    args = ["--specimen", o.specimen, "--tile", str(o.tile), "--dt", repr(dt), "--steps", str(steps)]
     return _bench.run_worker(me, code, threads, args, timeout=3600)
 
 
@@ -116,6 +130,8 @@ def main():
         return
     from trueaniso import engines, specimen_file
     s, meta = specimen_file.load(o.specimen)
+    if o.tile > 1:
+        s = load(o)
     dt = o.dt or 0.5 * engines.TimeStepper.stiffness_bound(s)
     threads = [int(t) for t in o.threads.split(",")]
     rows = []
@@ -132,10 +148,11 @@ def main():
     names = {"ours": "trueaniso", "yade": "YADE Mindlin", "lammps granular": "LAMMPS granular (mindlin)",
              "lammps gran/hertz/history": "LAMMPS gran/hertz/history"}
     others = [c for c in o.codes if c != "ours"]
-    lines = ["Machine: %s. Specimen: %d spheres at 100 kPa (e = %.3f, Zm = %.2f), time step %.3g s, "
+    lines = ["Machine: %s. Specimen: %d spheres%s at 100 kPa (e = %.3f, Zm = %.2f), time step %.3g s, "
              "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
              "Figures in M particle-steps/s; ratios: ours / theirs."
-             % (_bench.machine(), n, meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
+             % (_bench.machine(), n, (" (%s tiled %d x %d x %d)" % (os.path.basename(o.specimen), o.tile, o.tile, o.tile)
+                                      if o.tile > 1 else ""), meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d")), "",
              "| threads | %s |" % " | ".join(["trueaniso"] + ["%s | ratio" % names[c] for c in others]),
              "|" + "---|" * (2 + 2 * len(others))]

@@ -29,22 +29,6 @@ if HERE not in sys.path:
 import _bench  # noqa: E402
 
 
-def tiled(scene, k):
-    """The specimen's packing repeated k times along each axis of its (nearly orthorhombic) cell:
-    reduced coordinates kept, the cell's diagonal times k."""
-    import numpy as np
-    from trueaniso import engines
-    h = np.array(scene.cell)
-    edge = np.diag(h).copy()
-    reduced = np.linalg.solve(h, np.array(scene.positions).T).T % 1.0
-    t = engines.Scene()
-    t.shear_modulus, t.poisson, t.density, t.friction = scene.shear_modulus, scene.poisson, scene.density, scene.friction
-    t.cell_size = t.cell_ref_size = edge * k
-    shifts = [np.array([i, j, l]) for i in range(k) for j in range(k) for l in range(k)]
-    t.add_spheres(np.vstack([(reduced + s) * edge for s in shifts]), np.tile(np.array(scene.radii), len(shifts)))
-    return t
-
-
 def grid_rows(scene):
     """The order placement gave before the Morton order: bodies sorted by a grid of cells one
     largest diameter wide, x fastest, then y, then z (rows of the grid)."""
@@ -61,7 +45,7 @@ def worker(o):
     from trueaniso import dem, engines, specimen_file
     s, _ = specimen_file.load(o.specimen)
     if o.tile > 1:
-        s = tiled(s, o.tile)
+        s = _bench.tiled(s, o.tile)
     if o.variant == "random":
         s.reorder_bodies(np.random.default_rng(1).permutation(s.num_bodies))
     elif o.variant == "rows":
