@@ -46,9 +46,7 @@ def options(argv=None):
     p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
                    help="cap of the expansion/compression rate as an inertial number")
     p.add_argument("--unbalanced", type=cli.finite, default=1e-3, help="unbalanced force of the final state")
-    p.add_argument("--threads", type=cli.count, default=0,
-                   help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
-                        % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
+    cli.add_threads_option(p)
     p.add_argument("--out", required=True, help="specimen file (.npz); a .json summary is written beside it")
     p.add_argument("--force", action="store_true", help="prepare again even if --out is a valid specimen")
     p.add_argument("--wait", action="store_true",

@@ -59,9 +59,7 @@ def parser():
                         "--rolling-friction with it")
     p.add_argument("--rolling-friction", type=cli.non_negative, default=0.0,
                    help="rolling resistance: eta_r of the largest rolling moment eta_r rbar N; 0 = off")
-    p.add_argument("--threads", type=cli.count, default=0,
-                   help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
-                        % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
+    cli.add_threads_option(p)
     p.add_argument("--out", required=True, help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
                                                        "refusing")

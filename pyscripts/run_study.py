@@ -40,9 +40,7 @@ def parser():
     p.add_argument("--mu", type=cli.finite, default=0.5,
                    help="friction coefficient while states are reached (the paper's 0.5; the specimen is "
                         "consolidated with 0.5, and probes always suppress sliding)")
-    p.add_argument("--threads", type=cli.count, default=0,
-                   help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
-                        % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
+    cli.add_threads_option(p)
     p.add_argument("--out", default="results/default", help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
                                                        "refusing")

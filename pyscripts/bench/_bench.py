@@ -40,6 +40,11 @@ def replace_block(path, name, body, heading=None):
         f.write(text)
 
 
+def reply(result):
+    """A worker's answer to run_worker: one line "BENCH {json}" on standard output."""
+    print("BENCH " + json.dumps(result), flush=True)
+
+
 def run_worker(script, code, threads, args, timeout=7200):
     """Runs `script --worker CODE ARGS` in its own process with `threads` OpenMP threads (ours
     under /usr/bin/python3, "yade" under yade-double -j THREADS) and returns the dict the worker

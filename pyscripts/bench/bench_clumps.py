@@ -13,7 +13,6 @@ InsertionSortCollider, its NewtonIntegrator's aspherical rotation), each run in 
 specimen's metadata (wall time of prepare_specimen.py). With --doc the table between
 <!-- clumps:begin --> and <!-- clumps:end --> of that file is replaced.
 """
-import json
 import os
 import statistics
 import sys
@@ -76,8 +75,7 @@ def run_worker(code, threads, o, specimen, dt):
 def main():
     o = options()
     if o.worker:
-        r = worker_ours(o) if o.worker == "ours" else worker_yade(o)
-        print("BENCH " + json.dumps(r), flush=True)
+        _bench.reply(worker_ours(o) if o.worker == "ours" else worker_yade(o))
         return
     from trueaniso import engines, specimen_file
     threads = [int(t) for t in o.threads.split(",")]

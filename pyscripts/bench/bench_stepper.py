@@ -14,7 +14,6 @@ the figure is particle-steps per second of the timed steps only (set-up excluded
 interleave the codes (their order rotates) and the median is reported. With --doc the table
 between the markers <!-- stepper:begin --> and <!-- stepper:end --> of that file is replaced.
 """
-import json
 import os
 import statistics
 import sys
@@ -130,8 +129,7 @@ def run_worker(code, threads, o, dt):
 def main():
     o = options()
     if o.worker:
-        r = worker_ours(o) if o.worker == "ours" else worker_yade(o)
-        print("BENCH " + json.dumps(r), flush=True)
+        _bench.reply(worker_ours(o) if o.worker == "ours" else worker_yade(o))
         return
     from trueaniso import engines, specimen_file
     _, meta = specimen_file.load(o.specimen)

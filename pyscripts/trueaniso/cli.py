@@ -53,6 +53,14 @@ class Parser(argparse.ArgumentParser):
         fail(message)
 
 
+def add_threads_option(parser):
+    """--threads, as every script that runs the engines offers it (0: all cores)."""
+    from . import resources
+    parser.add_argument("--threads", type=count, default=0,
+                        help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
+                             % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
+
+
 def description(doc):
     """A script's --help description: the first paragraph of its docstring, whole (not its first
     line, which may stop mid-sentence)."""
