@@ -138,3 +138,20 @@ def zeta_per_state(tab, parts, reference):
         except ValueError:
             out[sid] = None
     return out
+
+
+def zeta_trend(tab, zetas, band=0.02, low_fraction=0.2):
+    """How the per-state zeta (zeta_per_state) follows Zm: Spearman's rank correlation over the
+    states with a zeta, and the mean zeta of the states within `band` of the highest Zm and of those
+    in the lowest `low_fraction` of the Zm range (with their counts). The paper's zeta is one
+    number for all states: rho near 0 and the two means equal."""
+    zm = tab["Zm"]
+    ok = [(zm[tab["state"].index(s)], v) for s, v in zetas.items() if v is not None]
+    rho = None
+    if len(ok) >= 3:
+        from scipy.stats import spearmanr
+        rho = float(spearmanr([a for a, _ in ok], [b for _, b in ok]).statistic)
+    hi = [v for z, v in ok if z >= zm.max() - band]
+    lo = [v for z, v in ok if z < zm.min() + low_fraction * (zm.max() - zm.min())]
+    mean = lambda v: float(np.mean(v)) if v else None  # noqa: E731
+    return dict(rho=rho, high=mean(hi), n_high=len(hi), low=mean(lo), n_low=len(lo))

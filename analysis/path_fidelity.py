@@ -8,9 +8,13 @@ isotropic state (sigma_z = p) outwards by distance from it, as in docs/study-tab
 
     /usr/bin/python3 -m analysis.path_fidelity results/x/probes.csv [more.csv ...]
     /usr/bin/python3 -m analysis.path_fidelity --gaps 1e-5,1e-4,1e-3,1e-2 results/x [more study dirs ...]
+    /usr/bin/python3 -m analysis.path_fidelity --table results/x [more study dirs ...]
 
 The second form recounts Zm with other gap tolerances on the study's state checkpoints
-(states/<id>.npz), which the table's single Zm_gap1e-3 column cannot give.
+(states/<id>.npz), which the table's single Zm_gap1e-3 column cannot give. The third prints the
+issue's path-fidelity table (markdown), one row per study: variant (spheres, seed, rolling
+resistance), Zm and Zm_gap1e-3 ranges, reversals, the fitted zeta and how the per-state zeta follows
+Zm, E at the isotropic state, and the cost (steps, wall time).
 """
 import sys
 
@@ -64,6 +68,60 @@ def summary(rows, path="probe table"):
     return out
 
 
+def study_row(study):
+    """One row of the path-fidelity table from a study directory (metadata.json, probes.csv)."""
+    import json
+    import os
+    import numpy as np
+    from . import chain, zeta_contrast
+    try:
+        with open(os.path.join(study, "metadata.json")) as f:
+            meta = json.load(f)
+    except (OSError, ValueError) as exc:
+        raise ResultsError("%s: no readable metadata.json (%s)" % (study, exc)) from None
+    fp, spec = meta["fingerprint"], meta["runs"][-1]["specimen"]
+    csv_path = os.path.join(study, "probes.csv")
+    rows = read_probes(csv_path, need=zeta_contrast.NEEDED + ["b", "sigma_z_goal", "Zm", "probe_steps", "state_steps"])
+    s = summary(rows, csv_path)
+    rev = reversals(rows, path=csv_path)
+    strong = [r for r in rev if r[4] < 0.99 * r[3]]
+    worst = min((r[4] / r[3] - 1 for r in rev), default=0.0)
+    mat = spec["material"]
+    fit = zeta_contrast.fit(csv_path, mat["shear_modulus"], mat["poisson"])
+    tab = chain.state_table(rows)
+    ref = tab["state"].index("1") if "1" in tab["state"] else 0
+    parts = chain.fabric_parts(csv_path, tab, mat["shear_modulus"], mat["poisson"], rows[0]["rotations"])
+    trend = chain.zeta_trend(tab, chain.zeta_per_state(tab, parts, ref))
+    st = _states(rows, csv_path)
+    steps = sum(number(r, "probe_steps", csv_path) for r in rows) + \
+        sum(number(v["row"], "state_steps", csv_path) for v in st.values())
+    n = spec["summary"]["n"]
+    roll = fp["state"].get("rolling_stiffness", 0.0), fp["state"].get("rolling_friction", 0.0)
+    return dict(study=study, n=n, seed=spec["seed"], rolling=roll, states=s["states"], Zm=s["Zm"],
+                Zm_gap=s.get("Zm_gap1e-3"), reversals=len(rev), strong=len(strong), worst=worst,
+                zeta=fit and fit["zeta"], zeta_se=fit and fit["se"], rho=trend["rho"], zeta_high=trend["high"],
+                zeta_low=trend["low"], E_iso=float(np.mean(tab["E"][ref])) if len(tab["state"]) else None,
+                steps=steps, wall=s["wall_time"], threads=fp.get("threads"),
+                rate=n * steps / s["wall_time"] if s["wall_time"] > 0 else None)
+
+
+def markdown_table(summaries):
+    """The path-fidelity table: one line per study_row."""
+    f = lambda x, fmt: "-" if x is None else fmt % x  # noqa: E731
+    out = ["| spheres | seed | rolling (beta, eta_r) | states | Zm (drop) | Zm_gap1e-3 | reversals (> 1 %; worst) "
+           "| zeta fitted | zeta per state: rho with Zm; high-Zm, low-Zm mean | E iso (MPa) | steps | wall (threads) |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in summaries:
+        roll = "off" if r["rolling"][0] == 0 else "%g, %g" % r["rolling"]
+        out.append("| %d | %s | %s | %d | %.3f-%.3f (%.3f) | %s | %d (%d; %+.1f %%) | %s | %s; %s, %s | %s | %.3g | %.0f s (%s) |"
+                   % (r["n"], r["seed"], roll, r["states"], r["Zm"][0], r["Zm"][1], r["Zm"][1] - r["Zm"][0],
+                      "-" if r["Zm_gap"] is None else "%.3f-%.3f" % r["Zm_gap"], r["reversals"], r["strong"],
+                      100 * r["worst"], "-" if r["zeta"] is None else "%.3f +/- %.3f" % (r["zeta"], r["zeta_se"]),
+                      f(r["rho"], "%.2f"), f(r["zeta_high"], "%.2f"), f(r["zeta_low"], "%.2f"),
+                      f(r["E_iso"] and r["E_iso"] / 1e6, "%.1f"), r["steps"], r["wall"], r["threads"]))
+    return "\n".join(out)
+
+
 def gap_scan(study, tolerances):
     """{state id: [Zm, Zm with each tolerance]} from the checkpoints of a study directory."""
     import glob
@@ -81,8 +139,16 @@ def gap_scan(study, tolerances):
 
 def main(argv):
     if not argv:
-        sys.stderr.write("usage: python3 -m analysis.path_fidelity PROBES.csv [...] | --gaps TOLS STUDY_DIR [...]\n")
+        sys.stderr.write("usage: python3 -m analysis.path_fidelity PROBES.csv [...] | --gaps TOLS STUDY_DIR [...] "
+                         "| --table STUDY_DIR [...]\n")
         return 2
+    if argv[0] == "--table":
+        try:
+            print(markdown_table([study_row(d) for d in argv[1:]]))
+        except ResultsError as exc:
+            sys.stderr.write("error: %s\n" % exc)
+            return 2
+        return 0
     if argv[0] == "--gaps":
         tols = [float(t) for t in argv[1].split(",")]
         for d in argv[2:]:

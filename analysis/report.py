@@ -229,21 +229,16 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
                   "![Fig. 13](%s)" % figs["f13"], "",
                   "### Figs 14-15: E_i and nu_ij predicted (Table 2 fits, fitted zeta) against DEM", "",
                   "![Fig. 14](%s) ![Fig. 15](%s)" % tuple(figs["f1415"]), ""]
-        ok = [(zm[k], v) for k, v in ((tab["state"].index(s), v) for s, v in zetas.items()) if v is not None]
-        rho = None
-        if len(ok) >= 3:
-            from scipy.stats import spearmanr
-            rho = float(spearmanr([a for a, _ in ok], [b for _, b in ok]).statistic)
-        hi = [v for z, v in ok if z >= zm.max() - 0.02]
-        lo = [v for z, v in ok if z < zm.min() + 0.2 * (zm.max() - zm.min())]
+        trend = chain.zeta_trend(tab, zetas)
+        rho = trend["rho"]
         lines += ["### zeta and Zm", "",
                   "| | paper | ours |", "|---|---|---|",
                   "| zeta fitted on the contrast, all states | 0.552 (both) | zeta_h %.3f, zeta_v %.3f (one zeta: %.3f) |"
                   % (zh, zv, contrast["zeta"]),
                   "| zeta per state against state %s, mean at the highest Zm (within 0.02) | 0.552, constant | %s (%d states) |"
-                  % (tab["state"][ref], _fmt(np.mean(hi) if hi else None, "%.3f"), len(hi)),
+                  % (tab["state"][ref], _fmt(trend["high"], "%.3f"), trend["n_high"]),
                   "| the same, lowest fifth of the Zm range | 0.552, constant | %s (%d states) |"
-                  % (_fmt(np.mean(lo) if lo else None, "%.3f"), len(lo)),
+                  % (_fmt(trend["low"], "%.3f"), trend["n_low"]),
                   "| Spearman rank correlation of zeta with Zm | (zeta independent of state) | %s |" % _fmt(rho, "%.2f"),
                   "", "![zeta against Zm](%s)" % figs["fz"], ""]
         if exp:
