@@ -261,23 +261,51 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
 
 
 def table_b1(results, paper):
-    """Appendix B / Table B1 at the isotropic state: the exact static solve with rotations blocked
-    (what a restrained probe measures) against the unmodified (zeta = 1) kinematic prediction, when
-    the study has them (run_study.py writes statics_isotropic.json)."""
-    out = ["## Table B1: rotations restrained, isotropic state (MPa)", ""]
-    path = os.path.join(results, "statics_isotropic.json") if os.path.isdir(results) else None
-    if not path or not os.path.exists(path):
-        return out + ["Not in this study (run_study.py writes statics_isotropic.json).", ""]
-    with open(path) as f:
-        st = json.load(f)
-    pred, dem = np.array(st["E_kinematic"]) / 1e6, np.array(st["E_blocked"]) / 1e6
-    p = paper["B1"]["isotropic"]
-    out += ["| | E_x | E_y | E_z | predicted / DEM |", "|---|---|---|---|---|",
-            "| paper predicted (zeta = 1) | %.1f | %.1f | %.1f | %.3f |" % (*p["pred"], np.mean(p["pred"]) / np.mean(p["dem"])),
-            "| paper DEM | %.1f | %.1f | %.1f | |" % p["dem"],
-            "| ours predicted (zeta = 1) | %.1f | %.1f | %.1f | %.3f |" % (*pred, pred.mean() / dem.mean()),
-            "| ours static solve, rotations blocked | %.1f | %.1f | %.1f | |" % tuple(dem), ""]
-    return out
+    """Appendix B / Table B1 at the isotropic state and at state 21: the exact static solve with
+    rotations blocked (what a restrained probe measures) against the unmodified (zeta = 1)
+    kinematic prediction, from the study's statics records (trueaniso.statics.cached_record:
+    run_study.py writes them, `--statics` solves them from the checkpoints)."""
+    from trueaniso import statics
+    out = ["## Table B1: rotations restrained (MPa)", ""]
+    found = []
+    if os.path.isdir(results):
+        for label, candidates in (("isotropic", (None, "1")), ("21", ("21",))):
+            path = next((statics.state_file(results, c) for c in candidates
+                         if os.path.exists(statics.state_file(results, c))), None)
+            if path:
+                with open(path) as f:
+                    found.append((label, json.load(f)))
+    if not found:
+        return out + ["Not in this study (run_study.py writes the statics records; `python3 -m analysis.report "
+                      "DIR --statics` solves them from the state checkpoints).", ""]
+    out += ["| state | | E_x | E_y | E_z | predicted / DEM |", "|---|---|---|---|---|---|"]
+    for label, st in found:
+        pred, dem = np.array(st["E_kinematic"]) / 1e6, np.array(st["E_blocked"]) / 1e6
+        p = paper["B1"][label]
+        name = "isotropic" if label == "isotropic" else "21 (b = 0.5, sigma_z = 140 kPa)"
+        out += ["| %s | paper predicted (zeta = 1) | %.1f | %.1f | %.1f | %.3f |"
+                % (name, *p["pred"], np.mean(p["pred"]) / np.mean(p["dem"])),
+                "| | paper DEM | %.1f | %.1f | %.1f | |" % tuple(p["dem"]),
+                "| | ours predicted (zeta = 1) | %.1f | %.1f | %.1f | %.3f |" % (*pred, pred.mean() / dem.mean()),
+                "| | ours static solve, rotations blocked | %.1f | %.1f | %.1f | |" % tuple(dem)]
+        if "sigma" in st:
+            out.append("| | ours sigma_x, sigma_y, sigma_z (kPa) | %.1f | %.1f | %.1f | |"
+                       % tuple(x / 1e3 for x in st["sigma"]))
+    return out + [""]
+
+
+def solve_statics(results, log=print):
+    """The Table B1 records of a study directory from its checkpoints (states 1 and 21)."""
+    from trueaniso import statics
+    if not os.path.isdir(os.path.join(results, "states")):
+        raise ResultsError("%s: --statics needs a study directory with state checkpoints (states/*.npz)" % results)
+    done = 0
+    for sid in ("1", "21"):
+        if os.path.exists(os.path.join(results, "states", "%s.npz" % sid)):
+            statics.cached_record(results, sid, log=log)
+            done += 1
+    if not done:
+        raise ResultsError("%s: no checkpoint of state 1 or 21 (states/1.npz, states/21.npz)" % results)
 
 
 def main(argv=None):
@@ -288,11 +316,16 @@ def main(argv=None):
     p.add_argument("--assembly", default="spheres", choices=sorted(chain.PAPER), help="the paper's assembly to compare with")
     p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
     p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
+    p.add_argument("--statics", action="store_true",
+                   help="solve the static stiffness of the isotropic state and of state 21 from the study's "
+                        "checkpoints (states/1.npz, states/21.npz) where no record exists yet (Table B1)")
     o = p.parse_args(argv)
     try:
+        if o.statics:
+            solve_statics(o.results, log=lambda m: sys.stderr.write(m + "\n"))
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,
                         log=lambda m: sys.stderr.write(m + "\n"))
-    except (ResultsError, OSError, ValueError) as exc:
+    except (ResultsError, OSError, ValueError, RuntimeError) as exc:
         sys.stderr.write("error: %s\n" % exc)
         sys.exit(2)
     print("report: %s" % path)

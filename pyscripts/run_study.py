@@ -23,7 +23,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
 from analysis import figures, report, zeta_contrast  # noqa: E402
-from trueaniso import (atomic, clump_specimen, cli, engines, lock, progress, resources, specimen,  # noqa: E402
+from trueaniso import (atomic, clump_specimen, cli, engines, lock, progress, resources, specimen, statics,  # noqa: E402
                        specimen_file, study, study_dir, triaxial)
 
 DEFAULT_IDS = "1,5,9,13,17,21,25,35,39"
@@ -181,7 +181,9 @@ def main(argv=None):
             study.run_states(path, states, o.out, log=log, progress_every=o.progress_every, **options)
         except triaxial.StateNotReached as exc:
             cli.fail(str(exc), 1)
-        sres = isotropic_statics(o.out, scene)
+        sres = statics.cached_record(o.out, scene=scene, log=log)
+        if "21" in {str(sid) for sid, _, _ in states}:  # Table B1's second state
+            statics.cached_record(o.out, "21", log=log)
         log("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %.3f, zeta_v = %.3f"
             % ([round(e / 1e6, 1) for e in sres["E_free"]], [round(e / 1e6, 1) for e in sres["E_blocked"]],
                sres["zeta_h"], sres["zeta_v"]))
@@ -209,25 +211,6 @@ def main(argv=None):
         from trueaniso import yade_bridge
         yade_bridge.yade_scene_from(scene, import_contacts=False)
         log("specimen written into YADE's O (%d particles) for viewing/export" % scene.num_bodies)
-
-
-def isotropic_statics(out, scene):
-    """The exact static stiffness of the specimen (the isotropic state), rotations free and
-    blocked, and the magnitude zeta; computed once per study."""
-    path = os.path.join(out, "statics_isotropic.json")
-    if not os.path.exists(path):
-        from trueaniso import statics
-        print("statics (isotropic state): solving the contact network's stiffness, rotations free and blocked ...",
-              flush=True)
-        free = statics.static_stiffness(scene, rotations=True)
-        blocked = statics.static_stiffness(scene, rotations=False)
-        zeta = statics.rotation_factor(scene, free=free, blocked=blocked)
-        atomic.write_json(path, dict(
-            E_free=free["E"], E_blocked=blocked["E"], E_kinematic=zeta["E_kinematic"], nu_free=free["nu"],
-            zeta_h=zeta["zeta_h"], zeta_v=zeta["zeta_v"], residual=free["residual"],
-            rattlers=len(free["rattlers"]), time=free["time"]["total"] + blocked["time"]["total"]))
-    with open(path) as f:
-        return json.load(f)
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing

@@ -7,6 +7,9 @@ Love-Weber stress against the cell's log strain (both compression positive; Voig
 zz, yz, xz, xy; engineering shear strains). docs/statics.md has the definitions and derivations.
 """
 
+import json
+import os
+
 from . import engines as _e
 
 VOIGT = ("xx", "yy", "zz", "yz", "xz", "xy")
@@ -61,3 +64,40 @@ def summary(result):
     lines.append("residual %.2e, %d rattlers, %d pinned, %.2f s" % (
         result["residual"], len(result["rattlers"]), len(result["pinned"]), result["time"]["total"]))
     return "\n".join(lines)
+
+
+def state_record(scene):
+    """What a study keeps of a state's static solve (Appendix B / Table B1): E with rotations free
+    and blocked, the kinematic (zeta = 1) prediction, nu, the magnitude zeta, the state's normal
+    stresses, residual, rattlers and time; plain lists and numbers (JSON)."""
+    free = static_stiffness(scene, rotations=True)
+    blocked = static_stiffness(scene, rotations=False)
+    zeta = rotation_factor(scene, free=free, blocked=blocked)
+    s = _e.stress(scene)
+    return dict(E_free=[float(x) for x in free["E"]], E_blocked=[float(x) for x in blocked["E"]],
+                E_kinematic=[float(x) for x in zeta["E_kinematic"]],
+                nu_free=[[None if x != x else float(x) for x in row] for row in free["nu"]],
+                zeta_h=float(zeta["zeta_h"]), zeta_v=float(zeta["zeta_v"]), residual=float(free["residual"]),
+                sigma=[float(s[i, i]) for i in range(3)], rattlers=len(free["rattlers"]),
+                time=free["time"]["total"] + blocked["time"]["total"])
+
+
+def state_file(out, state):
+    """Where a study directory keeps a state's record: statics_isotropic.json for the specimen
+    (run_study's name since issue 5), statics_state-ID.json for the checkpoint of state ID."""
+    return os.path.join(out, "statics_isotropic.json" if state is None else "statics_state-%s.json" % state)
+
+
+def cached_record(out, state=None, scene=None, log=print):
+    """The record of `state` (None: the specimen, given as `scene`) from its file in `out`, or
+    solved from the scene (for a state: its checkpoint states/ID.npz) and written atomically."""
+    from . import atomic, specimen_file
+    path = state_file(out, state)
+    if not os.path.exists(path):
+        if scene is None:
+            scene, _ = specimen_file.load(os.path.join(out, "states", "%s.npz" % state))
+        log("statics (%s): solving the contact network's stiffness, rotations free and blocked ..."
+            % ("isotropic state" if state is None else "state %s" % state))
+        atomic.write_json(path, state_record(scene))
+    with open(path) as f:
+        return json.load(f)

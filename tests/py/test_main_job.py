@@ -73,11 +73,14 @@ def test_adding_states_continues_the_study(first, tmp_path):
     out = tmp_path / "W"
     shutil.copytree(first[0], out)
     before = (out / "probes.csv").read_bytes()
-    proc = main_job(out, "--ids", "1,5,9")
+    assert not (out / "statics_state-21.json").exists()
+    proc = main_job(out, "--ids", "1,5,21")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (out / "probes.csv").read_bytes().startswith(before)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["states"] == 3 and summary["probes"] == 9 and (out / "figures" / "K_G_vs_Zm.png").exists()
+    # state 21 is Table B1's second state: its static solve is kept beside the isotropic one, and shown
+    assert (out / "statics_state-21.json").exists() and "| 21 (b = 0.5" in (out / "report" / "report.md").read_text()
     check_contrast_against_checkpoints(out, summary["zeta_contrast"])
 
 

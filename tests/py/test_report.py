@@ -2,6 +2,7 @@
 (analysis/report.py) built from a small fixed probe table: eight states of the committed
 4000-sphere, 39-state study (docs/data/table-c1-spheres-4000.csv)."""
 import csv
+import json
 import os
 import subprocess
 import sys
@@ -130,3 +131,31 @@ def test_shear_probe_rows_leave_the_axial_chain_alone(small_table, tmp_path):
     _, plain = report.build(small_table, str(tmp_path / "a"), log=lambda m: None)
     _, mixed = report.build(str(path), str(tmp_path / "b"), log=lambda m: None)
     assert mixed["free"]["table2"] == plain["free"]["table2"] and mixed["free"]["zeta"] == plain["free"]["zeta"]
+
+
+def test_table_b1_at_the_isotropic_state_and_state_21(specimen_100, tmp_path):
+    """`--statics` solves states 1 and 21 from their checkpoints, once; Table B1 shows both beside
+    the paper's; each record's blocked E equals a static solve of the checkpoint done here."""
+    from conftest import run_script, one_line_error
+    from trueaniso import specimen_file, statics
+    out = tmp_path / "study"
+    proc = run_script("run_states.py", "--specimen", specimen_100, "--out", out, "--ids", "1,21", "--probes", "z")
+    assert proc.returncode == 0, proc.stderr
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    cmd = [sys.executable, "-m", "analysis.report", str(out), "--statics", "--out", str(tmp_path / "rep")]
+    proc = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.count("solving the contact network") == 2
+    text = (tmp_path / "rep" / "report.md").read_text()
+    for sid in ("1", "21"):
+        rec = json.loads((out / ("statics_state-%s.json" % sid)).read_text())
+        scene, _ = specimen_file.load(str(out / "states" / ("%s.npz" % sid)))
+        E = statics.static_stiffness(scene, rotations=False)["E"] / 1e6
+        assert np.allclose(rec["E_blocked"], E * 1e6, rtol=1e-12)
+        assert "| ours static solve, rotations blocked | %.1f | %.1f | %.1f | |" % tuple(E) in text
+    assert "| 21 (b = 0.5, sigma_z = 140 kPa) | paper predicted (zeta = 1) | 455.4 | 400.8 | 489.7 |" in text
+    proc = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0 and "solving" not in proc.stderr  # kept, not solved again
+    bare = subprocess.run([sys.executable, "-m", "analysis.report", str(out / "probes.csv"), "--statics"], cwd=REPO,
+                          capture_output=True, text=True, env=env, timeout=300)
+    one_line_error(bare, "--statics", "state checkpoints")
