@@ -158,8 +158,33 @@ def _material(results):
     return None, None
 
 
-def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=None, log=print):
-    """Write report.md and its PNGs; returns the report's path and the numbers it shows."""
+def fig16_section(source, out):
+    """Fig. 16 from a cross-anisotropic study (its probes.csv or study directory, or the JSON that
+    analysis/cross_anisotropy.py --out writes): lines of the report, its figure written into `out`."""
+    from . import cross_anisotropy
+    if source.endswith(".json"):
+        with open(source) as f:
+            rows = json.load(f)
+    else:
+        rows = cross_anisotropy.states(os.path.join(source, "probes.csv") if os.path.isdir(source) else source)
+    cross_anisotropy.figure(rows, os.path.join(out, "fig16.png"))
+    lines = ["## Fig. 16: one anisotropy in G, E and nu (cross-anisotropic states, z vertical)", "",
+             "From `%s`. The paper (Fig. 16a): G_hh/G_vh follows (E_h/E_v)^0.5, as Eq. (24) predicts, while "
+             "nu_hh/nu_vv follows another trend. Ours:" % source, "",
+             "| sigma_v/sigma_h | G_hh/G_vh | (E_h/E_v)^0.5 | difference | nu_hv/nu_hh | predicted a_h^2/a_v^2 |",
+             "|---|---|---|---|---|---|"]
+    for m in rows:
+        lines.append("| %.2f | %.3f | %.3f | %+.1f %% | %s | %s |" % (
+            m["sigma_v"] / m["sigma_h"], m["G_ratio"], m["E_ratio_root"], 100 * (m["G_ratio"] / m["E_ratio_root"] - 1),
+            _fmt(m.get("nu_ratio"), "%.3f"), _fmt(m.get("predicted_ratio"), "%.3f")))
+    worst = max(abs(m["G_ratio"] / m["E_ratio_root"] - 1) for m in rows)
+    return lines + ["", "Largest difference between G_hh/G_vh and (E_h/E_v)^0.5: %.1f %% over %d states."
+                    % (100 * worst, len(rows)), "", "![Fig. 16](fig16.png)", ""], worst
+
+
+def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=None, log=print, fig16=None):
+    """Write report.md and its PNGs; returns the report's path and the numbers it shows. `fig16`:
+    a cross-anisotropic study (or its JSON) for the Fig. 16 section."""
     csv_path = os.path.join(results, "probes.csv") if os.path.isdir(results) else results
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     if assembly not in chain.PAPER:
@@ -249,7 +274,11 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
                             zeta_common=contrast["zeta"], nu_rmse={l: p["nu_rmse"] for l, p in preds},
                             E_rel_rmse={l: p["E_rel_rmse"] for l, p in preds}, m=exp["m"] if exp else None,
                             zeta_spearman=rho)
-    lines += table_b1(results, paper) + ["## Departures from the paper", "", "| what | ours | why |", "|---|---|---|"]
+    lines += table_b1(results, paper)
+    if fig16:
+        f16, numbers["fig16_worst"] = fig16_section(fig16, out)
+        lines += f16
+    lines += ["## Departures from the paper", "", "| what | ours | why |", "|---|---|---|"]
     lines += ["| %s | %s | %s |" % d for d in DEPARTURES]
     from trueaniso import atomic
     path = os.path.join(out, "report.md")
@@ -316,6 +345,8 @@ def main(argv=None):
     p.add_argument("--assembly", default="spheres", choices=sorted(chain.PAPER), help="the paper's assembly to compare with")
     p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
     p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
+    p.add_argument("--fig16", help="a cross-anisotropic study (run_states.py --path cross-anisotropic: its directory "
+                                    "or probes.csv, or the JSON of analysis/cross_anisotropy.py --out) for Fig. 16")
     p.add_argument("--statics", action="store_true",
                    help="solve the static stiffness of the isotropic state and of state 21 from the study's "
                         "checkpoints (states/1.npz, states/21.npz) where no record exists yet (Table B1)")
@@ -324,7 +355,7 @@ def main(argv=None):
         if o.statics:
             solve_statics(o.results, log=lambda m: sys.stderr.write(m + "\n"))
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,
-                        log=lambda m: sys.stderr.write(m + "\n"))
+                        log=lambda m: sys.stderr.write(m + "\n"), fig16=o.fig16)
     except (ResultsError, OSError, ValueError, RuntimeError) as exc:
         sys.stderr.write("error: %s\n" % exc)
         sys.exit(2)

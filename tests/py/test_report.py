@@ -159,3 +159,16 @@ def test_table_b1_at_the_isotropic_state_and_state_21(specimen_100, tmp_path):
     bare = subprocess.run([sys.executable, "-m", "analysis.report", str(out / "probes.csv"), "--statics"], cwd=REPO,
                           capture_output=True, text=True, env=env, timeout=300)
     one_line_error(bare, "--statics", "state checkpoints")
+
+
+def test_fig16_section_from_the_committed_cross_anisotropic_data(small_table, tmp_path):
+    """The Fig. 16 section: its rows are the JSON's ratios, its largest difference computed here."""
+    src = os.path.join(REPO, "docs", "data", "fig16-spheres-1000.json")
+    path, numbers = report.build(small_table, str(tmp_path), log=lambda m: None, fig16=src)
+    text = open(path).read()
+    rows = json.load(open(src))
+    worst = max(abs(m["G_ratio"] / m["E_ratio_root"] - 1) for m in rows)
+    assert numbers["fig16_worst"] == pytest.approx(worst) and 0.03 < worst < 0.04  # 3.5 % at sigma_v/sigma_h 0.5
+    m = rows[0]
+    assert "| %.2f | %.3f | %.3f |" % (m["sigma_v"] / m["sigma_h"], m["G_ratio"], m["E_ratio_root"]) in text
+    assert (tmp_path / "fig16.png").stat().st_size > 5000 and "![Fig. 16](fig16.png)" in text
