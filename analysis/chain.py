@@ -20,6 +20,7 @@ from . import hyperelastic, zeta_contrast
 from trueaniso import zeta as _zeta  # noqa: E402 - analysis.results put pyscripts/ on the path
 
 AXES = "xyz"
+PAPER_VOID_RATIO = dict(spheres=0.584, clump1=0.445, clump2=0.636)  # section 2.1, at isotropic 100 kPa
 PAPER_ZETA = _zeta.PAPER_ZETA  # section 4.2, zeta_h = zeta_v = 0.552 for spheres
 # Paper values the report stands beside (Table 2 in MPa; section 4.3; Table B1 in MPa).
 PAPER = dict(

@@ -172,3 +172,16 @@ def test_fig16_section_from_the_committed_cross_anisotropic_data(small_table, tm
     m = rows[0]
     assert "| %.2f | %.3f | %.3f |" % (m["sigma_v"] / m["sigma_h"], m["G_ratio"], m["E_ratio_root"]) in text
     assert (tmp_path / "fig16.png").stat().st_size > 5000 and "![Fig. 16](fig16.png)" in text
+
+
+def test_clump_section_from_the_committed_anisotropy_data(small_table, tmp_path):
+    """E_z/E_x of each clump assembly against the paper's Table B1 DEM row, computed here."""
+    src = os.path.join(REPO, "docs", "data", "anisotropy-clumps-4000.json")
+    path, numbers = report.build(small_table, str(tmp_path), log=lambda m: None, clumps=src)
+    text = open(path).read()
+    for m in json.load(open(src)):
+        E = m["probe_restrained"]
+        paper = chain.PAPER[m["assembly"]]["B1"]["isotropic"]["dem"]
+        assert numbers["clump_ratios"][m["assembly"]] == pytest.approx(E[2] / E[0])
+        assert "| %.3f | %+.1f %% |" % (E[2] / E[0], 100 * (E[2] / E[0] / (paper[2] / paper[0]) - 1)) in text
+    assert numbers["clump_ratios"]["clump1"] > 1.5 and numbers["clump_ratios"]["clump2"] < 1  # the paper's signs
