@@ -73,6 +73,125 @@ def scalar_moduli_vs_zm(rows, path):
     return out
 
 
+def _by_state(rows):
+    """One row per state (its z probe's, else the first normal probe's): the state's own columns."""
+    out = {}
+    for r in rows:
+        if r["probe"] in ("x", "y", "z") and (r["state"] not in out or r["probe"] == "z"):
+            out[r["state"]] = r
+    return list(out.values())
+
+
+def _b_groups(states):
+    """{b: [states sorted by q]}: the constant-b paths, as the paper's Figs 5, 6 and 8 draw them."""
+    groups = {}
+    for st in states:
+        groups.setdefault(round(float(st["b"]), 3), []).append(st)
+    return {b: sorted(v, key=lambda st: float(st["q"])) for b, v in sorted(groups.items())}
+
+
+def poisson_vs_q(rows, path):
+    """Fig. 5: nu_zx, nu_xz | nu_zy, nu_yz | nu_xy, nu_yx against q, one line per b. Returns
+    {b: (q, nu (n, 3, 3))} in kPa and ratios."""
+    plt = _plt()
+    states = hyperelastic.states_from_rows(rows)
+    groups = {}
+    for st in states.values():
+        groups.setdefault(round(st["b"], 3), []).append(st)
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
+    out = {}
+    pairs = (((2, 0), (0, 2)), ((2, 1), (1, 2)), ((0, 1), (1, 0)))
+    for b, sts in sorted(groups.items()):
+        sts = sorted(sts, key=lambda st: st["q"])
+        q = np.array([st["q"] for st in sts]) / 1e3
+        nu = np.array([st["nu"] for st in sts])
+        out[b] = (q, nu)
+        for ax, ((i, j), (k, m)) in zip(axes, pairs):
+            line, = ax.plot(q, nu[:, i, j], "o-", ms=3, label="b = %.2f" % b)
+            ax.plot(q, nu[:, k, m], "s--", ms=3, color=line.get_color())
+    for ax, ((i, j), (k, m)) in zip(axes, pairs):
+        ax.set_title("nu_%s%s (solid), nu_%s%s (dashed)" % ("xyz"[i], "xyz"[j], "xyz"[k], "xyz"[m]), fontsize=9)
+        ax.set_xlabel("q (kPa)")
+    axes[0].set_ylabel("Poisson's ratio")
+    axes[2].legend(fontsize=7)
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
+    return out
+
+
+def stress_ratios_vs_q(rows, path):
+    """Fig. 6: sigma_z/sigma_x, sigma_z/sigma_y, sigma_x/sigma_y against q, one line per b."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
+    out = {}
+    for b, sts in _b_groups(_by_state(rows)).items():
+        q = np.array([float(st["q"]) for st in sts]) / 1e3
+        sig = np.array([[float(st["sigma_" + a]) for a in "xyz"] for st in sts])
+        ratios = np.stack([sig[:, 2] / sig[:, 0], sig[:, 2] / sig[:, 1], sig[:, 0] / sig[:, 1]], axis=1)
+        out[b] = (q, ratios)
+        for k, ax in enumerate(axes):
+            ax.plot(q, ratios[:, k], "o-", ms=3, label="b = %.2f" % b)
+    for ax, name in zip(axes, ("sigma_z/sigma_x", "sigma_z/sigma_y", "sigma_x/sigma_y")):
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel("q (kPa)")
+    axes[2].legend(fontsize=7)
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
+    return out
+
+
+PAPER_ZM_SPHERES = (5.94, 5.99)  # section 4.1 / Fig. 8a: the sphere assembly's Zm over the 39 states
+
+
+def zm_vs_q(rows, path, band=PAPER_ZM_SPHERES):
+    """Fig. 8: Zm against q, one line per b, the paper's band shaded; Zm counted with a gap
+    tolerance of 1e-3 (r1 + r2) as open markers when the table has it."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    if band:
+        ax.axhspan(*band, color="0.85", label="paper, spheres (%.2f-%.2f)" % band)
+    out = {}
+    for b, sts in _b_groups(_by_state(rows)).items():
+        q = np.array([float(st["q"]) for st in sts]) / 1e3
+        zm = np.array([float(st["Zm"]) for st in sts])
+        out[b] = (q, zm)
+        line, = ax.plot(q, zm, "o-", ms=3, label="b = %.2f" % b)
+        if sts[0].get("Zm_gap1e-3", "") != "":
+            ax.plot(q, [float(st["Zm_gap1e-3"]) for st in sts], "o:", ms=3, mfc="none", color=line.get_color())
+    ax.set_xlabel("q (kPa)")
+    ax.set_ylabel("Zm (filled), Zm with a 1e-3 gap tolerance (open)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
+    return out
+
+
+def fabric_vs_stress(rows, path, name):
+    """Figs 9, 10, 12: the diagonal of a fabric tensor of the rows (R, H, B: name_ii; M: M_iiii)
+    against the stress in the same direction, one series per direction. Returns {axis: (sigma
+    in kPa, values)}."""
+    plt = _plt()
+    states = _by_state(rows)
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    out = {}
+    for axis, mark in zip("xyz", "os^"):
+        col = name + "_" + axis * (4 if name == "M" else 2)
+        s = np.array([float(st["sigma_" + axis]) for st in states]) / 1e3
+        v = np.array([float(st[col]) for st in states])
+        out[axis] = (s, v)
+        ax.scatter(s, v, marker=mark, label=col, alpha=0.8)
+    ax.set_xlabel("sigma_i (kPa)")
+    ax.set_ylabel(name + " (diagonal)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
+    return out
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description="figures from a probes.csv")
     p.add_argument("csv", help="probe table of run_states.py or run_study.py")

@@ -158,6 +158,45 @@ def _material(results):
     return None, None
 
 
+def paper_figures(rows, out, tag, assembly):
+    """Figs 5, 6, 8, 9, 10 and 12 from the rows of one rotations setting, each with the paper's
+    statement beside our numbers."""
+    f = dict(f5="fig5-nu-vs-q%s.png" % tag, f6="fig6-stress-ratios%s.png" % tag, f8="fig8-Zm-vs-q%s.png" % tag,
+             f9="fig9-R%s.png" % tag, f10="fig10-H%s.png" % tag, f12b="fig12-B%s.png" % tag,
+             f12m="fig12-M%s.png" % tag)
+    nu = figures.poisson_vs_q(rows, os.path.join(out, f["f5"]))
+    figures.stress_ratios_vs_q(rows, os.path.join(out, f["f6"]))
+    zm = figures.zm_vs_q(rows, os.path.join(out, f["f8"]), band=figures.PAPER_ZM_SPHERES if assembly == "spheres"
+                         else None)
+    fab = {name: figures.fabric_vs_stress(rows, os.path.join(out, f[key]), name)
+           for name, key in (("R", "f9"), ("H", "f10"), ("B", "f12b"), ("M", "f12m"))}
+    span = lambda d: (min(v.min() for _, v in d.values()), max(v.max() for _, v in d.values()))  # noqa: E731
+    nus = np.concatenate([v[1][:, ~np.eye(3, dtype=bool)].ravel() for v in nu.values()])
+    nus = nus[np.isfinite(nus)]
+    zr = span(zm)
+    h_tr = [sum(fab["H"][a][1][k] for a in "xyz") for k in range(len(fab["H"]["x"][1]))]
+    h_rel = np.array([fab["H"][a][1] / np.array(h_tr) for a in "xyz"])
+    b_slope = {a: 1000 * np.polyfit(*fab["B"][a], 1)[0] / np.mean(fab["B"][a][1]) for a in "xyz"}  # % per 10 kPa
+    sphere = assembly == "spheres"
+    return ["### Figs 5, 6, 8, 9, 10 and 12", "",
+            "| figure | paper (%s) | ours |" % assembly, "|---|---|---|",
+            "| Fig. 5: nu_ij against q, by b | each nu_ij follows its stress ratio (Fig. 6) | %.3f-%.3f over the states |"
+            % (nus.min(), nus.max()),
+            "| Fig. 8: Zm against q | %s | %.3f-%.3f |" % ("5.94-5.99, falls at large \\|q\\|" if sphere
+                                                          else "falls at large \\|q\\|", *zr),
+            "| Fig. 9: R_ii against sigma_i | %s | %.3f-%.3f |" % ("close to 1/3, minor changes" if sphere
+                                                                  else "inherent anisotropy", *span(fab["R"])),
+            "| Fig. 10: H_ii / tr H against sigma_i | %s | %.3f-%.3f |" % ("almost identical, vary slightly" if sphere
+                                                                          else "inherent anisotropy",
+                                                                          h_rel.min(), h_rel.max()),
+            "| Fig. 12: B_ii against sigma_i | %s | rises %.2f, %.2f, %.2f %% per 10 kPa (x, y, z; of the mean B_ii) |"
+            % ("one trend for the three directions, rising" if sphere else "directional differences",
+               b_slope["x"], b_slope["y"], b_slope["z"]), "",
+            "![Fig. 5](%s)" % f["f5"], "", "![Fig. 6](%s) ![Fig. 8](%s)" % (f["f6"], f["f8"]), "",
+            "![Fig. 9](%s) ![Fig. 10](%s)" % (f["f9"], f["f10"]), "",
+            "![Fig. 12, B](%s) ![Fig. 12, M](%s)" % (f["f12b"], f["f12m"]), ""]
+
+
 def fig16_section(source, out):
     """Fig. 16 from a cross-anisotropic study (its probes.csv or study directory, or the JSON that
     analysis/cross_anisotropy.py --out writes): lines of the report, its figure written into `out`."""
@@ -302,6 +341,7 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
             lines += ["### Fig. 4a: E_i/E_j = (sigma_i/sigma_j)^m", "",
                       "m = %.3f (R^2 %.3f over %d ratios); the paper shows the power law without the value of m."
                       % (exp["m"], exp["r2"], len(exp["log_sigma_ratio"])), "", "![Fig. 4a](%s)" % figs["f4"], ""]
+        lines += paper_figures(sel, out, tag, assembly)
         numbers[rot] = dict(states=n, Zm=(float(zm.min()), float(zm.max())), table2=fits, zeta=(zh, zv),
                             zeta_common=contrast["zeta"], nu_rmse={l: p["nu_rmse"] for l, p in preds},
                             E_rel_rmse={l: p["E_rel_rmse"] for l, p in preds}, m=exp["m"] if exp else None,

@@ -185,3 +185,31 @@ def test_clump_section_from_the_committed_anisotropy_data(small_table, tmp_path)
         assert numbers["clump_ratios"][m["assembly"]] == pytest.approx(E[2] / E[0])
         assert "| %.3f | %+.1f %% |" % (E[2] / E[0], 100 * (E[2] / E[0] / (paper[2] / paper[0]) - 1)) in text
     assert numbers["clump_ratios"]["clump1"] > 1.5 and numbers["clump_ratios"]["clump2"] < 1  # the paper's signs
+
+
+def test_figures_5_to_12_plot_the_table_s_own_numbers(small_table, tmp_path):
+    """Figs 5, 6, 8, 9, 10 and 12: what each plots is the probe table's column, state by state, and
+    the report's ranges are those of the table."""
+    from analysis import figures
+    rows = list(csv.DictReader(open(small_table)))
+    z = {r["state"]: r for r in rows if r["probe"] == "z"}
+    zm = figures.zm_vs_q(rows, str(tmp_path / "f8.png"))
+    got = {(round(q, 6), v) for b, (qs, vs) in zm.items() for q, v in zip(qs, vs)}
+    assert got == {(round(float(r["q"]) / 1e3, 6), float(r["Zm"])) for r in z.values()}
+    ratios = figures.stress_ratios_vs_q(rows, str(tmp_path / "f6.png"))
+    got = {(round(q, 6), round(r[0], 12), round(r[2], 12)) for qs, rs in ratios.values() for q, r in zip(qs, rs)}
+    assert got == {(round(float(r["q"]) / 1e3, 6), round(float(r["sigma_z"]) / float(r["sigma_x"]), 12),
+                    round(float(r["sigma_x"]) / float(r["sigma_y"]), 12)) for r in z.values()}
+    R = figures.fabric_vs_stress(rows, str(tmp_path / "f9.png"), "R")
+    assert sorted(R["z"][1]) == sorted(float(r["R_zz"]) for r in z.values())
+    M = figures.fabric_vs_stress(rows, str(tmp_path / "f12.png"), "M")
+    assert sorted(M["x"][1]) == sorted(float(r["M_xxxx"]) for r in z.values())
+    nu = figures.poisson_vs_q(rows, str(tmp_path / "f5.png"))
+    assert sum(len(q) for q, _ in nu.values()) == len(STATES)
+    path, _ = report.build(small_table, str(tmp_path / "rep"), log=lambda m: None)
+    text = open(path).read()
+    zms = [float(r["Zm"]) for r in z.values()]
+    assert "| Fig. 8: Zm against q | 5.94-5.99, falls at large \\|q\\| | %.3f-%.3f |" % (min(zms), max(zms)) in text
+    for name in ("fig5-nu-vs-q.png", "fig6-stress-ratios.png", "fig8-Zm-vs-q.png", "fig9-R.png", "fig10-H.png",
+                 "fig12-B.png", "fig12-M.png"):
+        assert (tmp_path / "rep" / name).stat().st_size > 5000 and "](%s)" % name in text
