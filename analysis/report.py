@@ -158,6 +158,25 @@ def _material(results):
     return None, None
 
 
+def _study_line(results):
+    """What the study is (from its metadata.json): specimen size, seed, void ratio and Zm, the
+    loading path and the contact law's rolling resistance; None for a bare table."""
+    meta_path = os.path.join(results, "metadata.json") if os.path.isdir(results) else None
+    if not meta_path or not os.path.exists(meta_path):
+        return None
+    with open(meta_path) as f:
+        meta = json.load(f)
+    spec, fp = meta.get("specimen") or {}, meta.get("fingerprint") or {}
+    summ, state = spec.get("summary") or {}, fp.get("state") or {}
+    beta, eta = state.get("rolling_stiffness", 0.0), state.get("rolling_friction", 0.0)
+    law = ("rolling resistance off (the paper's contact law)" if not beta else
+           "rolling resistance beta = %g, eta_r = %g (not the paper's law: docs/rolling.md)" % (beta, eta))
+    return ("Study: %s %s (seed %s), e = %.4f and Zm = %.3f at the isotropic state; %s path; %s."
+            % (summ.get("n", "?"), fp.get("assembly", "sphere") + "s" if fp.get("assembly", "sphere") == "sphere"
+               else fp.get("assembly"), spec.get("seed", "?"), summ.get("void_ratio", float("nan")),
+               summ.get("Zm", float("nan")), fp.get("path", "true-triaxial"), law))
+
+
 def paper_figures(rows, out, tag, assembly):
     """Figs 5, 6, 8, 9, 10 and 12 from the rows of one rotations setting, each with the paper's
     statement beside our numbers."""
@@ -272,6 +291,9 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
              "Made by `analysis/report.py` from `%s` on %s. Material: G = %.4g Pa, nu = %.3g (%s; checked "
              "against the table's micromechanical moduli). Each table gives the paper's number beside ours."
              % (csv_path, time.strftime("%Y-%m-%d"), material["shear_modulus"], material["poisson"], where), ""]
+    study_line = _study_line(results)
+    if study_line:
+        lines += [study_line, ""]
     os.makedirs(out, exist_ok=True)
     numbers = {}
     for rot in sorted({r["rotations"] for r in rows}):

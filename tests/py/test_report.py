@@ -154,6 +154,7 @@ def test_table_b1_at_the_isotropic_state_and_state_21(specimen_100, tmp_path):
         assert np.allclose(rec["E_blocked"], E * 1e6, rtol=1e-12)
         assert "| ours static solve, rotations blocked | %.1f | %.1f | %.1f | |" % tuple(E) in text
     assert "| 21 (b = 0.5, sigma_z = 140 kPa) | paper predicted (zeta = 1) | 455.4 | 400.8 | 489.7 |" in text
+    assert "Study: 100 spheres (seed 3)" in text and "rolling resistance off (the paper's contact law)" in text
     proc = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0 and "solving" not in proc.stderr  # kept, not solved again
     bare = subprocess.run([sys.executable, "-m", "analysis.report", str(out / "probes.csv"), "--statics"], cwd=REPO,
