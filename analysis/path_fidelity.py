@@ -143,6 +143,9 @@ def main(argv):
                          "| --table STUDY_DIR [...]\n")
         return 2
     if argv[0] == "--table":
+        if len(argv) < 2:
+            sys.stderr.write("error: --table needs one or more study directories\n")
+            return 2
         try:
             print(markdown_table([study_row(d) for d in argv[1:]]))
         except ResultsError as exc:

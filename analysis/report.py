@@ -216,15 +216,44 @@ def paper_figures(rows, out, tag, assembly):
             "![Fig. 12, B](%s) ![Fig. 12, M](%s)" % (f["f12b"], f["f12m"]), ""]
 
 
-def fig16_section(source, out):
-    """Fig. 16 from a cross-anisotropic study (its probes.csv or study directory, or the JSON that
-    analysis/cross_anisotropy.py --out writes): lines of the report, its figure written into `out`."""
-    from . import cross_anisotropy
-    if source.endswith(".json"):
+FIG16_KEYS = ("sigma_v", "sigma_h", "G_ratio", "E_ratio_root")
+CLUMP_KEYS = ("assembly", "n", "e", "probe_restrained", "static_restrained")
+
+
+def _json_list(source, keys, what):
+    try:
         with open(source) as f:
             rows = json.load(f)
-    else:
-        rows = cross_anisotropy.states(os.path.join(source, "probes.csv") if os.path.isdir(source) else source)
+    except (OSError, ValueError) as exc:
+        raise ResultsError("%s: cannot read %s (%s)" % (source, what, exc)) from None
+    if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) and all(k in r for k in keys)
+                                                         for r in rows):
+        raise ResultsError("%s is not %s: a JSON list of objects with %s" % (source, what, ", ".join(keys)))
+    return rows
+
+
+def fig16_rows(source):
+    """The per-state cross-anisotropy measures of a cross-anisotropic study (its probes.csv or
+    study directory) or of the JSON analysis/cross_anisotropy.py --out wrote; checked."""
+    from . import cross_anisotropy
+    if source.endswith(".json"):
+        return _json_list(source, FIG16_KEYS, "the output of analysis/cross_anisotropy.py --out")
+    return cross_anisotropy.states(os.path.join(source, "probes.csv") if os.path.isdir(source) else source)
+
+
+def clump_entries(source):
+    """The entries of pyscripts/bench/anisotropy_clumps.py --json, checked (clump1, clump2)."""
+    from . import chain
+    entries = _json_list(source, CLUMP_KEYS, "the output of pyscripts/bench/anisotropy_clumps.py --json")
+    bad = [m["assembly"] for m in entries if m["assembly"] not in chain.PAPER or m["assembly"] == "spheres"]
+    if bad:
+        raise ResultsError("%s: assemblies %s are not the paper's clump1 or clump2" % (source, bad))
+    return entries
+
+
+def fig16_section(rows, source, out):
+    """Fig. 16 from fig16_rows: lines of the report, its figure written into `out`."""
+    from . import cross_anisotropy
     cross_anisotropy.figure(rows, os.path.join(out, "fig16.png"))
     lines = ["## Fig. 16: one anisotropy in G, E and nu (cross-anisotropic states, z vertical)", "",
              "From `%s`. The paper (Fig. 16a): G_hh/G_vh follows (E_h/E_v)^0.5, as Eq. (24) predicts, while "
@@ -240,12 +269,10 @@ def fig16_section(source, out):
                     % (100 * worst, len(rows)), "", "![Fig. 16](fig16.png)", ""], worst
 
 
-def clumps_section(source):
-    """The clump assemblies at their isotropic state (pyscripts/bench/anisotropy_clumps.py --json):
-    void ratio, the restrained moduli of Table B1 and E_z/E_x beside the paper's."""
+def clumps_section(entries, source):
+    """The clump assemblies at their isotropic state (clump_entries): void ratio, the restrained
+    moduli of Table B1 and E_z/E_x beside the paper's."""
     from . import chain
-    with open(source) as f:
-        entries = json.load(f)
     lines = ["## Clump assemblies at the isotropic state (100 kPa, rotations restrained)", "",
              "From `%s` (docs/specimens.md has the fabric and the free-rotation moduli). The paper's "
              "clump1 is vertically stiffer, its clump2 horizontally (Table B1, DEM row)." % source, "",
@@ -271,14 +298,20 @@ def clumps_section(source):
 
 
 def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=None, log=print, fig16=None,
-          clumps=None):
+          clumps=None, statics=False):
     """Write report.md and its PNGs; returns the report's path and the numbers it shows. `fig16`:
     a cross-anisotropic study (or its JSON) for the Fig. 16 section; `clumps`: the JSON of
-    anisotropy_clumps.py for the clump section."""
+    anisotropy_clumps.py for the clump section; `statics`: solve Table B1's states from the
+    study's checkpoints first (solve_statics)."""
     csv_path = os.path.join(results, "probes.csv") if os.path.isdir(results) else results
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     if assembly not in chain.PAPER:
         raise ResultsError("assembly must be one of %s" % ", ".join(chain.PAPER))
+    # Inputs of the optional sections are read and checked before anything is written.
+    f16_rows = fig16_rows(fig16) if fig16 else None
+    clump_rows = clump_entries(clumps) if clumps else None
+    if statics:
+        solve_statics(results, log=log)
     material, where = _material(results)
     if shear_modulus is not None or poisson is not None or material is None:
         material = dict(shear_modulus=shear_modulus or DEFAULT_MATERIAL["shear_modulus"],
@@ -370,10 +403,10 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
                             zeta_spearman=rho)
     lines += table_b1(results, paper)
     if fig16:
-        f16, numbers["fig16_worst"] = fig16_section(fig16, out)
+        f16, numbers["fig16_worst"] = fig16_section(f16_rows, fig16, out)
         lines += f16
     if clumps:
-        cl, numbers["clump_ratios"] = clumps_section(clumps)
+        cl, numbers["clump_ratios"] = clumps_section(clump_rows, clumps)
         lines += cl
     lines += ["## Departures from the paper", "", "| what | ours | why |", "|---|---|---|"]
     lines += ["| %s | %s | %s |" % d for d in DEPARTURES]
@@ -451,10 +484,9 @@ def main(argv=None):
                         "checkpoints (states/1.npz, states/21.npz) where no record exists yet (Table B1)")
     o = p.parse_args(argv)
     try:
-        if o.statics:
-            solve_statics(o.results, log=lambda m: sys.stderr.write(m + "\n"))
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,
-                        log=lambda m: sys.stderr.write(m + "\n"), fig16=o.fig16, clumps=o.clumps)
+                        log=lambda m: sys.stderr.write(m + "\n"), fig16=o.fig16, clumps=o.clumps,
+                        statics=o.statics)
     except (ResultsError, OSError, ValueError, RuntimeError) as exc:
         sys.stderr.write("error: %s\n" % exc)
         sys.exit(2)

@@ -214,3 +214,20 @@ def test_figures_5_to_12_plot_the_table_s_own_numbers(small_table, tmp_path):
     for name in ("fig5-nu-vs-q.png", "fig6-stress-ratios.png", "fig8-Zm-vs-q.png", "fig9-R.png", "fig10-H.png",
                  "fig12-B.png", "fig12-M.png"):
         assert (tmp_path / "rep" / name).stat().st_size > 5000 and "](%s)" % name in text
+
+
+def test_bad_optional_inputs_are_refused_before_anything_is_written(small_table, tmp_path):
+    """--fig16 and --clumps given the wrong file, a missing one or a study without shear probes:
+    one line of error, and no output directory (before: a KeyError traceback after the figures)."""
+    from conftest import one_line_error
+    fig16 = os.path.join(REPO, "docs", "data", "fig16-spheres-1000.json")
+    clumps = os.path.join(REPO, "docs", "data", "anisotropy-clumps-4000.json")
+    for args, words in ((["--clumps", fig16], ("anisotropy_clumps.py", "assembly")),
+                        (["--fig16", clumps], ("cross_anisotropy.py", "G_ratio")),
+                        (["--fig16", str(tmp_path / "missing.json")], ("cannot read",)),
+                        (["--fig16", small_table], ("lacks the columns", "G"))):
+        out = tmp_path / "rep"
+        proc = subprocess.run([sys.executable, "-m", "analysis.report", small_table, "--out", str(out), *args],
+                              cwd=REPO, capture_output=True, text=True, timeout=300)
+        one_line_error(proc, *words)
+        assert not out.exists()
