@@ -25,6 +25,13 @@ def _save(fig, path):
     os.replace(tmp, path)
 
 
+def _finish(plt, fig, path):
+    """Lay out, write atomically and close a figure."""
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
+
+
 def modulus_vs_stress(rows, path, title="sphere assembly"):
     """Fig. 3: E_i against sigma_i, one series per direction."""
     plt = _plt()
@@ -38,9 +45,7 @@ def modulus_vs_stress(rows, path, title="sphere assembly"):
     ax.set_ylabel("E_i (MPa)")
     ax.set_title("Young's moduli against the stress in their direction\n(%s)" % title, fontsize=10)
     ax.legend()
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    _finish(plt, fig, path)
 
 
 def scalar_moduli_vs_zm(rows, path):
@@ -67,9 +72,7 @@ def scalar_moduli_vs_zm(rows, path):
     ax.set_xlabel("Zm")
     ax.set_ylabel("modulus (MPa)")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    _finish(plt, fig, path)
     return out
 
 
@@ -114,9 +117,7 @@ def poisson_vs_q(rows, path):
         ax.set_xlabel("q (kPa)")
     axes[0].set_ylabel("Poisson's ratio")
     axes[2].legend(fontsize=7)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    _finish(plt, fig, path)
     return out
 
 
@@ -136,9 +137,7 @@ def stress_ratios_vs_q(rows, path):
         ax.set_title(name, fontsize=9)
         ax.set_xlabel("q (kPa)")
     axes[2].legend(fontsize=7)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    _finish(plt, fig, path)
     return out
 
 
@@ -163,9 +162,7 @@ def zm_vs_q(rows, path, band=PAPER_ZM_SPHERES):
     ax.set_xlabel("q (kPa)")
     ax.set_ylabel("Zm (filled), Zm with a 1e-3 gap tolerance (open)")
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    _finish(plt, fig, path)
     return out
 
 
@@ -186,9 +183,7 @@ def fabric_vs_stress(rows, path, name):
     ax.set_xlabel("sigma_i (kPa)")
     ax.set_ylabel(name + " (diagonal)")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    _finish(plt, fig, path)
     return out
 
 
