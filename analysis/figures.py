@@ -97,15 +97,10 @@ def poisson_vs_q(rows, path):
     """Fig. 5: nu_zx, nu_xz | nu_zy, nu_yz | nu_xy, nu_yx against q, one line per b. Returns
     {b: (q, nu (n, 3, 3))} in kPa and ratios."""
     plt = _plt()
-    states = hyperelastic.states_from_rows(rows)
-    groups = {}
-    for st in states.values():
-        groups.setdefault(round(st["b"], 3), []).append(st)
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
     out = {}
     pairs = (((2, 0), (0, 2)), ((2, 1), (1, 2)), ((0, 1), (1, 0)))
-    for b, sts in sorted(groups.items()):
-        sts = sorted(sts, key=lambda st: st["q"])
+    for b, sts in _b_groups(hyperelastic.states_from_rows(rows).values()).items():
         q = np.array([st["q"] for st in sts]) / 1e3
         nu = np.array([st["nu"] for st in sts])
         out[b] = (q, nu)

@@ -18,7 +18,7 @@ Zm, E at the isotropic state, and the cost (steps, wall time).
 """
 import sys
 
-from .results import ResultsError, number, read_probes  # sets the path to pyscripts/ as well
+from .results import ResultsError, number, read_metadata, read_probes  # sets the path to pyscripts/ as well
 from trueaniso import triaxial  # noqa: E402  (after .results)
 
 NORMAL = ("x", "y", "z")
@@ -70,16 +70,11 @@ def summary(rows, path="probe table"):
 
 def study_row(study):
     """One row of the path-fidelity table from a study directory (metadata.json, probes.csv)."""
-    import json
     import os
     import numpy as np
     from . import chain, zeta_contrast
-    try:
-        with open(os.path.join(study, "metadata.json")) as f:
-            meta = json.load(f)
-    except (OSError, ValueError) as exc:
-        raise ResultsError("%s: no readable metadata.json (%s)" % (study, exc)) from None
-    fp, spec = meta["fingerprint"], meta["runs"][-1]["specimen"]
+    meta = read_metadata(study, required=True)
+    fp, spec = meta["fingerprint"], meta["specimen"]
     csv_path = os.path.join(study, "probes.csv")
     rows = read_probes(csv_path, need=zeta_contrast.NEEDED + ["b", "sigma_z_goal", "Zm", "probe_steps", "state_steps"])
     s = summary(rows, csv_path)
@@ -101,8 +96,7 @@ def study_row(study):
                 Zm_gap=s.get("Zm_gap1e-3"), reversals=len(rev), strong=len(strong), worst=worst,
                 zeta=fit and fit["zeta"], zeta_se=fit and fit["se"], rho=trend["rho"], zeta_high=trend["high"],
                 zeta_low=trend["low"], E_iso=float(np.mean(tab["E"][ref])) if len(tab["state"]) else None,
-                steps=steps, wall=s["wall_time"], threads=fp.get("threads"),
-                rate=n * steps / s["wall_time"] if s["wall_time"] > 0 else None)
+                steps=steps, wall=s["wall_time"], threads=fp.get("threads"))
 
 
 def markdown_table(summaries):

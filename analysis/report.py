@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from . import chain, figures, zeta_contrast
-from .results import ResultsError, read_probes
+from .results import ResultsError, read_metadata, read_probes
 
 AXES = "xyz"
 DEFAULT_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)  # the paper's particles (section 2.1)
@@ -149,23 +149,18 @@ def _fmt(x, f="%.4g"):
 
 
 def _material(results):
-    meta_path = os.path.join(results, "metadata.json") if os.path.isdir(results) else None
-    if meta_path and os.path.exists(meta_path):
-        with open(meta_path) as f:
-            m = (json.load(f).get("specimen") or {}).get("material")
-        if m:
-            return dict(shear_modulus=float(m["shear_modulus"]), poisson=float(m["poisson"])), "the study's metadata"
+    m = ((read_metadata(results) or {}).get("specimen") or {}).get("material")
+    if m:
+        return dict(shear_modulus=float(m["shear_modulus"]), poisson=float(m["poisson"])), "the study's metadata"
     return None, None
 
 
 def _study_line(results):
     """What the study is (from its metadata.json): specimen size, seed, void ratio and Zm, the
     loading path and the contact law's rolling resistance; None for a bare table."""
-    meta_path = os.path.join(results, "metadata.json") if os.path.isdir(results) else None
-    if not meta_path or not os.path.exists(meta_path):
+    meta = read_metadata(results)
+    if meta is None:
         return None
-    with open(meta_path) as f:
-        meta = json.load(f)
     spec, fp = meta.get("specimen") or {}, meta.get("fingerprint") or {}
     summ, state = spec.get("summary") or {}, fp.get("state") or {}
     beta, eta = state.get("rolling_stiffness", 0.0), state.get("rolling_friction", 0.0)

@@ -42,6 +42,20 @@ def read_probes(path, need=("state", "probe", "E")):
     return out
 
 
+def read_metadata(results, required=False):
+    """The metadata.json of a study directory (its fingerprint, specimen, runs), or None for a bare
+    table or a directory without one; with `required`, a ResultsError instead of None."""
+    import json
+    path = os.path.join(results, "metadata.json")
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as exc:
+        if required:
+            raise ResultsError("%s: no readable metadata.json (%s)" % (results, exc)) from None
+        return None
+
+
 def number(row, column, path="probe table"):
     """A float cell, or one clear error naming the row."""
     try:

@@ -59,7 +59,7 @@ def test_table_row_of_a_study_directory(tmp_path):
         w.writerows(rows)
     material = dict(shear_modulus=18e9, poisson=0.15, density=2500.0, friction=0.5)
     meta = dict(fingerprint=dict(threads=2, state=dict(rolling_stiffness=0.0, rolling_friction=0.0)),
-                runs=[dict(specimen=dict(seed=1, material=material, summary=dict(n=4000)))])
+                specimen=dict(seed=1, material=material, summary=dict(n=4000)))
     (tmp_path / "metadata.json").write_text(json.dumps(meta))
     r = path_fidelity.study_row(str(tmp_path))
     zm = [float(x["Zm"]) for x in rows]
