@@ -5,11 +5,12 @@
 namespace trueaniso {
 
 CellMeasurement CellMeasurement::of(const Scene& s) {
+  const ContactMeasures c = contactMeasures(s);
   CellMeasurement m;
-  m.stress = voigt::fromTensor(loveWeberStress(s));
+  m.stress = voigt::fromTensor(c.stress);
   m.deformation = s.cell.deformation();
-  m.stiffness = affineStiffness(s);
-  m.unbalanced = unbalancedForce(s);
+  m.stiffness = c.stiffness;
+  m.unbalanced = c.unbalanced;
   return m;
 }
 

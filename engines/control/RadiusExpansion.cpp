@@ -20,8 +20,11 @@ void RadiusExpansion::apply(Scene& s) {
     baseVolume_ = s.bodies.volume;
     scale = 1.0;
   }
-  pressure = loveWeberStress(s).trace() / 3.0;
-  const Real K = affineStiffness(s).head<3>().mean();
+  // Measured before the radii grow: the forces, hence the stress and the unbalanced force, are
+  // those of the last force evaluation either way.
+  const ContactMeasures measured = contactMeasures(s);
+  pressure = measured.stress.trace() / 3.0;
+  const Real K = measured.stiffness.head<3>().mean();
   const Real err = targetPressure - pressure;
   // Growing radii by d ln r is, for the contacts, an isotropic affine compression of d ln r.
   Real rate = K > 0 ? gain * err / (K * s.dt) : (err > 0 ? maxGrowthRate : -maxGrowthRate);
@@ -31,7 +34,7 @@ void RadiusExpansion::apply(Scene& s) {
   if (clumps) growClumps(s);
   else for (int b = 0; b < nb; ++b) s.setSphereRadius(b, scale * base_[b]);
   for (Real& r : s.contacts.rbar) r *= grow;  // Eq. (7) is homogeneous in the radii
-  unbalanced = unbalancedForce(s);
+  unbalanced = measured.unbalanced;
   reached = std::abs(err) < stressTolerance && unbalanced < unbalancedTolerance;
   if (reached && stopWhenReached) done = true;
 }

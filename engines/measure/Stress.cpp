@@ -10,28 +10,91 @@
 
 namespace trueaniso {
 
+namespace {
+
+// One contact's term of each sum. Each measure below and contactMeasures() add the same terms in
+// the same blocks (measure/Reduce.hpp), so the fused pass gives the same bits.
+
+// Love-Weber: F_c (x) L_c.
+inline void addStress(const Contacts& C, int c, Mat3& acc) {
+  if (C.normalForce[c] > 0) acc.noalias() += C.force(c) * C.branch[c].transpose();
+}
+
+// The mean contact force of the unbalanced force.
+struct ForceMean {
+  Real f = 0;
+  long n = 0;
+  ForceMean& operator+=(const ForceMean& o) { f += o.f; n += o.n; return *this; }
+};
+inline void addContactForce(const Contacts& C, int c, ForceMean& acc) {
+  if (C.normalForce[c] > 0) { acc.f += C.force(c).norm(); ++acc.n; }
+}
+
+// The diagonal of Eq. (32), contact springs only.
+inline void addAffineStiffness(const Contacts& C, const HertzMindlin& law, int c, Vec6& acc) {
+  const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
+  if (kn <= 0) return;
+  const Real ks = law.shearStiffness(kn), kd = (1.0 - law.shearToNormal()) * kn;  // k_n - k_s
+  const Vec3& n = C.normal[c];
+  const Vec3& L = C.branch[c];
+  for (int k = 0; k < 3; ++k) {
+    // K_kk = sum L_k^2 [k_s + (k_n - k_s) n_k^2], the kk kk component of Eq. (32).
+    acc[k] += L[k] * L[k] * (ks + kd * n[k] * n[k]);
+  }
+  for (int I = 3; I < 6; ++I) {
+    // Engineering shear gamma_ij: the affine displacement u = (gamma/2)(L_j e_i + L_i e_j), the
+    // force k_s u + (k_n - k_s) n (n.u), the stress sym(dF (x) L)_ij: the ij ij component of
+    // Eq. (32) symmetrised over (ij) and (kl), as the static solve's affine part.
+    const int i = voigt::kRow[I], j = voigt::kCol[I];
+    const Real nu = 0.5 * (n[i] * L[j] + n[j] * L[i]);
+    const Real dFi = 0.5 * ks * L[j] + kd * n[i] * nu, dFj = 0.5 * ks * L[i] + kd * n[j] * nu;
+    acc[I] += 0.5 * (dFi * L[j] + dFj * L[i]);
+  }
+}
+
+// Mean |resultant force| over bodies over the mean |contact force|.
+Real unbalancedFrom(const Scene& s, const ForceMean& contact) {
+  const Bodies& B = s.bodies;
+  const Real bodySum = blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.force[b].norm(); });
+  if (contact.n == 0 || contact.f == 0) return std::numeric_limits<Real>::quiet_NaN();
+  return (bodySum / B.size()) / (contact.f / contact.n);
+}
+
+}  // namespace
+
 Mat3 loveWeberStress(const Scene& s) {
   const Contacts& C = s.contacts;
-  const Mat3 sum = blockSum<Mat3>(C.size(), Mat3::Zero(), [&](int c, Mat3& acc) {
-    if (C.normalForce[c] > 0) acc.noalias() += C.force(c) * C.branch[c].transpose();
-  });
+  const Mat3 sum = blockSum<Mat3>(C.size(), Mat3::Zero(), [&](int c, Mat3& acc) { addStress(C, c, acc); });
   return sum / s.cell.volume();
 }
 
 Real unbalancedForce(const Scene& s) {
-  const Bodies& B = s.bodies;
   const Contacts& C = s.contacts;
-  const Real bodySum = blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.force[b].norm(); });
-  struct Acc {
-    Real f = 0;
-    long n = 0;
-    Acc& operator+=(const Acc& o) { f += o.f; n += o.n; return *this; }
+  return unbalancedFrom(
+      s, blockSum<ForceMean>(C.size(), ForceMean{}, [&](int c, ForceMean& acc) { addContactForce(C, c, acc); }));
+}
+
+ContactMeasures contactMeasures(const Scene& s) {
+  const Contacts& C = s.contacts;
+  const HertzMindlin law(s.material);
+  struct Sums {
+    Mat3 stress = Mat3::Zero();
+    Vec6 stiffness = Vec6::Zero();
+    ForceMean mean;
+    Sums& operator+=(const Sums& o) {
+      stress += o.stress;
+      stiffness += o.stiffness;
+      mean += o.mean;
+      return *this;
+    }
   };
-  const Acc contact = blockSum<Acc>(C.size(), Acc{}, [&](int c, Acc& acc) {
-    if (C.normalForce[c] > 0) { acc.f += C.force(c).norm(); ++acc.n; }
+  const Sums sum = blockSum<Sums>(C.size(), Sums{}, [&](int c, Sums& acc) {
+    addStress(C, c, acc.stress);
+    addAffineStiffness(C, law, c, acc.stiffness);
+    addContactForce(C, c, acc.mean);
   });
-  if (contact.n == 0 || contact.f == 0) return std::numeric_limits<Real>::quiet_NaN();
-  return (bodySum / B.size()) / (contact.f / contact.n);
+  const Real V = s.cell.volume();
+  return {sum.stress / V, sum.stiffness / V, unbalancedFrom(s, sum.mean)};
 }
 
 Real unbalancedTorque(const Scene& s) {
@@ -56,26 +119,8 @@ Real unbalancedTorque(const Scene& s) {
 Vec6 affineStiffness(const Scene& s) {
   const Contacts& C = s.contacts;
   const HertzMindlin law(s.material);
-  const Vec6 sum = blockSum<Vec6>(C.size(), Vec6::Zero(), [&](int c, Vec6& acc) {
-    const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
-    if (kn <= 0) return;
-    const Real ks = law.shearStiffness(kn), kd = (1.0 - law.shearToNormal()) * kn;  // k_n - k_s
-    const Vec3& n = C.normal[c];
-    const Vec3& L = C.branch[c];
-    for (int k = 0; k < 3; ++k) {
-      // K_kk = sum L_k^2 [k_s + (k_n - k_s) n_k^2], the kk kk component of Eq. (32).
-      acc[k] += L[k] * L[k] * (ks + kd * n[k] * n[k]);
-    }
-    for (int I = 3; I < 6; ++I) {
-      // Engineering shear gamma_ij: the affine displacement u = (gamma/2)(L_j e_i + L_i e_j), the
-      // force k_s u + (k_n - k_s) n (n.u), the stress sym(dF (x) L)_ij: the ij ij component of
-      // Eq. (32) symmetrised over (ij) and (kl), as the static solve's affine part.
-      const int i = voigt::kRow[I], j = voigt::kCol[I];
-      const Real nu = 0.5 * (n[i] * L[j] + n[j] * L[i]);
-      const Real dFi = 0.5 * ks * L[j] + kd * n[i] * nu, dFj = 0.5 * ks * L[i] + kd * n[j] * nu;
-      acc[I] += 0.5 * (dFi * L[j] + dFj * L[i]);
-    }
-  });
+  const Vec6 sum =
+      blockSum<Vec6>(C.size(), Vec6::Zero(), [&](int c, Vec6& acc) { addAffineStiffness(C, law, c, acc); });
   return sum / s.cell.volume();
 }
 

@@ -25,6 +25,17 @@ Real unbalancedTorque(const Scene& scene);
 // true stiffness that the cell controllers use to scale their gain.
 Vec6 affineStiffness(const Scene& scene);
 
+// The stress, the affine stiffness and the unbalanced force that a cell controller reads every
+// step, from one pass over the contacts instead of three: the three passes took 20 % of a
+// 53,004-sphere state's time (perf, docs/benchmarks.md). The same bits as the three functions
+// above: the same terms added in the same blocks and order (tests/cpp/test_dynamics.cpp).
+struct ContactMeasures {
+  Mat3 stress;      // loveWeberStress
+  Vec6 stiffness;   // affineStiffness
+  Real unbalanced;  // unbalancedForce
+};
+ContactMeasures contactMeasures(const Scene& scene);
+
 // Principal values of the symmetric part of a stress tensor, largest first.
 Vec3 principalStresses(const Mat3& sigma);
 

@@ -136,6 +136,42 @@ TEST(Stress, UnbalancedForceFollowsYadeDefinition) {
   EXPECT_DOUBLE_EQ(z.mechanical(), (2.0 * 2 - 2) / (3 - 0 - 2));  // Eq. (14): 2
 }
 
+// The fused pass the cell controllers read every step gives the bits of the three measures it
+// replaced, on a scene with shear forces and sliding, with one thread and with a team (the pairs
+// are enough for one: core/Parallel.hpp). Exact: the same terms in the same blocks and order.
+TEST(Stress, OnePassMeasuresEqualTheThreeSums) {
+  auto s = randomGasIn(Mat3::Identity(), 1500, 0.6, 5);
+  s->dt = 1e-6;
+  // Prescribed spins on every other sphere build tangential forces, some to the Coulomb cap.
+  for (int b = 0; b < s->bodies.size(); b += 2) s->bodies.angVel[b] = Vec3(50, -30, 20);
+  Driver driver(s);
+  for (int k = 0; k < 3; ++k) { driver.evaluate(); driver.move(); }
+  driver.evaluate();
+  ASSERT_TRUE(worthThreads(s->contacts.size()));
+  long sliding = 0, loaded = 0;
+  for (int c = 0; c < s->contacts.size(); ++c) {
+    if (!s->contacts.active(c)) continue;
+    ++loaded;
+    sliding += s->contacts.shearForce[c].norm() >= 0.5 * (1 - 1e-12) * s->contacts.normalForce[c];
+  }
+  ASSERT_GT(sliding, 0);
+  ASSERT_LT(sliding, loaded);
+#ifdef _OPENMP
+  const int saved = omp_get_max_threads();
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+#endif
+    const ContactMeasures m = contactMeasures(*s);
+    EXPECT_TRUE(m.stress == loveWeberStress(*s));
+    EXPECT_TRUE(m.stiffness == affineStiffness(*s));
+    EXPECT_EQ(m.unbalanced, unbalancedForce(*s));
+    EXPECT_GT(m.stress.trace(), 0.0);
+#ifdef _OPENMP
+  }
+  omp_set_num_threads(saved);
+#endif
+}
+
 // A step above the two-body limit of the stiffest contact is refused before it is taken.
 TEST(NewtonIntegrator, RefusesUnstableStep) {
   auto s = twoSpheres(1e-4, 1e-4, 1e-6);
