@@ -1,0 +1,136 @@
+"""One stepper change measured: the same packing stepped by two builds of trueaniso, before and after.
+
+    /usr/bin/python3 pyscripts/bench/bench_builds.py --before TREE --after TREE --specimen S.npz [--tiles 1,2] [--doc docs/benchmarks.md]
+
+TREE is a checkout of trueaniso, built (./setup.sh), e.g. `git worktree add ../before HEAD~1`.
+Each run is a process of its own that imports that tree's engines and steps the specimen (tiled
+K x K x K times) with ContactDetection, ContactForces and NewtonIntegrator on one engine thread,
+as bench_stepper.py does; before and after alternate, the first of the pair alternating too.
+Figure: particle-steps per CPU second of the timed steps (CPU time, the figure other jobs on the
+machine disturb least). The two builds must step the packing to the same bits (a checksum of the
+positions and contact forces after the timed steps is compared): a change that alters results is not a speed-up
+of the same computation, and the benchmark refuses to time it as one.
+With --doc the table between <!-- NAME:begin --> and <!-- NAME:end --> (--block) is replaced.
+"""
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+sys.path[:0] = [os.path.dirname(HERE)]
+from trueaniso import cli  # noqa: E402
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)
+import _bench  # noqa: E402
+
+# Run in a fresh interpreter with the tree's pyscripts first on the path: it uses only what both
+# builds have (specimen_file.load, dem.Chain, Scene.contact_arrays), so it can time an older tree.
+WORKER = r"""
+import hashlib, json, sys, time
+tree, specimen, tile, steps = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+sys.path[:0] = [tree + "/pyscripts", tree + "/pyscripts/bench"]
+import numpy as np
+from trueaniso import dem, specimen_file
+s, _ = specimen_file.load(specimen)
+if tile > 1:
+    import _bench
+    s = _bench.tiled(s, tile)
+    dem.refresh(s)
+s.dt = 2.9e-8
+c = dem.Chain(s, damping=0.2)
+c.timestep.dead = True
+c.run(50)
+t = time.process_time()
+c.run(steps)
+cpu = time.process_time() - t
+d = s.contact_arrays()
+h = hashlib.sha256()
+for a in (s.positions, d["normal_force"], d["shear_force"], d["overlap"]):
+    h.update(np.ascontiguousarray(np.asarray(a, dtype=float)).tobytes())
+print("BENCH " + json.dumps(dict(n=s.num_bodies, steps=steps, cpu=cpu, checksum=h.hexdigest()[:16])))
+"""
+
+
+def run(tree, specimen, tile, steps):
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    env.pop("TRUEANISO_BUILD", None)  # it would give both trees the same compiled module
+    out = subprocess.run(["/usr/bin/python3", "-c", WORKER, tree, specimen, str(tile), str(steps)],
+                         capture_output=True, text=True, env=env)
+    line = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
+    if out.returncode != 0 or not line:
+        cli.fail("stepping with %s failed:\n%s" % (tree, out.stderr[-2000:]), 1)
+    import json
+    return json.loads(line[-1][6:])
+
+
+def options():
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--before", required=True, help="checkout of trueaniso before the change (built)")
+    p.add_argument("--after", required=True, help="checkout of trueaniso with the change (built)")
+    p.add_argument("--specimen", required=True, help="sphere specimen (.npz)")
+    p.add_argument("--tiles", default="1", help="tilings K (K^3 copies of the specimen), comma separated")
+    p.add_argument("--repeats", type=int, default=5, help="runs of each build, interleaved")
+    p.add_argument("--particle-steps", type=float, default=1.2e7, help="particle-steps per timed run")
+    p.add_argument("--change", default="the change", help="what the change is, for the table")
+    p.add_argument("--doc", help="Markdown file whose block is replaced")
+    p.add_argument("--block", default="stepper-builds", help="marker name of the block in --doc")
+    o = cli.parse(p)
+    try:
+        o.tiles = [int(k) for k in str(o.tiles).split(",")]
+    except ValueError:
+        cli.fail("--tiles takes whole numbers separated by commas, not %r" % o.tiles)
+    if o.repeats < 1 or min(o.tiles) < 1 or max(o.tiles) > 4:
+        cli.fail("--repeats must be >= 1 and --tiles between 1 and 4")
+    if not os.path.isfile(o.specimen):
+        cli.fail("no specimen file %s (prepare it first, docs/benchmarks.md)" % o.specimen)
+    for tree in (o.before, o.after):
+        if not os.path.isfile(os.path.join(tree, "pyscripts", "trueaniso", "dem.py")):
+            cli.fail("%s is not a trueaniso checkout (no pyscripts/trueaniso/dem.py)" % tree)
+    o.before, o.after = os.path.abspath(o.before), os.path.abspath(o.after)
+    return o
+
+
+def revision(tree):
+    out = subprocess.run(["git", "-C", tree, "describe", "--always", "--dirty"], capture_output=True, text=True)
+    return out.stdout.strip() or os.path.basename(tree)
+
+
+def main():
+    o = options()
+    names = {o.before: revision(o.before), o.after: revision(o.after)}
+    lines = ["Machine: %s; %s. %s: %s (before) against %s (after), one engine thread, %d interleaved runs "
+             "of each, medians; time step 2.9e-8 s, damping 0.2; both builds step to the same bits."
+             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after], o.repeats), "",
+             "| spheres | before (M particle-steps per CPU s) | after | after / before | paired ratios (min - max) |",
+             "|---|---|---|---|---|"]
+    for k in o.tiles:
+        n = None
+        rate = {o.before: [], o.after: []}
+        for r in range(o.repeats):
+            pair = (o.before, o.after) if r % 2 == 0 else (o.after, o.before)
+            res = {}
+            for tree in pair:
+                steps = max(50, int(o.particle_steps / (4000 * k ** 3)))
+                res[tree] = x = run(tree, o.specimen, k, steps)
+                n = x["n"]
+                rate[tree].append(x["n"] * x["steps"] / x["cpu"] / 1e6)
+                print("  %s %s" % (names[tree], x), flush=True)
+            if res[o.before]["checksum"] != res[o.after]["checksum"]:
+                cli.fail("the two builds step the packing to different results (checksums %s and %s): "
+                         "not the same computation" % (res[o.before]["checksum"], res[o.after]["checksum"]), 1)
+        ratios = [a / b for a, b in zip(rate[o.after], rate[o.before])]
+        lines.append("| %d | %.2f | %.2f | %.3f | %.3f - %.3f |" % (
+            n, statistics.median(rate[o.before]), statistics.median(rate[o.after]),
+            statistics.median(ratios), min(ratios), max(ratios)))
+    lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_builds.py %s`"
+              % " ".join(a if not os.path.exists(a) else os.path.relpath(a) for a in sys.argv[1:])]
+    table = "\n".join(lines)
+    print(table)
+    if o.doc:
+        _bench.replace_block(o.doc, o.block, table, heading="## Stepper changes (issue 15)")
+
+
+if __name__ == "__main__":
+    cli.guarded(main)

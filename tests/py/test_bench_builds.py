@@ -1,0 +1,42 @@
+"""bench_builds.py, the before/after timing of a stepper change (docs/benchmarks.md, "Stepper
+changes"): it times two builds on the same packing only when they compute the same thing, and
+refuses what is not a checkout. Timings are printed, never asserted."""
+import os
+import shutil
+
+from conftest import REPO, one_line_error, run_script
+
+
+def bench(before, after, specimen, *extra):
+    return run_script("bench/bench_builds.py", "--before", before, "--after", after, "--specimen", specimen,
+                      "--repeats", "2", "--particle-steps", "2e4", *extra, timeout=300)
+
+
+def test_one_build_against_itself_gives_a_row_and_the_same_bits(tmp_path, specimen_100):
+    doc = tmp_path / "bench.md"
+    proc = bench(REPO, REPO, specimen_100, "--change", "nothing", "--doc", doc)
+    assert proc.returncode == 0, proc.stderr
+    text = doc.read_text()
+    assert "<!-- stepper-builds:begin -->" in text and "nothing:" in text
+    rows = [ln for ln in text.splitlines() if ln.startswith("| 100 |")]
+    assert len(rows) == 1
+    before, after, ratio = (float(x) for x in rows[0].split("|")[2:5])
+    assert before > 0 and after > 0 and abs(ratio - after / before) < 0.2 * ratio  # median of ratios
+
+
+def test_builds_that_compute_differently_are_refused(tmp_path, specimen_100):
+    """A tree whose chain damps half as much steps the packing elsewhere: not the same computation."""
+    other = tmp_path / "other"
+    shutil.copytree(os.path.join(REPO, "pyscripts"), other / "pyscripts",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    os.symlink(os.path.join(REPO, "build"), other / "build")
+    dem = other / "pyscripts" / "trueaniso" / "dem.py"
+    text = dem.read_text()
+    assert "self.integrator.damping = damping\n" in text
+    dem.write_text(text.replace("self.integrator.damping = damping\n", "self.integrator.damping = 0.5 * damping\n"))
+    proc = bench(REPO, other, specimen_100)
+    assert proc.returncode == 1 and "different results" in proc.stderr, proc.stderr
+
+
+def test_refuses_a_folder_that_is_not_a_checkout(tmp_path, specimen_100):
+    one_line_error(bench(tmp_path, REPO, specimen_100), "not a trueaniso checkout")
