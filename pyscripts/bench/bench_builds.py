@@ -88,6 +88,8 @@ def options():
     for tree in (o.before, o.after):
         if not os.path.isfile(os.path.join(tree, "pyscripts", "trueaniso", "dem.py")):
             cli.fail("%s is not a trueaniso checkout (no pyscripts/trueaniso/dem.py)" % tree)
+        if not os.path.isdir(os.path.join(tree, "build", "python")):
+            cli.fail("%s is not built: run its ./setup.sh first (no build/python)" % tree)
     o.before, o.after = os.path.abspath(o.before), os.path.abspath(o.after)
     return o
 

@@ -38,5 +38,8 @@ def test_builds_that_compute_differently_are_refused(tmp_path, specimen_100):
     assert proc.returncode == 1 and "different results" in proc.stderr, proc.stderr
 
 
-def test_refuses_a_folder_that_is_not_a_checkout(tmp_path, specimen_100):
+def test_refuses_a_folder_that_is_not_a_checkout_or_not_built(tmp_path, specimen_100):
     one_line_error(bench(tmp_path, REPO, specimen_100), "not a trueaniso checkout")
+    unbuilt = tmp_path / "unbuilt"
+    shutil.copytree(os.path.join(REPO, "pyscripts"), unbuilt / "pyscripts", ignore=shutil.ignore_patterns("__pycache__"))
+    one_line_error(bench(REPO, unbuilt, specimen_100), "not built")
