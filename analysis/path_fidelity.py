@@ -136,6 +136,9 @@ def main(argv):
         sys.stderr.write("usage: python3 -m analysis.path_fidelity PROBES.csv [...] | --gaps TOLS STUDY_DIR [...] "
                          "| --table STUDY_DIR [...]\n")
         return 2
+    if argv[0] in ("-h", "--help"):
+        print(__doc__.strip())
+        return 0
     if argv[0] == "--table":
         if len(argv) < 2:
             sys.stderr.write("error: --table needs one or more study directories\n")
@@ -147,7 +150,14 @@ def main(argv):
             return 2
         return 0
     if argv[0] == "--gaps":
-        tols = [float(t) for t in argv[1].split(",")]
+        try:
+            tols = [float(t) for t in argv[1].split(",")]
+        except (IndexError, ValueError):
+            tols = []
+        if not tols or not all(0 < t < 1 for t in tols) or len(argv) < 3:
+            sys.stderr.write("error: --gaps takes gap tolerances in (0, 1), comma separated (e.g. 1e-4,1e-3), "
+                             "then one or more study directories\n")
+            return 2
         for d in argv[2:]:
             try:
                 scan = gap_scan(d, tols)

@@ -75,3 +75,14 @@ def test_table_row_of_a_study_directory(tmp_path):
     (tmp_path / "metadata.json").unlink()
     with pytest.raises(path_fidelity.ResultsError, match="metadata.json"):
         path_fidelity.study_row(str(tmp_path))
+
+
+def test_help_and_bad_gap_tolerances(tmp_path, capsys):
+    """Before: --help was taken for a missing probe table, and a bad --gaps list gave a traceback."""
+    assert path_fidelity.main(["--help"]) == 0
+    assert "--table" in capsys.readouterr().out
+    for args in (["--gaps"], ["--gaps", "x", str(tmp_path)], ["--gaps", "1e-4"], ["--gaps", "0,1e-3", str(tmp_path)],
+                 ["--gaps", "nan", str(tmp_path)]):
+        assert path_fidelity.main(args) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("error: --gaps takes gap tolerances"), (args, err)
