@@ -269,6 +269,60 @@ TEST(ContactForces, SumsOnlyTheThreadsThatRan) {
 #endif
 }
 
+// Every touching pair's force and moments reach both bodies, whatever batch of the force loop it
+// falls in (ContactForces walks pairs in batches, the last one partial): each body's force and
+// torque equal the pair-order sums of the contact forces the loop stored, to the bit on one
+// thread; with a team of two, within round-off of the two buffers' sum.
+TEST(ContactForces, BodiesReceiveEveryPairInOrder) {
+  auto s = randomGas(1500, 0.6, 13);
+  s->dt = 1e-6;
+  for (int b = 0; b < s->bodies.size(); b += 3) s->bodies.angVel[b] = Vec3(-40, 25, 60);  // shear forces
+  Driver driver(s);
+  driver.evaluate();
+  driver.move();
+#ifdef _OPENMP
+  const int saved = omp_get_max_threads();
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+#else
+  for (int threads : {1}) {
+#endif
+    driver.evaluate();
+    const Contacts& C = s->contacts;
+    ASSERT_NE(C.size() % 32, 0) << "choose a scene whose last batch is partial";
+    std::vector<Vec3> F(s->bodies.size(), Vec3::Zero()), T(s->bodies.size(), Vec3::Zero());
+    int touching = 0;
+    for (int c = 0; c < C.size(); ++c) {
+      if (!C.active(c)) continue;
+      ++touching;
+      const Vec3 Fc = C.force(c), n = C.normal[c];
+      const int a = C.b1[c], b = C.b2[c];
+      const Real ra = s->members.radius[C.m1[c]], rb = s->members.radius[C.m2[c]];
+      F[a] -= Fc;
+      F[b] += Fc;
+      T[a] -= Vec3((ra - 0.5 * C.overlap[c]) * n).cross(Fc);
+      T[b] += Vec3(-(rb - 0.5 * C.overlap[c]) * n).cross(Fc);
+    }
+    ASSERT_GT(touching, 1000);
+    Real scale = 0, worstF = 0, worstT = 0, torqueScale = 0;
+    for (int b = 0; b < s->bodies.size(); ++b) {
+      scale = std::max(scale, F[b].norm());
+      torqueScale = std::max(torqueScale, T[b].norm());
+      worstF = std::max(worstF, (s->bodies.force[b] - F[b]).norm());
+      worstT = std::max(worstT, (s->bodies.torque[b] - T[b]).norm());
+    }
+    ASSERT_GT(torqueScale, 0.0);
+    // One thread adds in pair order, as here: exact. Two: each body's sum split in two parts,
+    // a few ulps of the largest force (1e-13 relative allows ~500).
+    const Real tol = threads == 1 ? 0.0 : 1e-13;
+    EXPECT_LE(worstF, tol * scale) << threads << " threads";
+    EXPECT_LE(worstT, tol * torqueScale) << threads << " threads";
+  }
+#ifdef _OPENMP
+  omp_set_num_threads(saved);
+#endif
+}
+
 // A step of a small scene runs on the calling thread whatever the thread count (core/Parallel.hpp):
 // two threads on 300 spheres took 8-13 ms a step against 0.22 ms with another process on the
 // second core. Observable as bit-identical forces with one and two threads (a team sums the
