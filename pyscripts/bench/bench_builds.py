@@ -10,6 +10,9 @@ Figure: particle-steps per CPU second of the timed steps (CPU time, the figure o
 machine disturb least). The two builds must step the packing to the same bits (a checksum of the
 positions and contact forces after the timed steps is compared): a change that alters results is not a speed-up
 of the same computation, and the benchmark refuses to time it as one.
+With --state ID the two builds run a whole Table C1 state with its three probes instead
+(run_states.py --ids ID --threads 1: the servo, its measures every step, the probes), timed in CPU
+seconds and refused when their probe tables differ (wall-time columns aside).
 With --doc the table between <!-- NAME:begin --> and <!-- NAME:end --> (--block) is replaced.
 """
 import os
@@ -65,6 +68,59 @@ def run(tree, specimen, tile, steps):
     return json.loads(line[-1][6:])
 
 
+def run_state(tree, specimen, state):
+    """CPU seconds of run_states.py --ids STATE of this tree (the state and its three probes) and a
+    checksum of its probe table without the wall-time columns."""
+    import csv
+    import hashlib
+    import resource
+    import tempfile
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    env.pop("TRUEANISO_BUILD", None)
+    with tempfile.TemporaryDirectory() as tmp:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        out = subprocess.run(["/usr/bin/python3", os.path.join(tree, "pyscripts", "run_states.py"), "--specimen", specimen,
+                              "--ids", str(state), "--threads", "1", "--out", os.path.join(tmp, "s")],
+                             capture_output=True, text=True, env=env)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        if out.returncode != 0:
+            cli.fail("state %s with %s failed:\n%s" % (state, tree, out.stderr[-2000:]), 1)
+        with open(os.path.join(tmp, "s", "probes.csv")) as f:
+            rows = list(csv.DictReader(f))
+    h = hashlib.sha256()
+    for r in rows:
+        h.update(repr(sorted((k, v) for k, v in r.items() if not k.endswith("wall_time"))).encode())
+    steps = int(float(rows[0]["state_steps"])) + sum(int(float(r["probe_steps"])) for r in rows)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    return dict(cpu=cpu, steps=steps, checksum=h.hexdigest()[:16])
+
+
+def state_table(o, names):
+    """--state: the whole state (servo, measures, probes) as run_states.py runs it, CPU seconds."""
+    lines = ["Machine: %s; %s. %s: %s (before) against %s (after): run_states.py --ids %s --threads 1 on %s, "
+             "%d alternating runs of each, medians; both builds give the same probe table (wall times aside)."
+             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after], o.state,
+                os.path.basename(o.specimen), o.repeats), "",
+             "| state | steps (state and probes) | before (CPU s) | after (CPU s) | after / before | paired ratios (min - max) |",
+             "|---|---|---|---|---|---|"]
+    cpu = {o.before: [], o.after: []}
+    steps = None
+    for r in range(o.repeats):
+        res = {}
+        for tree in ((o.before, o.after) if r % 2 == 0 else (o.after, o.before)):
+            res[tree] = x = run_state(tree, o.specimen, o.state)
+            cpu[tree].append(x["cpu"])
+            steps = x["steps"]
+            print("  %s %s" % (names[tree], x), flush=True)
+        if res[o.before]["checksum"] != res[o.after]["checksum"]:
+            cli.fail("the two builds give different probe tables for state %s: not the same computation" % o.state, 1)
+    ratios = [a / b for a, b in zip(cpu[o.after], cpu[o.before])]
+    lines.append("| %s | %d | %.1f | %.1f | %.3f | %.3f - %.3f |" % (
+        o.state, steps, statistics.median(cpu[o.before]), statistics.median(cpu[o.after]), statistics.median(ratios),
+        min(ratios), max(ratios)))
+    return lines
+
+
 def options():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--before", required=True, help="checkout of trueaniso before the change (built)")
@@ -73,6 +129,8 @@ def options():
     p.add_argument("--tiles", default="1", help="tilings K (K^3 copies of the specimen), comma separated")
     p.add_argument("--repeats", type=int, default=5, help="runs of each build, interleaved")
     p.add_argument("--particle-steps", type=float, default=1.2e7, help="particle-steps per timed run")
+    p.add_argument("--state", help="time a whole Table C1 state with its probes (run_states.py --ids STATE) "
+                                   "instead of the bare stepper; CPU seconds")
     p.add_argument("--change", default="the change", help="what the change is, for the table")
     p.add_argument("--doc", help="Markdown file whose block is replaced")
     p.add_argument("--block", default="stepper-builds", help="marker name of the block in --doc")
@@ -102,6 +160,15 @@ def revision(tree):
 def main():
     o = options()
     names = {o.before: revision(o.before), o.after: revision(o.after)}
+    if o.state:
+        lines = state_table(o, names)
+        lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_builds.py %s`"
+                  % " ".join(a if not os.path.exists(a) else os.path.relpath(a) for a in sys.argv[1:])]
+        table = "\n".join(lines)
+        print(table)
+        if o.doc:
+            _bench.replace_block(o.doc, o.block, table, heading="## Stepper changes (issue 15)")
+        return
     lines = ["Machine: %s; %s. %s: %s (before) against %s (after), one engine thread, %d interleaved runs "
              "of each, medians; time step 2.9e-8 s, damping 0.2; both builds step to the same bits."
              % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after], o.repeats), "",

@@ -24,6 +24,17 @@ def test_one_build_against_itself_gives_a_row_and_the_same_bits(tmp_path, specim
     assert before > 0 and after > 0 and abs(ratio - after / before) < 0.2 * ratio  # median of ratios
 
 
+def test_a_whole_state_timed_against_itself(tmp_path, specimen_100):
+    doc = tmp_path / "bench.md"
+    proc = run_script("bench/bench_builds.py", "--before", REPO, "--after", REPO, "--specimen", specimen_100,
+                      "--state", "5", "--repeats", "1", "--doc", doc, "--block", "state", timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    rows = [ln for ln in doc.read_text().splitlines() if ln.startswith("| 5 |")]
+    assert len(rows) == 1
+    steps, before, after = (float(x) for x in rows[0].split("|")[2:5])
+    assert steps > 200 and before > 0 and after > 0
+
+
 def test_builds_that_compute_differently_are_refused(tmp_path, specimen_100):
     """A tree whose chain damps half as much steps the packing elsewhere: not the same computation."""
     other = tmp_path / "other"
