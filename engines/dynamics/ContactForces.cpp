@@ -72,8 +72,8 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     // pass's iterations are short and independent, so the processor overlaps their sqrt/division
     // chains, which one iteration of ~250 instructions did not let it do. Forces are added in
     // pair order as before: the same bits. Measured against the single loop (bench_builds.py,
-    // docs/benchmarks.md): +6 to +12 %; a third pass for the force additions and a branchless
-    // first pass measured no better within the machine's noise.
+    // docs/benchmarks.md): +6 to +15 % at 4000-16,000 spheres, none resolved at 32,000; a third
+    // pass for the force additions and a branchless first pass measured no better.
     constexpr int kBatch = 32;
     struct Touch {  // a touching pair of the batch and its geometry
       Vec3 n, d;

@@ -16,6 +16,7 @@ seconds and refused when their probe tables differ (wall-time columns aside).
 With --doc the table between <!-- NAME:begin --> and <!-- NAME:end --> (--block) is replaced.
 """
 import os
+import shlex
 import statistics
 import subprocess
 import sys
@@ -163,7 +164,7 @@ def main():
     if o.state:
         lines = state_table(o, names)
         lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_builds.py %s`"
-                  % " ".join(a if not os.path.exists(a) else os.path.relpath(a) for a in sys.argv[1:])]
+                  % " ".join(shlex.quote(a if not os.path.exists(a) else os.path.relpath(a)) for a in sys.argv[1:])]
         table = "\n".join(lines)
         print(table)
         if o.doc:
@@ -194,7 +195,7 @@ def main():
             n, statistics.median(rate[o.before]), statistics.median(rate[o.after]),
             statistics.median(ratios), min(ratios), max(ratios)))
     lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_builds.py %s`"
-              % " ".join(a if not os.path.exists(a) else os.path.relpath(a) for a in sys.argv[1:])]
+              % " ".join(shlex.quote(a if not os.path.exists(a) else os.path.relpath(a)) for a in sys.argv[1:])]
     table = "\n".join(lines)
     print(table)
     if o.doc:
