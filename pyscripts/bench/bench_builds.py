@@ -57,11 +57,17 @@ print("BENCH " + json.dumps(dict(n=s.num_bodies, steps=steps, cpu=cpu, checksum=
 """
 
 
-def run(tree, specimen, tile, steps):
+def child_env():
+    """One engine thread, and the tree's own compiled module: TRUEANISO_BUILD would give both trees
+    the same one."""
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    env.pop("TRUEANISO_BUILD", None)  # it would give both trees the same compiled module
+    env.pop("TRUEANISO_BUILD", None)
+    return env
+
+
+def run(tree, specimen, tile, steps):
     out = subprocess.run(["/usr/bin/python3", "-c", WORKER, tree, specimen, str(tile), str(steps)],
-                         capture_output=True, text=True, env=env)
+                         capture_output=True, text=True, env=child_env())
     line = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
     if out.returncode != 0 or not line:
         cli.fail("stepping with %s failed:\n%s" % (tree, out.stderr[-2000:]), 1)
@@ -76,13 +82,11 @@ def run_state(tree, specimen, state):
     import hashlib
     import resource
     import tempfile
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    env.pop("TRUEANISO_BUILD", None)
     with tempfile.TemporaryDirectory() as tmp:
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         out = subprocess.run(["/usr/bin/python3", os.path.join(tree, "pyscripts", "run_states.py"), "--specimen", specimen,
                               "--ids", str(state), "--threads", "1", "--out", os.path.join(tmp, "s")],
-                             capture_output=True, text=True, env=env)
+                             capture_output=True, text=True, env=child_env())
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         if out.returncode != 0:
             cli.fail("state %s with %s failed:\n%s" % (state, tree, out.stderr[-2000:]), 1)
@@ -96,6 +100,45 @@ def run_state(tree, specimen, state):
     return dict(cpu=cpu, steps=steps, checksum=h.hexdigest()[:16])
 
 
+def alternating(o, names, measure, differ):
+    """measure(tree) o.repeats times for each build, before and after alternating which goes first;
+    the two runs of a pair must give the same checksum (else: 'the two builds DIFFER')."""
+    runs = {o.before: [], o.after: []}
+    for r in range(o.repeats):
+        pair = (o.before, o.after) if r % 2 == 0 else (o.after, o.before)
+        for tree in pair:
+            runs[tree].append(measure(tree))
+            print("  %s %s" % (names[tree], runs[tree][-1]), flush=True)
+        a, b = runs[o.before][-1]["checksum"], runs[o.after][-1]["checksum"]
+        if a != b:
+            cli.fail("the two builds %s (checksums %s and %s): not the same computation" % (differ, a, b), 1)
+    return runs
+
+
+def paired(before, after, fmt):
+    """Table cells: the medians of before and after, the median of the paired ratios after/before
+    and their range."""
+    ratios = [a / b for a, b in zip(after, before)]
+    return (fmt + " | " + fmt + " | %.3f | %.3f - %.3f") % (
+        statistics.median(before), statistics.median(after), statistics.median(ratios), min(ratios), max(ratios))
+
+
+def stepper_table(o, names):
+    """The bare stepper on the specimen tiled K x K x K, particle-steps per CPU second."""
+    lines = ["Machine: %s; %s. %s: %s (before) against %s (after), one engine thread, %d interleaved runs "
+             "of each, medians; time step 2.9e-8 s, damping 0.2; both builds step to the same bits."
+             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after], o.repeats), "",
+             "| spheres | before (M particle-steps per CPU s) | after | after / before | paired ratios (min - max) |",
+             "|---|---|---|---|---|"]
+    for k in o.tiles:
+        steps = max(50, int(o.particle_steps / (4000 * k ** 3)))
+        runs = alternating(o, names, lambda tree: run(tree, o.specimen, k, steps),
+                           "step the packing to different results")
+        rate = {t: [x["n"] * x["steps"] / x["cpu"] / 1e6 for x in xs] for t, xs in runs.items()}
+        lines.append("| %d | %s |" % (runs[o.after][-1]["n"], paired(rate[o.before], rate[o.after], "%.2f")))
+    return lines
+
+
 def state_table(o, names):
     """--state: the whole state (servo, measures, probes) as run_states.py runs it, CPU seconds."""
     lines = ["Machine: %s; %s. %s: %s (before) against %s (after): run_states.py --ids %s --threads 1 on %s, "
@@ -104,21 +147,10 @@ def state_table(o, names):
                 os.path.basename(o.specimen), o.repeats), "",
              "| state | steps (state and probes) | before (CPU s) | after (CPU s) | after / before | paired ratios (min - max) |",
              "|---|---|---|---|---|---|"]
-    cpu = {o.before: [], o.after: []}
-    steps = None
-    for r in range(o.repeats):
-        res = {}
-        for tree in ((o.before, o.after) if r % 2 == 0 else (o.after, o.before)):
-            res[tree] = x = run_state(tree, o.specimen, o.state)
-            cpu[tree].append(x["cpu"])
-            steps = x["steps"]
-            print("  %s %s" % (names[tree], x), flush=True)
-        if res[o.before]["checksum"] != res[o.after]["checksum"]:
-            cli.fail("the two builds give different probe tables for state %s: not the same computation" % o.state, 1)
-    ratios = [a / b for a, b in zip(cpu[o.after], cpu[o.before])]
-    lines.append("| %s | %d | %.1f | %.1f | %.3f | %.3f - %.3f |" % (
-        o.state, steps, statistics.median(cpu[o.before]), statistics.median(cpu[o.after]), statistics.median(ratios),
-        min(ratios), max(ratios)))
+    runs = alternating(o, names, lambda tree: run_state(tree, o.specimen, o.state),
+                       "give different probe tables for state %s" % o.state)
+    cpu = {t: [x["cpu"] for x in xs] for t, xs in runs.items()}
+    lines.append("| %s | %d | %s |" % (o.state, runs[o.after][-1]["steps"], paired(cpu[o.before], cpu[o.after], "%.1f")))
     return lines
 
 
@@ -161,39 +193,7 @@ def revision(tree):
 def main():
     o = options()
     names = {o.before: revision(o.before), o.after: revision(o.after)}
-    if o.state:
-        lines = state_table(o, names)
-        lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_builds.py %s`"
-                  % " ".join(shlex.quote(a if not os.path.exists(a) else os.path.relpath(a)) for a in sys.argv[1:])]
-        table = "\n".join(lines)
-        print(table)
-        if o.doc:
-            _bench.replace_block(o.doc, o.block, table, heading="## Stepper changes (issue 15)")
-        return
-    lines = ["Machine: %s; %s. %s: %s (before) against %s (after), one engine thread, %d interleaved runs "
-             "of each, medians; time step 2.9e-8 s, damping 0.2; both builds step to the same bits."
-             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after], o.repeats), "",
-             "| spheres | before (M particle-steps per CPU s) | after | after / before | paired ratios (min - max) |",
-             "|---|---|---|---|---|"]
-    for k in o.tiles:
-        n = None
-        rate = {o.before: [], o.after: []}
-        for r in range(o.repeats):
-            pair = (o.before, o.after) if r % 2 == 0 else (o.after, o.before)
-            res = {}
-            for tree in pair:
-                steps = max(50, int(o.particle_steps / (4000 * k ** 3)))
-                res[tree] = x = run(tree, o.specimen, k, steps)
-                n = x["n"]
-                rate[tree].append(x["n"] * x["steps"] / x["cpu"] / 1e6)
-                print("  %s %s" % (names[tree], x), flush=True)
-            if res[o.before]["checksum"] != res[o.after]["checksum"]:
-                cli.fail("the two builds step the packing to different results (checksums %s and %s): "
-                         "not the same computation" % (res[o.before]["checksum"], res[o.after]["checksum"]), 1)
-        ratios = [a / b for a, b in zip(rate[o.after], rate[o.before])]
-        lines.append("| %d | %.2f | %.2f | %.3f | %.3f - %.3f |" % (
-            n, statistics.median(rate[o.before]), statistics.median(rate[o.after]),
-            statistics.median(ratios), min(ratios), max(ratios)))
+    lines = state_table(o, names) if o.state else stepper_table(o, names)
     lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_builds.py %s`"
               % " ".join(shlex.quote(a if not os.path.exists(a) else os.path.relpath(a)) for a in sys.argv[1:])]
     table = "\n".join(lines)
