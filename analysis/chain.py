@@ -94,22 +94,37 @@ def predictions(tab, fits, a2_mic):
                 nu_rmse=float(np.sqrt(np.mean(nu_err ** 2))))
 
 
-def stress_ratio_exponent(tab):
-    """Fig. 4a: m in E_i/E_j = (sigma_i/sigma_j)^m over all ordered pairs i != j of every state,
-    least squares through the origin in log-log; with R^2 of that line and the points."""
+ALL_PAIRS = tuple((i, j) for i in range(3) for j in range(3) if i != j)
+HORIZONTAL_PAIRS = ((0, 1), (1, 0))                                   # E_x/E_y, Fig. 4b-c's power law
+VERTICAL_PAIRS = ((2, 0), (0, 2), (2, 1), (1, 2))                     # those the paper says deviate on clumps
+
+
+def stress_ratio_exponent(tab, pairs=ALL_PAIRS):
+    """Fig. 4: m in E_i/E_j = (sigma_i/sigma_j)^m over the ordered pairs (i, j) of every state
+    (all six for spheres, Fig. 4a; the horizontal pair for clumps, Fig. 4b-c), least squares
+    through the origin in log-log; with R^2 of that line and the points."""
     x, y = [], []
     for s, E in zip(tab["sigma"], tab["E"]):
-        for i in range(3):
-            for j in range(3):
-                if i != j:
-                    x.append(np.log(s[i] / s[j]))
-                    y.append(np.log(E[i] / E[j]))
+        for i, j in pairs:
+            x.append(np.log(s[i] / s[j]))
+            y.append(np.log(E[i] / E[j]))
     x, y = np.array(x), np.array(y)
     if len(x) == 0 or not np.any(x != 0):
         return None
     m = float(np.dot(x, y) / np.dot(x, x))
     r2 = 1 - np.sum((y - m * x) ** 2) / np.sum(y ** 2)
     return dict(m=m, r2=float(r2), log_sigma_ratio=x, log_E_ratio=y)
+
+
+def zm_by_sign_of_q(q, zm, reference):
+    """Fig. 8's asymmetry: the lowest Zm among states with q < 0 and with q > 0, and each one's
+    drop below the reference (isotropic) Zm; the paper's clumps lose contacts faster at q < 0."""
+    q, zm = np.asarray(q, float), np.asarray(zm, float)
+    out = {}
+    for name, sel in (("negative", q < 0), ("positive", q > 0)):
+        low = float(zm[sel].min()) if np.any(sel) else None
+        out[name] = dict(n=int(sel.sum()), lowest=low, drop=None if low is None else float(reference - low))
+    return out
 
 
 def fabric_parts(path, tab, shear_modulus, poisson, rotations):

@@ -86,7 +86,7 @@ def fig13(tab, a2_by_zeta, path):
     return _save(fig, path)
 
 
-def fig14_15(tab, pred, path_E, path_nu):
+def fig14_15(tab, pred, path_E, path_nu, assembly="spheres"):
     plt = _plt()
     fig, ax = plt.subplots(figsize=(4.6, 4.2))
     for i, mark in zip(range(3), "os^"):
@@ -109,18 +109,19 @@ def fig14_15(tab, pred, path_E, path_nu):
     _identity(ax, lo, hi)
     ax.set_xlabel("DEM nu_ij")
     ax.set_ylabel("predicted nu_ij, Eq. 22")
-    ax.set_title("RMSE %.4f (paper, spheres: 0.003)" % pred["nu_rmse"], fontsize=9)
+    ax.set_title("RMSE %.4f (paper, %s: %.3f)" % (pred["nu_rmse"], assembly, chain.PAPER[assembly]["nu_rmse"]),
+                 fontsize=9)
     ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
     names.append(_save(fig, path_nu))
     return names
 
 
-def fig4a(exp, path):
+def fig4a(exp, path, label="E_i/E_j, i != j"):
     plt = _plt()
     fig, ax = plt.subplots(figsize=(4.6, 4.2))
     x, y = np.exp(exp["log_sigma_ratio"]), np.exp(exp["log_E_ratio"])
-    ax.loglog(x, y, "o", ms=3, alpha=0.7, label="E_i/E_j, i != j")
+    ax.loglog(x, y, "o", ms=3, alpha=0.7, label=label)
     xs = np.geomspace(x.min(), x.max(), 20)
     ax.loglog(xs, xs ** exp["m"], "r-", label="(sigma_i/sigma_j)^%.3f" % exp["m"])
     ax.set_xlabel("sigma_i / sigma_j")
@@ -130,13 +131,14 @@ def fig4a(exp, path):
     return _save(fig, path)
 
 
-def fig_zeta_zm(tab, zetas, path):
+def fig_zeta_zm(tab, zetas, path, assembly="spheres"):
     plt = _plt()
     fig, ax = plt.subplots(figsize=(4.6, 4.0))
     pts = [(tab["Zm"][k], zetas[s]) for k, s in enumerate(tab["state"]) if zetas.get(s) is not None]
     if pts:
         ax.plot(*zip(*pts), "o", ms=4)
-    ax.axhline(chain.PAPER_ZETA, color="r", lw=0.8, label="paper 0.552")
+    ax.axhline(chain.PAPER_ZETA, color="r", lw=0.8,
+               label="paper 0.552" if assembly == "spheres" else "paper's spheres, 0.552")
     ax.set_xlabel("Zm")
     ax.set_ylabel("zeta fitted on the state's contrast")
     ax.legend(fontsize=8)
@@ -188,6 +190,10 @@ def paper_figures(rows, out, tag, assembly):
     nus = np.concatenate([v[1][:, ~np.eye(3, dtype=bool)].ravel() for v in nu.values()])
     nus = nus[np.isfinite(nus)]
     zr = span(zm)
+    q_all = np.concatenate([v[0] for v in zm.values()])
+    zm_all = np.concatenate([v[1] for v in zm.values()])
+    sides = chain.zm_by_sign_of_q(q_all, zm_all, zm_all[np.argmin(np.abs(q_all))])
+    side = lambda k: _fmt(sides[k]["drop"], "%.3f")  # noqa: E731
     h_tr = [sum(fab["H"][a][1][k] for a in "xyz") for k in range(len(fab["H"]["x"][1]))]
     h_rel = np.array([fab["H"][a][1] / np.array(h_tr) for a in "xyz"])
     b_slope = {a: 1000 * np.polyfit(*fab["B"][a], 1)[0] / np.mean(fab["B"][a][1]) for a in "xyz"}  # % per 10 kPa
@@ -196,8 +202,9 @@ def paper_figures(rows, out, tag, assembly):
             "| figure | paper (%s) | ours |" % assembly, "|---|---|---|",
             "| Fig. 5: nu_ij against q, by b | each nu_ij follows its stress ratio (Fig. 6) | %.3f-%.3f over the states |"
             % (nus.min(), nus.max()),
-            "| Fig. 8: Zm against q | %s | %.3f-%.3f |" % ("5.94-5.99, falls at large \\|q\\|" if sphere
-                                                          else "falls at large \\|q\\|", *zr),
+            "| Fig. 8: Zm against q | %s | %.3f-%.3f; largest drop below the isotropic state at q < 0: %s, at q > 0: %s |"
+            % ("5.94-5.99, falls at large \\|q\\|, alike at q < 0 and q > 0" if sphere else "falls at large \\|q\\|, faster at q < 0", *zr,
+               side("negative"), side("positive")),
             "| Fig. 9: R_ii against sigma_i | %s | %.3f-%.3f |" % ("close to 1/3, minor changes" if sphere
                                                                   else "inherent anisotropy", *span(fab["R"])),
             "| Fig. 10: H_ii / tr H against sigma_i | %s | %.3f-%.3f |" % ("almost identical, vary slightly" if sphere
@@ -343,19 +350,25 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
               ("zeta = 0.552 (paper)", chain.micromechanical_a2(parts, chain.PAPER_ZETA, chain.PAPER_ZETA)),
               ("zeta_h = %.3f, zeta_v = %.3f (fitted)" % (zh, zv), chain.micromechanical_a2(parts, zh, zv))]
         preds = [(label, chain.predictions(tab, fits, a)) for label, a in a2]
-        exp = chain.stress_ratio_exponent(tab)
+        sphere = assembly == "spheres"
+        # Fig. 4a fits all six ratios of the spheres; on clumps (Fig. 4b-c) the power law holds for
+        # E_x/E_y only, and the ratios with z are reported apart, as the paper's text does.
+        exp = chain.stress_ratio_exponent(tab, chain.ALL_PAIRS if sphere else chain.HORIZONTAL_PAIRS)
+        exp_v = None if sphere else chain.stress_ratio_exponent(tab, chain.VERTICAL_PAIRS)
         zetas = chain.zeta_per_state(tab, parts, ref)
         figs = dict(f13=fig13(tab, a2, os.path.join(out, "fig13-a2%s.png" % tag)),
                     f1415=fig14_15(tab, preds[2][1], os.path.join(out, "fig14-E%s.png" % tag),
-                                   os.path.join(out, "fig15-nu%s.png" % tag)),
-                    f4=fig4a(exp, os.path.join(out, "fig4a%s.png" % tag)) if exp else None,
-                    fz=fig_zeta_zm(tab, zetas, os.path.join(out, "zeta-vs-Zm%s.png" % tag)),
+                                   os.path.join(out, "fig15-nu%s.png" % tag), assembly),
+                    f4=fig4a(exp, os.path.join(out, "fig4a%s.png" % tag),
+                             "E_i/E_j, i != j" if sphere else "E_x/E_y, E_y/E_x") if exp else None,
+                    fz=fig_zeta_zm(tab, zetas, os.path.join(out, "zeta-vs-Zm%s.png" % tag), assembly),
                     f3="fig3-E-vs-sigma%s.png" % tag, f11="fig11-K-G-vs-Zm%s.png" % tag)
         figures.modulus_vs_stress(sel, os.path.join(out, figs["f3"]), "%s, rotations %s" % (assembly, rot))
         figures.scalar_moduli_vs_zm(sel, os.path.join(out, figs["f11"]))
         zm = tab["Zm"]
-        lines += ["Zm from %.3f to %.3f (paper, spheres: 5.94-5.99); reference (isotropic) state %s."
-                  % (zm.min(), zm.max(), tab["state"][ref]), "",
+        lines += ["Zm from %.3f to %.3f (paper, %s); reference (isotropic) state %s."
+                  % (zm.min(), zm.max(), "spheres: 5.94-5.99" if sphere else
+                     "%s: shown in Fig. 8 only, falling faster at q < 0" % assembly, tab["state"][ref]), "",
                   "### Table 2: K and G (MPa) against Zm, quadratic fits", "",
                   "| | c1 | c2 | c3 | R^2 | at Zm = %.2f |" % zm[ref], "|---|---|---|---|---|---|"]
         for name in ("K", "G"):
@@ -371,30 +384,44 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
         for (label, a), (_, p) in zip(a2, preds):
             lines.append("| %s | %.4f | %.4f | %.4f |" % (label, float(np.sqrt(np.mean((a - tab["a2_dem"]) ** 2))),
                                                           p["E_rel_rmse"], p["nu_rmse"]))
-        lines += ["| paper (spheres, 0.552) | | | %.3f |" % paper["nu_rmse"], "",
+        lines += ["| paper (%s) | | | %.3f |" % ("spheres, 0.552" if sphere else assembly + ", its fitted zeta_h, zeta_v",
+                                                paper["nu_rmse"]), "",
                   "![Fig. 13](%s)" % figs["f13"], "",
                   "### Figs 14-15: E_i and nu_ij predicted (Table 2 fits, fitted zeta) against DEM", "",
                   "![Fig. 14](%s) ![Fig. 15](%s)" % tuple(figs["f1415"]), ""]
         trend = chain.zeta_trend(tab, zetas)
+        # The paper states its zeta in the text for spheres only; the clumps' pair is in Fig. 13d, f.
+        paper_zeta, paper_zeta_short = (("0.552 (both)", "0.552") if sphere else
+                                        ("zeta_h != zeta_v, in Fig. 13 only", "its zeta_h, zeta_v"))
         rho = trend["rho"]
         lines += ["### zeta and Zm", "",
                   "| | paper | ours |", "|---|---|---|",
-                  "| zeta fitted on the contrast, all states | 0.552 (both) | zeta_h %.3f, zeta_v %.3f (one zeta: %.3f) |"
-                  % (zh, zv, contrast["zeta"]),
-                  "| zeta per state against state %s, mean at the highest Zm (within 0.02) | 0.552, constant | %s (%d states) |"
-                  % (tab["state"][ref], _fmt(trend["high"], "%.3f"), trend["n_high"]),
-                  "| the same, lowest fifth of the Zm range | 0.552, constant | %s (%d states) |"
-                  % (_fmt(trend["low"], "%.3f"), trend["n_low"]),
+                  "| zeta fitted on the contrast, all states | %s | zeta_h %.3f, zeta_v %.3f (one zeta: %.3f) |"
+                  % (paper_zeta, zh, zv, contrast["zeta"]),
+                  "| zeta per state against state %s, mean at the highest Zm (within 0.02) | %s, constant | %s (%d states) |"
+                  % (tab["state"][ref], paper_zeta_short, _fmt(trend["high"], "%.3f"), trend["n_high"]),
+                  "| the same, lowest fifth of the Zm range | %s, constant | %s (%d states) |"
+                  % (paper_zeta_short, _fmt(trend["low"], "%.3f"), trend["n_low"]),
                   "| Spearman rank correlation of zeta with Zm | (zeta independent of state) | %s |" % _fmt(rho, "%.2f"),
                   "", "![zeta against Zm](%s)" % figs["fz"], ""]
-        if exp:
+        if exp and sphere:
             lines += ["### Fig. 4a: E_i/E_j = (sigma_i/sigma_j)^m", "",
                       "m = %.3f (R^2 %.3f over %d ratios); the paper shows the power law without the value of m."
                       % (exp["m"], exp["r2"], len(exp["log_sigma_ratio"])), "", "![Fig. 4a](%s)" % figs["f4"], ""]
+        elif exp:
+            lines += ["### Fig. 4%s: E_i/E_j = (sigma_i/sigma_j)^m" % ("b" if assembly == "clump1" else "c"), "",
+                      "| ratios | paper | ours: m | ours: R^2 of the power law |", "|---|---|---|---|",
+                      "| E_x/E_y against sigma_x/sigma_y | a power law | %.3f | %.3f (%d ratios) |"
+                      % (exp["m"], exp["r2"], len(exp["log_sigma_ratio"])),
+                      "| E_z/E_x, E_z/E_y and inverses | deviate from it (inherent anisotropy) | %s | %s (%d ratios) |"
+                      % (_fmt(exp_v and exp_v["m"], "%.3f"), _fmt(exp_v and exp_v["r2"], "%.3f"),
+                         len(exp_v["log_sigma_ratio"]) if exp_v else 0), "",
+                      "![Fig. 4](%s)" % figs["f4"], ""]
         lines += paper_figures(sel, out, tag, assembly)
         numbers[rot] = dict(states=n, Zm=(float(zm.min()), float(zm.max())), table2=fits, zeta=(zh, zv),
                             zeta_common=contrast["zeta"], nu_rmse={l: p["nu_rmse"] for l, p in preds},
                             E_rel_rmse={l: p["E_rel_rmse"] for l, p in preds}, m=exp["m"] if exp else None,
+                            m_vertical=exp_v["m"] if exp_v else None, r2_vertical=exp_v["r2"] if exp_v else None,
                             zeta_spearman=rho)
     lines += table_b1(results, paper)
     if fig16:

@@ -67,6 +67,26 @@ def test_stress_ratio_exponent_of_an_exact_power_law():
     assert exp["m"] == pytest.approx(0.45, rel=1e-12) and exp["r2"] == pytest.approx(1.0, abs=1e-12)
 
 
+def test_stress_ratio_exponent_over_chosen_pairs():
+    """Clumps (Fig. 4b-c): the horizontal pair alone follows the power law; pairs with z carry
+    the inherent anisotropy, a factor the power law cannot take."""
+    sig = np.array([[100e3, 60e3, 140e3], [90e3, 105e3, 105e3], [120e3, 100e3, 80e3]])
+    E = 300e6 * (sig / 100e3) ** 0.45 * np.array([1.0, 1.0, 1.8])   # E_z 1.8 times stiffer
+    h = chain.stress_ratio_exponent(dict(sigma=sig, E=E), chain.HORIZONTAL_PAIRS)
+    assert h["m"] == pytest.approx(0.45, rel=1e-12) and len(h["log_sigma_ratio"]) == 6
+    v = chain.stress_ratio_exponent(dict(sigma=sig, E=E), chain.VERTICAL_PAIRS)
+    assert len(v["log_sigma_ratio"]) == 12 and v["r2"] < 0.9   # log 1.8 is not a power of the stress ratio
+
+
+def test_zm_by_sign_of_q_by_hand():
+    q = [0.0, -30e3, -60e3, 30e3, 60e3]
+    zm = [10.2, 10.0, 9.7, 10.1, 9.95]
+    s = chain.zm_by_sign_of_q(q, zm, 10.2)
+    assert s["negative"] == dict(n=2, lowest=9.7, drop=pytest.approx(0.5))
+    assert s["positive"] == dict(n=2, lowest=9.95, drop=pytest.approx(0.25))
+    assert chain.zm_by_sign_of_q([0.0, 1.0], [6.0, 5.9], 6.0)["negative"] == dict(n=0, lowest=None, drop=None)
+
+
 def test_predictions_reproduce_states_that_obey_the_model():
     """States made by Eqs. 21-22 from K(Zm), G(Zm) and known a^2 are predicted exactly (RMSE 0)."""
     zm = np.array([5.95, 5.9, 5.8, 5.7])
@@ -102,6 +122,26 @@ def test_report_from_a_small_fixed_table(small_table, tmp_path):
         assert (out / fig).stat().st_size > 5000 and "](%s)" % fig in text
     assert "## Departures from the paper" in text and "763.97" in text
     assert "Not in this study" in text  # no statics_isotropic.json beside a bare table
+
+
+def test_report_for_a_clump_assembly_names_the_clump_paper_values(small_table, tmp_path):
+    """--assembly clump1: the paper's clump1 numbers (Table 2, nu RMSE 0.036) and its statements
+    (Fig. 4b: E_x/E_y alone a power law; Fig. 8: Zm falls faster at q < 0), none of the spheres'."""
+    path, numbers = report.build(small_table, str(tmp_path / "c1"), assembly="clump1", log=lambda m: None)
+    text = open(path).read()
+    assert "| K paper | -10.2 | 151.9 | -423.7 |" in text
+    assert "| paper (clump1, its fitted zeta_h, zeta_v) | | | 0.036 |" in text
+    assert "5.94-5.99" not in text and "paper (spheres" not in text
+    assert "### Fig. 4b" in text and "| E_x/E_y against sigma_x/sigma_y | a power law |" in text
+    n = numbers["free"]
+    tab = chain.state_table([r for r in csv.DictReader(open(small_table))])
+    assert n["m"] == pytest.approx(chain.stress_ratio_exponent(tab, chain.HORIZONTAL_PAIRS)["m"])
+    assert n["m_vertical"] == pytest.approx(chain.stress_ratio_exponent(tab, chain.VERTICAL_PAIRS)["m"])
+    sides = chain.zm_by_sign_of_q([float(r["q"]) for r in csv.DictReader(open(small_table)) if r["probe"] == "z"],
+                                  [float(r["Zm"]) for r in csv.DictReader(open(small_table)) if r["probe"] == "z"],
+                                  float(next(r["Zm"] for r in csv.DictReader(open(small_table)) if r["state"] == "1")))
+    assert "faster at q < 0 | %.3f-%.3f; largest drop below the isotropic state at q < 0: %.3f, at q > 0: %.3f |" % (
+        n["Zm"][0], n["Zm"][1], sides["negative"]["drop"], sides["positive"]["drop"]) in text
 
 
 def test_report_refuses_a_wrong_material_and_bad_input(small_table, tmp_path):
@@ -210,7 +250,8 @@ def test_figures_5_to_12_plot_the_table_s_own_numbers(small_table, tmp_path):
     path, _ = report.build(small_table, str(tmp_path / "rep"), log=lambda m: None)
     text = open(path).read()
     zms = [float(r["Zm"]) for r in z.values()]
-    assert "| Fig. 8: Zm against q | 5.94-5.99, falls at large \\|q\\| | %.3f-%.3f |" % (min(zms), max(zms)) in text
+    assert "| Fig. 8: Zm against q | 5.94-5.99, falls at large \\|q\\|, alike at q < 0 and q > 0 | %.3f-%.3f;" % (
+        min(zms), max(zms)) in text
     for name in ("fig5-nu-vs-q.png", "fig6-stress-ratios.png", "fig8-Zm-vs-q.png", "fig9-R.png", "fig10-H.png",
                  "fig12-B.png", "fig12-M.png"):
         assert (tmp_path / "rep" / name).stat().st_size > 5000 and "](%s)" % name in text
