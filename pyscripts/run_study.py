@@ -75,7 +75,7 @@ def validate(o):
     spheres = o.n * members(o.assembly)
     prep, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
     # The static solve's memory goes with the bodies' degrees of freedom and the contacts (members).
-    statics_memory = resources.INTERPRETER_BYTES + resources.STATICS_BYTES_PER_SPHERE * spheres
+    statics_memory = resources.interpreter_bytes() + resources.STATICS_BYTES_PER_SPHERE * spheres
     resources.check_memory(max(prep, statics_memory), "a study of %d %s (its exact static solve)"
                            % (o.n, o.assembly))
     return states

@@ -13,7 +13,10 @@ THREADS_PER_CORE = 4  # more threads than this only slow the contact loops (meas
 # Measured on 1,000-16,000 spheres (peak RSS of the preparation above the interpreter's, with the
 # contact list of the dense state): 1.7 kB per sphere; 2.5 kB leaves a margin.
 PREPARATION_BYTES_PER_SPHERE = 2500
-INTERPRETER_BYTES = 300e6  # python3 or yade-double with numpy and the module loaded, with a margin
+# The interpreter with numpy and the module loaded (peak RSS, measured 2026-11-29): python3 37 MB,
+# yade-double 252 MB (YADE loads its own libraries and plugins). With a margin each; one figure for
+# both made every python3 estimate 2.7 times the measured peak (docs/runs.md).
+INTERPRETER_BYTES = {"python3": 60e6, "yade": 300e6}
 # The exact static solve (statics.static_stiffness, run by run_study.py on its specimen):
 # 7.6 GB at 53,004 spheres (docs/statics.md) = 143 kB per sphere; 160 kB with a margin.
 STATICS_BYTES_PER_SPHERE = 160e3
@@ -84,10 +87,16 @@ def human_seconds(s):
     return "%.0f s" % s
 
 
+def interpreter_bytes():
+    """INTERPRETER_BYTES of the interpreter running now: yade-double when YADE is loaded."""
+    import sys
+    return INTERPRETER_BYTES["yade" if "yade" in sys.modules else "python3"]
+
+
 def preparation_estimate(n, threads, assembly="sphere"):
     """(bytes, seconds) to prepare a specimen of n member spheres of an assembly (sphere, clump1,
     clump2): memory and a step's cost go with the member spheres."""
-    memory = INTERPRETER_BYTES + PREPARATION_BYTES_PER_SPHERE * n
+    memory = interpreter_bytes() + PREPARATION_BYTES_PER_SPHERE * n
     seconds = n * (PLACEMENT_SECONDS_PER_SPHERE
                    + PREPARATION_STEPS[assembly] * STEP_SECONDS_PER_SPHERE / max(1, threads))
     return memory, seconds
