@@ -59,7 +59,7 @@ def parser():
                         "--rolling-friction with it")
     p.add_argument("--rolling-friction", type=cli.non_negative, default=0.0,
                    help="rolling resistance: eta_r of the largest rolling moment eta_r rbar N; 0 = off")
-    cli.add_threads_option(p)
+    cli.add_threads_option(p, study=True)
     p.add_argument("--out", required=True, help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
                                                        "refusing")
@@ -75,6 +75,7 @@ def parser():
 
 def validate(o):
     """Every check that needs no work; returns the states."""
+    cli.resolve_threads(o)
     if o.path == "cross-anisotropic":
         if o.states is not None or o.table_c1 or o.ids is not None:
             raise cli.InputError("--path cross-anisotropic takes its states from --sigma-v, not from --states, "
@@ -90,7 +91,10 @@ def validate(o):
         elif o.states is not None:
             states = study.parse_states(o.states)
         elif o.ids is not None:
-            states = study.table_states(study.parse_ids(o.ids))
+            try:
+                states = study.table_states(study.parse_ids(o.ids))
+            except ValueError as exc:
+                raise ValueError("--ids: %s" % exc) from None
         else:
             states = study.table_states()
         for _, b, sz in states:
@@ -170,6 +174,9 @@ def main(argv=None):
     o = cli.parse(parser(), argv)
     states = validate(o)
     executor = mpi_executor(o)
+    if o.threads_from_study:
+        print("%s: continuing its study at its %d engine thread%s (--threads)"
+              % (o.out, o.threads, "" if o.threads == 1 else "s"), flush=True)
     if o.threads:
         from trueaniso import engines
         engines.set_threads(o.threads)

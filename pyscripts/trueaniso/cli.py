@@ -53,12 +53,28 @@ class Parser(argparse.ArgumentParser):
         fail(message)
 
 
-def add_threads_option(parser):
-    """--threads, as every script that runs the engines offers it (0: all cores)."""
+def add_threads_option(parser, study=False):
+    """--threads, as every script that runs the engines offers it (0: all cores). A study script
+    (study=True) leaves it None when not given, for resolve_threads."""
     from . import resources
-    parser.add_argument("--threads", type=count, default=0,
-                        help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)"
-                             % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE))
+    parser.add_argument("--threads", type=count, default=None if study else 0,
+                        help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)%s"
+                             % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE,
+                                "; when not given: the count of the study --out holds (a study continues "
+                                "at its own count, which its last bits depend on), else all cores" if study else ""))
+
+
+def resolve_threads(o):
+    """--threads of a study script when not given: the count recorded in the study that --out
+    holds (so that a rerun continues it instead of being refused for a thread count the user never
+    chose), else 0 (all cores). Sets o.threads_from_study. --force-new starts afresh: 0."""
+    from . import study_dir
+    o.threads_from_study = False
+    if o.threads is None:
+        there = None if getattr(o, "force_new", False) else study_dir.threads_of(o.out)
+        o.threads_from_study = there is not None
+        o.threads = there or 0
+    return o.threads
 
 
 def description(doc):

@@ -35,8 +35,10 @@ class Progress:
         if not self.due():
             return
         self.last = time.monotonic()
-        self.log("%s: step %d  stress error %.3g Pa  unbalanced %.2e%s  (%.0f s)"
-                 % (self.label, steps, stress_error, unbalanced, extra, self.last - self.t0))
+        # The unbalanced force is a ratio to the mean contact force: undefined before any contact.
+        ub = "%.2e" % unbalanced if np.isfinite(unbalanced) else "n/a (no contact yet)"
+        self.log("%s: step %d  stress error %.3g Pa  unbalanced %s%s  (%.0f s)"
+                 % (self.label, steps, stress_error, ub, extra, self.last - self.t0))
 
     # Callbacks for the protocols' progress hooks.
     def servo(self, servo):

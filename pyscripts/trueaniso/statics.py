@@ -95,7 +95,13 @@ def cached_record(out, state=None, scene=None, log=print):
     path = state_file(out, state)
     if not os.path.exists(path):
         if scene is None:
-            scene, _ = specimen_file.load(os.path.join(out, "states", "%s.npz" % state))
+            try:
+                scene, _ = specimen_file.load(os.path.join(out, "states", "%s.npz" % state))
+            except specimen_file.SpecimenFileError as exc:
+                # A study's checkpoint, not a specimen: run_study reaches a missing one again.
+                raise specimen_file.SpecimenFileError(
+                    "%s; remove it and rerun to compute it again"
+                    % str(exc).replace("specimen file", "checkpoint of state %s," % state, 1)) from None
         log("statics (%s): solving the contact network's stiffness, rotations free and blocked ..."
             % ("isotropic state" if state is None else "state %s" % state))
         atomic.write_json(path, state_record(scene))

@@ -110,11 +110,16 @@ def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rot
 
 def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False,
                skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None,
-               wait=False, force_new=False, progress_every=EVERY, recipe=None, path="true-triaxial", executor=None):
+               wait=False, force_new=False, progress_every=EVERY, recipe=None, path="true-triaxial", executor=None,
+               checkpoints=()):
     """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering, or
     ``state_id``; ``sv<kPa>`` on the cross-anisotropic path). path: one of triaxial.PATHS (the
     mean stress of each state, triaxial.path_mean_stress). probes: axes 0-5 or x, y, z, yz, xz,
     xy. Returns the complete rows of probes.csv after the run.
+
+    checkpoints: ids of states whose checkpoint must exist when the run ends even if their probes
+    are all done (run_study's static solve of state 21 reads it): a missing one is reached again
+    along its path, which reproduces its bytes (docs/runs.md, "What a resume reproduces exactly").
 
     executor: a concurrent.futures executor (e.g. mpi4py.futures.MPIPoolExecutor) whose workers
     each walk whole loading paths (the unit of work: a path's states follow one another). Workers
@@ -152,7 +157,7 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         run = _Run(specimen_path, spec_meta, out, fp, axes, csv_path, table, log, progress_every, path,
                    dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
                         damping=damping, **(probe_options or {})),
-                   dict(damping=damping, **(state_options or {})))
+                   dict(damping=damping, **(state_options or {})), keep=checkpoints)
         ordered = [path for _, path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
         if executor is None:
             for path in ordered:
@@ -166,7 +171,7 @@ def _run_paths_on(executor, run, paths):
     """Paths with work left go to the executor's workers; their rows are appended here, in the
     order paths end. A failed path stops the run (the rows of paths already ended are kept)."""
     import concurrent.futures as cf
-    todo = [p for p in paths if any(run.wanted(sid) for sid, _, _ in p)]
+    todo = [p for p in paths if any(run.needs(sid) for sid, _, _ in p)]
     run.log("%d loading paths with work left, on %s" % (len(todo), type(executor).__name__))
     futures = {executor.submit(_path_worker, run.job(p)): p for p in todo}
     try:
@@ -186,7 +191,8 @@ def _path_worker(job):
     rows = []
     run = _Run(job["specimen_path"], job["spec_meta"], job["out"], job["fp"], job["axes"], None,
                results_csv.Table(None, job["columns"], [], None), lambda m: print(m, flush=True), job["every"],
-               job["loading"], job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)))
+               job["loading"], job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)),
+               keep=job["keep"])
     run.done = set(job["done"])
     run.path(job["path"])
     return rows
@@ -196,19 +202,20 @@ class _Run:
     """One run's walk over the loading paths (the caller holds the lock)."""
 
     def __init__(self, specimen_path, spec_meta, out, fp, axes, csv_path, table, log, every, path, probe_kw, state_kw,
-                 sink=None):
+                 sink=None, keep=()):
         self.specimen_path, self.spec_meta, self.out, self.fp, self.loading = specimen_path, spec_meta, out, fp, path
         self.axes, self.csv_path, self.log, self.every = axes, csv_path, log, every
         self.columns = list(table.columns)
         self.done = {(r["state"], r["probe"]) for r in table.rows}
         self.probe_kw, self.state_kw = probe_kw, state_kw
         self.sink = sink or self.append
+        self.keep = {str(k) for k in keep}
 
     def job(self, path):
         """What a worker needs to walk `path` as this run would (picklable)."""
         return dict(specimen_path=self.specimen_path, spec_meta=self.spec_meta, out=self.out, fp=self.fp,
                     axes=self.axes, columns=self.columns, every=self.every, loading=self.loading, probe_kw=self.probe_kw,
-                    state_kw=self.state_kw, done=sorted(self.done), path=path)
+                    state_kw=self.state_kw, done=sorted(self.done), path=path, keep=sorted(self.keep))
 
     def append(self, row, columns):
         """A row into probes.csv (this process holds the lock)."""
@@ -227,17 +234,21 @@ class _Run:
     def wanted(self, sid):
         return [a for a in self.axes if (str(sid), a) not in self.done]
 
+    def needs(self, sid):
+        """The state has work left: probes to run, or a checkpoint to keep that is missing."""
+        return bool(self.wanted(sid)) or (str(sid) in self.keep and not os.path.exists(self.checkpoint(sid)))
+
     def path(self, path):
         """States in loading order; a checkpoint is made when its state has probes to run or a
         later state of the path starts from it (so the path is always the requested one)."""
         self._path_states = path
-        need = [bool(self.wanted(sid)) for sid, _, _ in path]
+        need = [self.needs(sid) for sid, _, _ in path]
         start = None
         for k, (sid, b, sz) in enumerate(path):
             ck = self.checkpoint(sid)
             if not os.path.exists(ck) and any(need[k:]):
                 self.reach(sid, b, sz, start, ck)
-            if need[k]:
+            if self.wanted(sid):
                 self.probe_state(sid, b, sz, ck)
             start = sid
 
@@ -247,7 +258,8 @@ class _Run:
         try:
             scene, meta = specimen_file.load(path)
         except specimen_file.SpecimenFileError as exc:
-            raise study_dir.StudyMismatch("%s; remove it and rerun to compute it again" % exc) from None
+            what = str(exc) if sid is None else str(exc).replace("specimen file", "checkpoint of state %s," % sid, 1)
+            raise study_dir.StudyMismatch("%s; remove it and rerun to compute it again" % what) from None
         p = meta["parameters"]
         if sid is None:
             ok = meta["sha256"] == self.fp["specimen"]
@@ -354,14 +366,19 @@ def parse_states(text):
 
 
 def parse_ids(text):
-    """'1,5,21' -> [1, 5, 21]; an empty list or a non-number is refused (never "all states")."""
+    """'1,5,21' -> [1, 5, 21]; an empty list, a non-number or a state given twice is refused
+    (never "all states", never a silent de-duplication). The caller names the option."""
     items = [t.strip() for t in text.split(",")]
     if not any(items):
-        raise InputError("--ids names no state (give Table C1 numbers, e.g. 1,5,21, or --table-c1 for all)")
+        raise ValueError("no state named (give Table C1 numbers 1-39, e.g. 1,5,21)")
     try:
-        return [int(t) for t in items if t]
+        ids = [int(t) for t in items if t]
     except ValueError:
-        raise InputError("--ids %r: Table C1 states are numbers 1-39, e.g. 1,5,21" % text) from None
+        raise ValueError("%r: Table C1 states are numbers 1-39, e.g. 1,5,21" % text) from None
+    twice = sorted({i for i in ids if ids.count(i) > 1})
+    if twice:
+        raise ValueError("state %s is given twice" % ", ".join(map(str, twice)))
+    return ids
 
 
 def table_states(ids=None):

@@ -85,6 +85,16 @@ def read_metadata(out):
                             % (path, exc, out, _way_out(out))) from None
 
 
+def threads_of(out):
+    """The engine thread count of the study `out` holds, or None (no study, or none readable:
+    the checks that follow say what is wrong with it)."""
+    try:
+        t = read_metadata(out)["fingerprint"]["threads"]
+    except (StudyMismatch, OSError, TypeError, KeyError):
+        return None
+    return t if isinstance(t, int) and t > 0 else None
+
+
 def _normal(x):
     """JSON's view of a value (tuples become lists, numpy scalars numbers): what metadata holds."""
     return json.loads(json.dumps(x, default=atomic._jsonable))

@@ -84,6 +84,33 @@ def test_adding_states_continues_the_study(first, tmp_path):
     check_contrast_against_checkpoints(out, summary["zeta_contrast"])
 
 
+def test_a_lost_checkpoint_of_state_21_is_reached_again(first, tmp_path):
+    """Before: with state 21's rows done, a removed states/21.npz (the advice for a damaged one)
+    left the study stuck: 'specimen file not found', each rerun the same, until --force-new.
+    Now the state is reached again along its path and its static solve gives the same numbers
+    (a resume reproduces a checkpoint's arrays bit for bit; 1e-9 covers the solver's last
+    digits, which depend only on those arrays)."""
+    out = tmp_path / "W"
+    shutil.copytree(first[0], out)
+    assert main_job(out, "--ids", "1,5,21").returncode == 0
+    record = json.loads((out / "statics_state-21.json").read_text())
+    before = (out / "probes.csv").read_bytes()
+    (out / "states" / "21.npz").write_bytes(b"not a zip")  # damaged: a clear refusal naming the checkpoint
+    proc = main_job(out, "--ids", "1,5,21")
+    assert proc.returncode == 0  # the record exists: the checkpoint is not needed
+    (out / "statics_state-21.json").unlink()
+    proc = main_job(out, "--ids", "1,5,21")
+    one_line_error(proc, "checkpoint of state 21", "remove it and rerun", yade=True)
+    (out / "states" / "21.npz").unlink()
+    proc = main_job(out, "--ids", "1,5,21")
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert "state 21: reached" in proc.stdout and "probe z  E" not in proc.stdout
+    assert (out / "probes.csv").read_bytes() == before
+    again = json.loads((out / "statics_state-21.json").read_text())
+    for k in ("E_free", "E_blocked"):
+        np.testing.assert_allclose(again[k], record[k], rtol=1e-9)
+
+
 def check_contrast_against_checkpoints(out, got):
     """The summary's zeta (fitted from the probe table's columns: analysis/zeta_contrast.py) must
     equal a fit whose stiffness parts come from the held-state checkpoints themselves (B and M of

@@ -133,6 +133,21 @@ def test_other_settings_are_refused_in_one_line(base, specimen_100, tmp_path, ar
     assert not (out / "states" / "4.npz").exists()
 
 
+def test_a_rerun_without_threads_continues_at_the_study_s_count(base, specimen_100, tmp_path):
+    """Before: a rerun that did not give --threads took all cores and was refused ('threads is 1
+    there, 2 in this run') though the user never chose a count. Now it adopts the study's; an
+    explicit other count is still refused (the last bits depend on it)."""
+    out = copy(base, tmp_path)
+    before = (out / "probes.csv").read_bytes()
+    proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", env=dict(OMP_NUM_THREADS="2"))
+    assert proc.returncode == 0, proc.stderr
+    assert "continuing its study at its 1 engine thread" in proc.stdout and "state 4: probe x" in proc.stdout
+    assert (out / "probes.csv").read_bytes().startswith(before)
+    assert json.loads((out / "metadata.json").read_text())["fingerprint"]["threads"] == 1
+    proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", "--threads", "2")
+    one_line_error(proc, "another study", "thread count", "--threads 1")
+
+
 def test_other_specimen_is_refused(base, specimen_100, tmp_path):
     """Before: --specimen other.npz --ids 2,3 computed state 3 from the old specimen's checkpoint."""
     scene, meta = specimen_file.load(str(specimen_100))
