@@ -159,27 +159,43 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                         damping=damping, **(probe_options or {})),
                    dict(damping=damping, **(state_options or {})), keep=checkpoints)
         ordered = [path for _, path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
+        # A state the specimen cannot reach (near its strength, the servo holds it without settling)
+        # ends its own path only: the other paths go on, and the run fails at the end naming every
+        # such state. Before, the first one stopped the whole study.
+        failed = []
         if executor is None:
             for path in ordered:
-                run.path(path)
+                try:
+                    run.path(path)
+                except triaxial.StateNotReached as exc:
+                    failed.append(run.path_failed(path, exc))
         else:
-            _run_paths_on(executor, run, ordered)
+            failed = _run_paths_on(executor, run, ordered)
+        if failed:
+            raise triaxial.StateNotReached("%d loading path%s stopped (the rows of every other state are written): %s"
+                                           % (len(failed), "" if len(failed) == 1 else "s", "; ".join(failed)))
         return results_csv.read(csv_path).rows
 
 
 def _run_paths_on(executor, run, paths):
     """Paths with work left go to the executor's workers; their rows are appended here, in the
-    order paths end. A failed path stops the run (the rows of paths already ended are kept)."""
+    order paths end. A path whose state is not reached ends there (its rows so far are appended)
+    and the others go on; returns the failures' messages. Any other error stops the run (the rows
+    of paths already ended are kept)."""
     import concurrent.futures as cf
     todo = [p for p in paths if any(run.needs(sid) for sid, _, _ in p)]
     run.log("%d loading paths with work left, on %s" % (len(todo), type(executor).__name__))
     futures = {executor.submit(_path_worker, run.job(p)): p for p in todo}
     try:
+        failed = []
         for fut in cf.as_completed(futures):
-            rows = fut.result()
+            rows, failure = fut.result()
             for row, columns in rows:
                 run.append(row, columns)
             run.log("path of states %s: %d rows appended" % (",".join(str(s[0]) for s in futures[fut]), len(rows)))
+            if failure:
+                failed.append(run.path_failed(futures[fut], failure))
+        return failed
     finally:
         for f in futures:
             f.cancel()
@@ -194,8 +210,11 @@ def _path_worker(job):
                job["loading"], job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)),
                keep=job["keep"])
     run.done = set(job["done"])
-    run.path(job["path"])
-    return rows
+    try:
+        run.path(job["path"])
+    except triaxial.StateNotReached as exc:  # this path ends; the manager goes on with the others
+        return rows, str(exc)
+    return rows, None
 
 
 class _Run:
@@ -233,6 +252,13 @@ class _Run:
 
     def wanted(self, sid):
         return [a for a in self.axes if (str(sid), a) not in self.done]
+
+    def path_failed(self, path, exc):
+        """The message of a path that stopped at a state not reached, logged as it happens."""
+        left = [str(s[0]) for s in path if self.wanted(s[0])]
+        msg = "%s (states left without probes on this path: %s)" % (exc, ", ".join(left) or "none")
+        self.log("error: %s; the other paths go on" % msg)
+        return msg
 
     def needs(self, sid):
         """The state has work left: probes to run, or a checkpoint to keep that is missing."""

@@ -232,3 +232,48 @@ def test_two_concurrent_runs_lose_no_row(specimen_100, tmp_path):
         assert p.returncode == 0, err
     assert sorted((r["state"], r["probe"]) for r in rows(out)) == sorted(
         (s, a) for s in ("1", "2", "6", "7") for a in "zx")
+
+
+def _fail_at(monkeypatch, sigma_z):
+    """reach_state raises for the state at sigma_z, as the servo does for a specimen near its
+    strength (held without settling); the other states are reached for real."""
+    from trueaniso import triaxial
+    real = triaxial.reach_state
+
+    def reach(scene, b, sz, *a, **kw):
+        if sz == sigma_z:
+            raise triaxial.StateNotReached("state b = %g, sigma_z = %g Pa not reached (test)" % (b, sz))
+        return real(scene, b, sz, *a, **kw)
+    monkeypatch.setattr(triaxial, "reach_state", reach)
+
+
+def test_a_state_not_reached_ends_its_own_path_only(specimen_100, tmp_path, monkeypatch):
+    """Before: the first state not reached stopped the study, and the states of every later path
+    were never run. Now its path ends (the later state 7 starts from 6 and is left too), the
+    other paths are run, and the run fails at the end naming the state."""
+    from trueaniso import study, triaxial
+    _fail_at(monkeypatch, 90e3)  # state 6 (b = 0, sigma_z = 90 kPa): the path 6, 7
+    out = tmp_path / "study"
+    log = []
+    with pytest.raises(triaxial.StateNotReached) as err:
+        study.run_states(str(specimen_100), study.table_states([1, 2, 6, 7]), str(out), probes="z", log=log.append)
+    assert "1 loading path stopped" in str(err.value) and "sigma_z = 90000 Pa not reached" in str(err.value)
+    assert "states left without probes on this path: 6, 7" in str(err.value)
+    assert sorted(r["state"] for r in rows(out)) == ["1", "2"]
+    assert any(m.startswith("error: ") and "the other paths go on" in m for m in log)
+
+
+def test_a_worker_returns_its_rows_and_the_state_not_reached(specimen_100, tmp_path, monkeypatch):
+    """The MPI worker's side: a path that stops at a state hands back the rows made before it
+    and the message, instead of raising (which lost the path's rows and stopped the manager)."""
+    from trueaniso import study
+    _fail_at(monkeypatch, 80e3)  # state 7, after 6 on the path 6, 7
+    out = tmp_path / "study"
+    study.run_states(str(specimen_100), study.table_states([1]), str(out), probes="z", log=lambda m: None)
+    run = study._Run(str(specimen_100), study.specimen_file.read(str(specimen_100))[1], str(out),
+                     json.loads((out / "metadata.json").read_text())["fingerprint"], ["z"], None,
+                     study.results_csv.Table(None, [], [], None), lambda m: None, 5.0, "true-triaxial",
+                     dict(gamma=1e-6, restrain_rotations=False, skip_detection=False, damping=0.4),
+                     dict(damping=0.4, friction=0.5))
+    got, failure = study._path_worker(run.job([(6, 0.0, 90e3), (7, 0.0, 80e3)]))
+    assert [r["state"] for r, _ in got] == [6] and "sigma_z = 80000 Pa not reached" in failure
