@@ -68,6 +68,28 @@ def table2(tab):
     return out
 
 
+def rising_side(c):
+    """Where the quadratic c1 Zm^2 + c2 Zm + c3 rises with Zm: ("above" or "below", its vertex
+    -c2 / (2 c1)). K and G grow with Zm in every assembly (the paper's Fig. 11), so a fit's data
+    lie on its rising side; a value on the other side is an extrapolation."""
+    vertex = -c[1] / (2.0 * c[0])
+    return ("above" if c[0] > 0 else "below"), float(vertex)
+
+
+def rising_range(fits):
+    """The Zm interval on which every quadratic of `fits` (K, G) rises: (low, high), where the
+    paper's data must lie; with the reasons, e.g. "K rises with Zm only below Zm = 7.45"."""
+    low, high, why = -np.inf, np.inf, []
+    for name, c in fits.items():
+        side, vertex = rising_side(c)
+        why.append("%s rises with Zm only %s Zm = %.2f" % (name, side, vertex))
+        if side == "above":
+            low = max(low, vertex)
+        else:
+            high = min(high, vertex)
+    return float(low), float(high), why
+
+
 def micromechanical_a2(parts, zeta_h, zeta_v):
     """a_i^2 of Eq. (25) applied to the micromechanical E_i of every state (n, 3)."""
     A_n, A_s = parts

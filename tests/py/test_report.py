@@ -78,6 +78,17 @@ def test_stress_ratio_exponent_over_chosen_pairs():
     assert len(v["log_sigma_ratio"]) == 12 and v["r2"] < 0.9   # log 1.8 is not a power of the stress ratio
 
 
+def test_rising_side_of_the_paper_s_quadratics():
+    """The vertex -c2/(2 c1) by hand: spheres' K 22607/(2 x 1902.7) = 5.9408, rising above it;
+    clump1's K 151.9/20.4 = 7.446, rising below it (so its data lie below 7.45)."""
+    assert chain.rising_side(chain.PAPER["spheres"]["K"]) == ("above", pytest.approx(5.94077, abs=1e-5))
+    assert chain.rising_side(chain.PAPER["clump1"]["K"]) == ("below", pytest.approx(7.44608, abs=1e-5))
+    low, high, why = chain.rising_range({k: chain.PAPER["clump1"][k] for k in ("K", "G")})
+    assert (low, high) == (-np.inf, pytest.approx(7.44608, abs=1e-5))  # G rises below 12.77: K binds
+    low, high, _ = chain.rising_range({k: chain.PAPER["spheres"][k] for k in ("K", "G")})
+    assert low == pytest.approx(5.94077, abs=1e-5) and high == np.inf  # G's vertex 5.9356 is lower
+
+
 def test_zm_by_sign_of_q_by_hand():
     q = [0.0, -30e3, -60e3, 30e3, 60e3]
     zm = [10.2, 10.0, 9.7, 10.1, 9.95]
@@ -130,6 +141,12 @@ def test_report_for_a_clump_assembly_names_the_clump_paper_values(small_table, t
     path, numbers = report.build(small_table, str(tmp_path / "c1"), assembly="clump1", log=lambda m: None)
     text = open(path).read()
     assert "| K paper | -10.2 | 151.9 | -423.7 |" in text
+    # the sphere states' Zm (about 5.95) is inside clump1's rising range (below 7.45): no mark;
+    # clump2's fits rise only above 6.00 (K) and 6.05 (G), so there the paper's values are marked
+    assert "extrapolated" not in text
+    text2 = open(report.build(small_table, str(tmp_path / "c2"), assembly="clump2", log=lambda m: None)[0]).read()
+    assert "| K paper | 48.1 | -577.4 | 1841.7 | > 0.99 | (" in text2 and "extrapolated) |" in text2
+    assert "K rises with Zm only above Zm = 6.00; G rises with Zm only above Zm = 6.05" in text2
     assert "| paper (clump1, its fitted zeta_h, zeta_v) | | | 0.036 |" in text
     assert "5.94-5.99" not in text and "paper (spheres" not in text
     assert "### Fig. 4b" in text and "| E_x/E_y against sigma_x/sigma_y | a power law |" in text
