@@ -156,12 +156,23 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
     return scene, log
 
 
+def _require_force_evaluation(scene):
+    """A scene whose contacts were set without a force evaluation (a YADE scene just imported:
+    forces and normals, no branch vectors yet) would read p = 0 with Zm > 0; refused instead."""
+    d = scene.contact_arrays()
+    loaded = np.asarray(d["normal_force"]) > 0
+    if loaded.any() and not np.any(np.asarray(d["branch"])[loaded]):
+        raise ValueError("the scene's contacts carry forces but no force evaluation at these positions (a scene "
+                         "just imported, e.g. from YADE): call trueaniso.dem.refresh(scene) first")
+
+
 def state(scene):
     """The numbers a researcher checks on a specimen: the whole stress (normal and shear
     components, principal values largest first, the largest shear stress tau_max and the
     deviatoric q of the principal values), the fabric counts and the cell (hSize, columns = cell
     vectors)."""
     from .triaxial import stress_record
+    _require_force_evaluation(scene)
     sig = engines.stress(scene)
     z = engines.coordination(scene)
     out = dict(n=scene.num_bodies, void_ratio=engines.void_ratio(scene), Zm=z["Zm"], Z=z["Z"],

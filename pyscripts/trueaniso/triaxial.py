@@ -207,6 +207,26 @@ def validate_probe(axis, gamma):
     return int(axis)
 
 
+# How far a scene's stress may lie from what a probe is told to hold (of the largest held stress):
+# states are reached within 100 Pa (0.1 % at 100 kPa); 2 % leaves room for a user's rounding, and
+# a probe from farther away would first travel to the held state and measure that path instead.
+HOLD_MISMATCH = 0.02
+
+
+def check_held_state(scene, hold):
+    """Refuse a probe whose held stresses are not the scene's (ValueError, before any step)."""
+    sig = engines.stress(scene)
+    hold = np.asarray(hold, dtype=float)
+    here = np.array([sig[0, 0], sig[1, 1], sig[2, 2], sig[1, 2], sig[0, 2], sig[0, 1]])[:len(hold)]
+    scale = max(np.abs(hold[:3]).max(), 1.0)
+    if len(hold) not in (3, 6) or np.abs(here - hold).max() > HOLD_MISMATCH * scale:
+        raise ValueError("the scene is at sigma = (%s) kPa, not at the stresses the probe is told to hold (%s) kPa "
+                         "(within %g %%): a probe measures the tangent at the state it holds; reach that state "
+                         "first (reach_state) or hold the scene's own stresses"
+                         % (", ".join("%.2f" % (v / 1e3) for v in here), ", ".join("%.2f" % (v / 1e3) for v in hold),
+                            100 * HOLD_MISMATCH))
+
+
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
           settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True,
@@ -236,6 +256,7 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     p.max_strain_rate = 10.0
     chain = dem.Chain(scene, damping=damping, controllers=[p])
     dem.refresh(scene)
+    check_held_state(scene, hold)
     t0 = time.time()
     p.start(scene, np.asarray(hold, dtype=float))
     if skip_detection:

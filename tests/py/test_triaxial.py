@@ -230,3 +230,30 @@ def test_shear_goal_on_a_path_that_fixes_the_shear_is_refused(specimen300):
     assert s.step == step
     with pytest.raises(ValueError, match="shear probe needs the shear stresses under control"):
         triaxial.probe(s, [100e3] * 3, "yz", control_shear=False)
+
+
+def test_measures_of_an_imported_scene_need_a_force_evaluation(specimen_100):
+    """Before: a scene whose contacts came in with forces only (yade_bridge.scene_from_yade's way)
+    gave specimen.state p = 0 with Zm 4.8 and no warning. Now it is refused until dem.refresh,
+    after which the state is the specimen's own (1e-9: refresh recomputes the same forces)."""
+    from trueaniso import dem, specimen, specimen_file
+    scene, _ = specimen_file.load(str(specimen_100))
+    want = specimen.state(scene)
+    d = scene.contact_arrays()
+    scene.set_contact_history(d["member1"], d["member2"], d["shift"].astype(np.int32), d["normal"], d["normal_force"],
+                              d["shear_force"])
+    with pytest.raises(ValueError, match="dem.refresh"):
+        specimen.state(scene)
+    dem.refresh(scene)
+    assert specimen.state(scene)["p"] == pytest.approx(want["p"], rel=1e-9)
+
+
+def test_a_probe_refuses_stresses_the_scene_is_not_at(specimen_100):
+    """Before: a probe told to hold 100 kPa on a scene at another stress travelled there and
+    returned that path's slope as E (63 MPa and nu 0.57 on a 579 kPa scene), without a word."""
+    from trueaniso import specimen_file
+    scene, _ = specimen_file.load(str(specimen_100))
+    with pytest.raises(ValueError, match="not at the stresses the probe is told to hold"):
+        triaxial.probe(scene, [300e3, 300e3, 300e3], "z")
+    with pytest.raises(ValueError, match="not at the stresses"):
+        triaxial.probe(scene, [100e3, 100e3, 100e3, 5e3, 0, 0], "z")  # a shear stress it does not carry
