@@ -167,6 +167,13 @@ def mpi_executor(o):
                              "pyscripts/run_states.py --mpi ... with K >= 2 (K-1 workers)")
     if not o.threads:
         o.threads = 1  # workers x threads within the cores; a thread count is part of the study
+    workers = MPI.COMM_WORLD.Get_size() - 1
+    if workers * o.threads > resources.cores():
+        # Not refused (a cluster node may count cores otherwise), but said: OpenMP teams on shared
+        # cores wait at every barrier for a time slice (docs/benchmarks.md, "Stepper changes").
+        print("warning: %d workers x %d engine threads exceed this machine's %d cores; each team waits for the "
+              "others at every barrier (a study continued at its own thread count keeps it: start a new one "
+              "with --threads 1 to use one thread a worker)" % (workers, o.threads, resources.cores()), flush=True)
     return MPIPoolExecutor()
 
 

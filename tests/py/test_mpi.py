@@ -50,6 +50,21 @@ def test_mpi_run_equals_the_serial_run(serial, specimen_100, tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "3 loading paths with work left, on MPIPoolExecutor" in proc.stdout
     assert values(out) == values(serial) and len(values(out)) == 8
+    assert "warning" not in proc.stdout  # 2 workers x 1 thread: within 2 cores
+
+
+def test_more_threads_than_cores_is_said_before_work(specimen_100, tmp_path):
+    """A study continued under MPI keeps its thread count (a rerun adopts it): 2 workers x 2
+    threads on 2 cores is allowed, but said, since teams on shared cores wait at every barrier."""
+    cmd = mpi_cmd(specimen_100, tmp_path / "study", ranks=3)
+    cmd[cmd.index("--ids") + 1], cmd[cmd.index("--probes") + 1] = "1", "z"
+    from trueaniso import resources
+    threads = 2 * resources.cores()  # 2 workers x 2 x cores: beyond the cores, within --threads' bound
+    proc = subprocess.run(cmd + ["--threads", str(threads)], env=mpi_env(), capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    first = proc.stdout.splitlines()[0]
+    assert first.startswith("warning: 2 workers x %d engine threads exceed" % threads), first
 
 
 def job_tree(pid):
