@@ -178,31 +178,46 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
 
 
 def _run_paths_on(executor, run, paths):
-    """Paths with work left go to the executor's workers; their rows are appended here, in the
-    order paths end. A path whose state is not reached ends there (its rows so far are appended)
-    and the others go on; returns the failures' messages. Any other error stops the run (the rows
-    of paths already ended are kept)."""
+    """The states of each loading path go to the executor's workers one at a time, in path order
+    (a state starts from the checkpoint of the one before it), the paths side by side; each
+    state's rows are appended here as it ends, so an interruption loses at most the states in
+    flight (before, a worker walked a whole path and its rows came back only at the path's end).
+    A state not reached ends its path and the others go on; returns the failures' messages. Any
+    other error stops the run (the rows of states already ended are kept)."""
     import concurrent.futures as cf
     todo = [p for p in paths if any(run.needs(sid) for sid, _, _ in p)]
     run.log("%d loading paths with work left, on %s" % (len(todo), type(executor).__name__))
-    futures = {executor.submit(_path_worker, run.job(p)): p for p in todo}
+    running = {}
+
+    def submit(path, k):
+        running[executor.submit(_state_worker, run.job(path, k))] = (path, k)
+    for path in todo:
+        submit(path, 0)
+    failed = []
     try:
-        failed = []
-        for fut in cf.as_completed(futures):
-            rows, failure = fut.result()
-            for row, columns in rows:
-                run.append(row, columns)
-            run.log("path of states %s: %d rows appended" % (",".join(str(s[0]) for s in futures[fut]), len(rows)))
-            if failure:
-                failed.append(run.path_failed(futures[fut], failure))
+        while running:
+            ended, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+            for fut in ended:
+                path, k = running.pop(fut)
+                rows, failure = fut.result()
+                for row, columns in rows:
+                    run.append(row, columns)
+                if rows:
+                    run.log("state %s: %d rows appended" % (path[k][0], len(rows)))
+                if failure:
+                    failed.append(run.path_failed(path, failure))
+                elif k + 1 < len(path):
+                    submit(path, k + 1)
         return failed
     finally:
-        for f in futures:
+        for f in running:
             f.cancel()
 
 
-def _path_worker(job):
-    """One loading path in a worker process: its checkpoints written, its rows returned."""
+def _state_worker(job):
+    """One state of a loading path in a worker process: reached if its checkpoint is missing and
+    it or a later state of the path has work, then probed; its rows and a failure (the message
+    of a state not reached, else None) are returned."""
     engines.set_threads(job["fp"]["threads"])  # the study's thread count: the same bits as serial
     rows = []
     run = _Run(job["specimen_path"], job["spec_meta"], job["out"], job["fp"], job["axes"], None,
@@ -211,7 +226,7 @@ def _path_worker(job):
                keep=job["keep"])
     run.done = set(job["done"])
     try:
-        run.path(job["path"])
+        run.step(job["path"], job["k"])
     except triaxial.StateNotReached as exc:  # this path ends; the manager goes on with the others
         return rows, str(exc)
     return rows, None
@@ -230,11 +245,11 @@ class _Run:
         self.sink = sink or self.append
         self.keep = {str(k) for k in keep}
 
-    def job(self, path):
-        """What a worker needs to walk `path` as this run would (picklable)."""
+    def job(self, path, k):
+        """What a worker needs to do state k of `path` as this run would (picklable)."""
         return dict(specimen_path=self.specimen_path, spec_meta=self.spec_meta, out=self.out, fp=self.fp,
                     axes=self.axes, columns=self.columns, every=self.every, loading=self.loading, probe_kw=self.probe_kw,
-                    state_kw=self.state_kw, done=sorted(self.done), path=path, keep=sorted(self.keep))
+                    state_kw=self.state_kw, done=sorted(self.done), path=path, k=k, keep=sorted(self.keep))
 
     def append(self, row, columns):
         """A row into probes.csv (this process holds the lock)."""
@@ -267,16 +282,19 @@ class _Run:
     def path(self, path):
         """States in loading order; a checkpoint is made when its state has probes to run or a
         later state of the path starts from it (so the path is always the requested one)."""
+        for k in range(len(path)):
+            self.step(path, k)
+
+    def step(self, path, k):
+        """State k of the path: reached from the state before it (or the specimen) when its
+        checkpoint is missing and it or a later state of the path has work; probed if it has."""
         self._path_states = path
-        need = [self.needs(sid) for sid, _, _ in path]
-        start = None
-        for k, (sid, b, sz) in enumerate(path):
-            ck = self.checkpoint(sid)
-            if not os.path.exists(ck) and any(need[k:]):
-                self.reach(sid, b, sz, start, ck)
-            if self.wanted(sid):
-                self.probe_state(sid, b, sz, ck)
-            start = sid
+        sid, b, sz = path[k]
+        ck = self.checkpoint(sid)
+        if not os.path.exists(ck) and any(self.needs(s) for s, _, _ in path[k:]):
+            self.reach(sid, b, sz, path[k - 1][0] if k else None, ck)
+        if self.wanted(sid):
+            self.probe_state(sid, b, sz, ck)
 
     def load(self, path, sid=None, b=None, sz=None):
         """A scene from a file of this study: the specimen (checked against the fingerprint) or a

@@ -49,8 +49,9 @@ def blocker(tmp_path):
 
 
 @pytest.mark.parametrize("args,words", [
-    (["--ids", ""], ["--ids names no state"]),  # before: ran all 39 states
-    (["--ids", " , "], ["--ids names no state"]),
+    (["--ids", ""], ["--ids: no state named"]),  # before: ran all 39 states
+    (["--ids", " , "], ["--ids: no state named"]),
+    (["--ids", "1,5,1"], ["--ids: state 1 is given twice"]),  # before: de-duplicated without a word
     (["--ids", "1", "--gamma", "1"], ["--gamma 1 is outside"]),  # before: 2,000,000 steps, then exit 1
     (["--ids", "1", "--gamma", "1e-12"], ["--gamma 1e-12 is outside"]),
     (["--ids", "1", "--gamma", "nan"], ["--gamma", "finite"]),
@@ -79,7 +80,8 @@ def test_run_states_out_must_be_a_writable_directory(specimen_100, blocker):
 @pytest.mark.parametrize("args,words", [
     (["--seed=-1"], ["--seed", ">= 0"]),
     (["--n", "1000000000"], ["memory", "this machine allows"]),
-    (["--ids", ""], ["--ids names no state"]),
+    (["--ids", ""], ["--ids: no state named"]),
+    (["--ids", "1,1"], ["--ids: state 1 is given twice"]),
     (["--threads", "1000"], ["--threads", "at most"]),
     (["--out", "/sys/trueaniso-study"], ["cannot create files in /sys"]),
 ])

@@ -213,6 +213,8 @@ def test_wait_queues_behind_the_holder(base, specimen_100, tmp_path):
                               "--out", str(out), "--ids", "1,2,3,6", "--probes", "zx", "--wait"], env=env,
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         first = p.stdout.readline()  # the waiting run says so, then blocks
+        if "continuing its study at its 1 engine thread" in first:  # it took the study's thread count
+            first = p.stdout.readline()
         assert first.startswith("waiting for the run that holds"), first
         assert p.poll() is None and (out / "probes.csv").read_bytes() == before
     stdout, stderr = p.communicate(timeout=300)
@@ -264,8 +266,9 @@ def test_a_state_not_reached_ends_its_own_path_only(specimen_100, tmp_path, monk
 
 
 def test_a_worker_returns_its_rows_and_the_state_not_reached(specimen_100, tmp_path, monkeypatch):
-    """The MPI worker's side: a path that stops at a state hands back the rows made before it
-    and the message, instead of raising (which lost the path's rows and stopped the manager)."""
+    """The MPI worker's side, one state a task: a state hands back its rows (and its checkpoint
+    is written for the next); a state not reached hands back the message instead of raising
+    (which stopped the manager and, when a worker walked a whole path, lost the path's rows)."""
     from trueaniso import study
     _fail_at(monkeypatch, 80e3)  # state 7, after 6 on the path 6, 7
     out = tmp_path / "study"
@@ -275,5 +278,8 @@ def test_a_worker_returns_its_rows_and_the_state_not_reached(specimen_100, tmp_p
                      study.results_csv.Table(None, [], [], None), lambda m: None, 5.0, "true-triaxial",
                      dict(gamma=1e-6, restrain_rotations=False, skip_detection=False, damping=0.4),
                      dict(damping=0.4, friction=0.5))
-    got, failure = study._path_worker(run.job([(6, 0.0, 90e3), (7, 0.0, 80e3)]))
-    assert [r["state"] for r, _ in got] == [6] and "sigma_z = 80000 Pa not reached" in failure
+    path = [(6, 0.0, 90e3), (7, 0.0, 80e3)]
+    got, failure = study._state_worker(run.job(path, 0))
+    assert [r["state"] for r, _ in got] == [6] and failure is None and (out / "states" / "6.npz").exists()
+    got, failure = study._state_worker(run.job(path, 1))
+    assert got == [] and "sigma_z = 80000 Pa not reached" in failure
