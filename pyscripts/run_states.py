@@ -66,8 +66,9 @@ def parser():
     p.add_argument("--force-new", action="store_true",
                    help="start a new study in --out: the old one is moved into --out/superseded/, not deleted")
     p.add_argument("--mpi", action="store_true",
-                   help="run the states on MPI workers, one state a task, each loading path in order: start as mpiexec -n K /usr/bin/python3 -m "
-                        "mpi4py.futures pyscripts/run_states.py --mpi ... (K-1 workers; --threads defaults to 1)")
+                   help="run the states on MPI workers, one state a task, each loading path in order: start as "
+                        "mpiexec -n K /usr/bin/python3 -m mpi4py.futures pyscripts/run_states.py --mpi ... (K-1 "
+                        "workers; --threads defaults to 1)")
     p.add_argument("--progress-every", type=cli.non_negative, default=progress.EVERY,
                    help="seconds between progress lines of long work (0: after every chunk of steps)")
     return p
