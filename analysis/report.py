@@ -427,6 +427,10 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
                       % (_fmt(exp_v and exp_v["m"], "%.3f"), _fmt(exp_v and exp_v["r2"], "%.3f"),
                          len(exp_v["log_sigma_ratio"]) if exp_v else 0), "",
                       "![Fig. 4](%s)" % figs["f4"], ""]
+        elif not sphere:
+            lines += ["### Fig. 4%s: E_i/E_j = (sigma_i/sigma_j)^m" % ("b" if assembly == "clump1" else "c"), "",
+                      "Not measurable from these states: sigma_x/sigma_y stays within 1 % of 1 in all of them "
+                      "(b = 0 only), so E_x/E_y has no stress ratio to follow.", ""]
         lines += paper_figures(sel, out, tag, assembly)
         numbers[rot] = dict(states=n, Zm=(float(zm.min()), float(zm.max())), table2=fits, zeta=(zh, zv),
                             zeta_common=contrast["zeta"], nu_rmse={l: p["nu_rmse"] for l, p in preds},

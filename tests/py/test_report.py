@@ -89,6 +89,15 @@ def test_rising_side_of_the_paper_s_quadratics():
     assert low == pytest.approx(5.94077, abs=1e-5) and high == np.inf  # G's vertex 5.9356 is lower
 
 
+def test_no_exponent_from_stress_ratios_within_the_servo_s_tolerance():
+    """b = 0 states hold sigma_x = sigma_y within 100 Pa: their ratio is noise, and the slope of
+    noise was reported as m = 503 (clump2, seven b = 0 states). Now there is none."""
+    sig = np.array([[100e3, 100.05e3, 100e3], [110e3, 109.95e3, 80e3]])
+    E = np.array([[300e6, 301e6, 250e6], [310e6, 309e6, 260e6]])
+    assert chain.stress_ratio_exponent(dict(sigma=sig, E=E), chain.HORIZONTAL_PAIRS) is None
+    assert chain.stress_ratio_exponent(dict(sigma=sig, E=E), chain.VERTICAL_PAIRS) is not None
+
+
 def test_zm_by_sign_of_q_by_hand():
     q = [0.0, -30e3, -60e3, 30e3, 60e3]
     zm = [10.2, 10.0, 9.7, 10.1, 9.95]
