@@ -182,9 +182,6 @@ def main(argv=None):
     o = cli.parse(parser(), argv)
     states = validate(o)
     executor = mpi_executor(o)
-    if o.threads_from_study:
-        print("%s: continuing its study at its %d engine thread%s (--threads)"
-              % (o.out, o.threads, "" if o.threads == 1 else "s"), flush=True)
     if o.threads:
         from trueaniso import engines
         engines.set_threads(o.threads)

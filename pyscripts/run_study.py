@@ -158,9 +158,6 @@ def main(argv=None):
 
     def log(m):
         print(m, flush=True)
-    if o.threads_from_study:
-        log("%s: continuing its study at its %d engine thread%s (--threads)"
-            % (o.out, o.threads, "" if o.threads == 1 else "s"))
     t0 = time.time()
     with lock.held(o.out, wait=o.wait, log=log):
         if o.force_new:

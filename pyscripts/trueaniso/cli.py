@@ -67,13 +67,17 @@ def add_threads_option(parser, study=False):
 def resolve_threads(o):
     """--threads of a study script when not given: the count recorded in the study that --out
     holds (so that a rerun continues it instead of being refused for a thread count the user never
-    chose), else 0 (all cores). Sets o.threads_from_study. --force-new starts afresh: 0."""
+    chose), else 0 (all cores), and says which. Sets o.threads_from_study. --force-new starts
+    afresh: 0."""
     from . import study_dir
     o.threads_from_study = False
     if o.threads is None:
         there = None if getattr(o, "force_new", False) else study_dir.threads_of(o.out)
         o.threads_from_study = there is not None
         o.threads = there or 0
+    if o.threads_from_study:
+        print("%s: continuing its study at its %d engine thread%s (--threads)"
+              % (o.out, o.threads, "" if o.threads == 1 else "s"), flush=True)
     return o.threads
 
 

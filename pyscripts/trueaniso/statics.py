@@ -91,7 +91,7 @@ def state_file(out, state):
 def cached_record(out, state=None, scene=None, log=print):
     """The record of `state` (None: the specimen, given as `scene`) from its file in `out`, or
     solved from the scene (for a state: its checkpoint states/ID.npz) and written atomically."""
-    from . import atomic, specimen_file
+    from . import atomic, specimen_file, study_dir
     path = state_file(out, state)
     if not os.path.exists(path):
         if scene is None:
@@ -99,9 +99,7 @@ def cached_record(out, state=None, scene=None, log=print):
                 scene, _ = specimen_file.load(os.path.join(out, "states", "%s.npz" % state))
             except specimen_file.SpecimenFileError as exc:
                 # A study's checkpoint, not a specimen: run_study reaches a missing one again.
-                raise specimen_file.SpecimenFileError(
-                    "%s; remove it and rerun to compute it again"
-                    % str(exc).replace("specimen file", "checkpoint of state %s," % state, 1)) from None
+                raise specimen_file.SpecimenFileError(study_dir.checkpoint_problem(exc, state)) from None
         log("statics (%s): solving the contact network's stiffness, rotations free and blocked ..."
             % ("isotropic state" if state is None else "state %s" % state))
         atomic.write_json(path, state_record(scene))

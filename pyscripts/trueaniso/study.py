@@ -302,8 +302,8 @@ class _Run:
         try:
             scene, meta = specimen_file.load(path)
         except specimen_file.SpecimenFileError as exc:
-            what = str(exc) if sid is None else str(exc).replace("specimen file", "checkpoint of state %s," % sid, 1)
-            raise study_dir.StudyMismatch("%s; remove it and rerun to compute it again" % what) from None
+            raise study_dir.StudyMismatch("%s; remove it and rerun to compute it again" % exc if sid is None
+                                          else study_dir.checkpoint_problem(exc, sid)) from None
         p = meta["parameters"]
         if sid is None:
             ok = meta["sha256"] == self.fp["specimen"]

@@ -85,6 +85,13 @@ def read_metadata(out):
                             % (path, exc, out, _way_out(out))) from None
 
 
+def checkpoint_problem(exc, state):
+    """The message for a study's checkpoint (states/ID.npz) that specimen_file cannot read: named
+    as the checkpoint it is, with the way out (a removed one is reached again)."""
+    return "%s; remove it and rerun to compute it again" % str(exc).replace(
+        "specimen file", "checkpoint of state %s," % state, 1)
+
+
 def threads_of(out):
     """The engine thread count of the study `out` holds, or None (no study, or none readable:
     the checks that follow say what is wrong with it)."""
