@@ -5,7 +5,9 @@
     /usr/bin/python3 pyscripts/prepare_specimen.py --assembly clump1 --n 4000 --out specimens/clump1-4000.npz
 
 The recipe and the reasons for its parameters are in docs/specimens.md. An existing valid output
-is kept and reported (runs are resumable); use --force to prepare it again. Memory and time are
+is kept and reported; use --force to prepare it again. An interrupted preparation resumes from its
+last checkpoint (written every --checkpoint-every steps beside --out as .NAME.checkpoint) when run
+again with the same options, to the same specimen an uninterrupted run writes. Memory and time are
 estimated before any work, and a specimen that cannot fit in this machine's memory is refused.
 Inside yade-double the result is also written into O (cell and spheres) for viewing or export.
 """
@@ -15,7 +17,8 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import clump_specimen, cli, engines, lock, progress, provenance, psd, resources, specimen, specimen_file  # noqa: E402
+from trueaniso import (clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance, psd,  # noqa: E402
+                       resources, specimen, specimen_file)
 
 ASSEMBLIES = ("sphere", "clump1", "clump2")
 ALIASES = {"spheres": "sphere"}
@@ -46,7 +49,10 @@ def options(argv=None):
     p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
                    help="cap of the expansion/compression rate as an inertial number")
     p.add_argument("--unbalanced", type=cli.finite, default=1e-3, help="unbalanced force of the final state")
-    cli.add_threads_option(p)
+    cli.add_threads_option(p, study=True)
+    p.add_argument("--checkpoint-every", type=cli.count, default=prep_checkpoint.EVERY,
+                   help="steps between checkpoints of the preparation, from which an interrupted run resumes "
+                        "(0: none; the specimen is then bit for bit what versions before checkpoints made)")
     p.add_argument("--out", required=True, help="specimen file (.npz); a .json summary is written beside it")
     p.add_argument("--force", action="store_true", help="prepare again even if --out is a valid specimen")
     p.add_argument("--wait", action="store_true",
@@ -82,7 +88,7 @@ def validate(o):
                              "(spheres fill at most 0.74 of space; use 0.3 < phi < 0.74)" % o.phi_cell)
     if not (0 < o.unbalanced < 1 and 0 < o.inertial_number < 1):
         raise cli.InputError("--unbalanced and --inertial-number must lie in (0, 1)")
-    resources.check_threads(o.threads)
+    resources.check_threads(o.threads or 0)
     if not o.out.endswith(".npz"):
         raise cli.InputError("--out must name a .npz file")
     try:
@@ -102,7 +108,7 @@ def validate(o):
         raise cli.InputError(problem)
     # Memory goes with the member spheres (contacts, cell lists), not with the bodies.
     spheres = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
-    memory, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
+    memory, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())  # None: at most all
     resources.check_memory(memory, "a specimen of %d %s (%d member spheres)" % (o.n, o.assembly, spheres))
     return dist
 
@@ -110,17 +116,30 @@ def validate(o):
 def main():
     o = options()
     dist = validate(o)
-    if o.threads:
-        engines.set_threads(o.threads)
     directory, name = os.path.split(os.path.abspath(o.out))
     # One preparation per output at a time; under the lock, the temporary files of an
     # interrupted preparation of this output are removed.
     with lock.held(directory, wait=o.wait, name=".%s.lock" % name, what="specimen output",
                    log=lambda m: print(m, flush=True)):
+        checkpoint = os.path.basename(prep_checkpoint.path_for(o.out))
         for stray in os.listdir(directory):
-            if stray.startswith(".tmp-") and stray.endswith(("-" + name, "-" + name[:-4] + ".json")):
+            if stray.startswith(".tmp-") and stray.endswith(("-" + name, "-" + name[:-4] + ".json", "-" + checkpoint)):
                 os.unlink(os.path.join(directory, stray))
+        if o.force and os.path.exists(os.path.join(directory, checkpoint)):
+            os.unlink(os.path.join(directory, checkpoint))
+            print("removed the checkpoint of an earlier preparation of %s (--force)" % o.out, flush=True)
+        # An interrupted preparation goes on at its own thread count; nothing else to continue.
+        cli.resolve_threads(o, study=False, preparation=prep_checkpoint.path_for(o.out))
+        if o.threads:
+            engines.set_threads(o.threads)
         prepare(o, dist)
+
+
+def settings(o):
+    """Every option that makes the specimen (what its preparation checkpoint is bound to)."""
+    return dict(assembly=o.assembly, n=o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu,
+                mu_prep=o.mu_prep, mu=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
+                unbalanced=o.unbalanced)
 
 
 def prepare(o, dist):
@@ -130,6 +149,7 @@ def prepare(o, dist):
         except specimen_file.SpecimenFileError as exc:
             raise cli.InputError("%s exists but is not usable (%s); remove it or use --force" % (o.out, exc))
         print("kept existing specimen %s (use --force to prepare again)" % o.out)
+        prep_checkpoint.Checkpoints(prep_checkpoint.path_for(o.out), {}).remove()  # a run killed after its save
         if specimen_file.ensure_summary(o.out, meta):
             print("wrote the missing summary %s from the specimen" % specimen_file.summary_path(o.out))
         report(scene, meta.get("parameters", {}), o)
@@ -147,17 +167,19 @@ def prepare(o, dist):
               % (o.n, o.assembly, o.seed, o.d50, o.cu, o.pressure / 1e3, resources.human_bytes(memory),
                  resources.human_seconds(seconds)), flush=True)
     t0 = time.time()
+    checkpoints = prep_checkpoint.for_specimen(o.out, settings(o), o.checkpoint_every,
+                                               log=None if o.quiet else lambda m: print(m, flush=True))
     try:
         if o.assembly == "sphere":
             scene, log = specimen.prepare_spheres(
                 o.n, seed=o.seed, size_distribution=dist, pressure=o.pressure, mu_prep=o.mu_prep,
                 mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
-                unbalanced=o.unbalanced, progress=None if o.quiet else bar.preparation)
+                unbalanced=o.unbalanced, progress=None if o.quiet else bar.preparation, checkpoints=checkpoints)
         else:
             scene, log = clump_specimen.prepare_clumps(
                 o.assembly, o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu, mu_prep=o.mu_prep,
                 mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number, unbalanced=o.unbalanced,
-                progress=None if o.quiet else bar.preparation)
+                progress=None if o.quiet else bar.preparation, checkpoints=checkpoints)
     except (ValueError, specimen.PreparationError, clump_specimen.PreparationError) as exc:
         cli.fail(str(exc), 1)
     log["threads"] = engines.threads()  # the count used, not the option (0 means all cores)
@@ -165,6 +187,7 @@ def prepare(o, dist):
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)
     specimen_file.write_summary(o.out, meta)  # derived from the .npz; rewritten from it if lost
+    checkpoints.remove()  # only now: the specimen is complete on disk
     if not o.quiet:
         print("saved %s in %.1f s" % (o.out, time.time() - t0))
     report(scene, log, o)

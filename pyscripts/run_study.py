@@ -15,7 +15,6 @@ The output directory is one study (docs/runs.md): a rerun continues it where it 
 after a kill, and may add states (--ids 1,5 then --ids 1,5,9); a rerun that asks for another
 specimen or other settings refuses in one line.
 """
-import json
 import os
 import sys
 import time
@@ -23,8 +22,8 @@ import time
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
 from analysis import figures, report, zeta_contrast  # noqa: E402
-from trueaniso import (atomic, clump_specimen, cli, engines, lock, progress, resources, specimen, statics,  # noqa: E402
-                       specimen_file, study, study_dir, triaxial)
+from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, resources,  # noqa: E402
+                       specimen, statics, specimen_file, study, study_dir, triaxial)
 
 DEFAULT_IDS = "1,5,9,13,17,21,25,35,39"
 ASSEMBLIES = ("sphere", "clump1", "clump2")
@@ -52,7 +51,8 @@ def parser():
 
 
 def validate(o):
-    cli.resolve_threads(o)
+    # A study, or a preparation for one killed before the study began, goes on at its own count.
+    cli.resolve_threads(o, preparation=prep_checkpoint.path_for(os.path.join(o.out, SPECIMEN)))
     if o.n < 100:
         raise cli.InputError("--n must be >= 100 for a study specimen")
     o.assembly = {"spheres": "sphere"}.get(o.assembly, o.assembly)
@@ -127,6 +127,7 @@ def check_recipe(o, log):
             % (o.out, describe(have), describe(want),
                study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
     log("specimen: kept %s" % path)
+    prep_checkpoint.Checkpoints(prep_checkpoint.path_for(path), {}).remove()  # of a run killed after its save
     return scene
 
 
@@ -138,13 +139,17 @@ def prepare(o, log):
         % (o.n, o.assembly, o.seed, resources.human_bytes(memory), resources.human_seconds(seconds)))
     t0 = time.time()
     bar = progress.Progress("specimen", log, o.progress_every)
+    # Checkpoints every so many steps: a run killed while it prepares resumes (prep_checkpoint).
+    checkpoints = prep_checkpoint.for_specimen(path, recipe(o), log=log)
     if o.assembly == "sphere":
-        scene, params = specimen.prepare_spheres(o.n, seed=o.seed, progress=bar.preparation)
+        scene, params = specimen.prepare_spheres(o.n, seed=o.seed, progress=bar.preparation, checkpoints=checkpoints)
     else:
-        scene, params = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, progress=bar.preparation)
+        scene, params = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, progress=bar.preparation,
+                                                      checkpoints=checkpoints)
     params.setdefault("assembly", o.assembly)
     params["threads"] = engines.threads()
     specimen_file.save(path, scene, seed=o.seed, parameters=params, summary=specimen.state(scene))
+    checkpoints.remove()  # only now: the specimen is complete on disk
     log("specimen: saved %s (%.1f s)" % (path, time.time() - t0))
     # Everything after this starts from the file, as a rerun does: the same numbers either way.
     return specimen_file.load(path)[0]

@@ -64,20 +64,27 @@ def add_threads_option(parser, study=False):
                                 "at its own count, which its last bits depend on), else all cores" if study else ""))
 
 
-def resolve_threads(o):
-    """--threads of a study script when not given: the count recorded in the study that --out
-    holds (so that a rerun continues it instead of being refused for a thread count the user never
-    chose), else 0 (all cores), and says which. Sets o.threads_from_study. --force-new starts
-    afresh: 0."""
-    from . import study_dir
-    o.threads_from_study = False
-    if o.threads is None:
-        there = None if getattr(o, "force_new", False) else study_dir.threads_of(o.out)
-        o.threads_from_study = there is not None
-        o.threads = there or 0
-    if o.threads_from_study:
-        print("%s: continuing its study at its %d engine thread%s (--threads)"
-              % (o.out, o.threads, "" if o.threads == 1 else "s"), flush=True)
+def resolve_threads(o, study=True, preparation=None):
+    """--threads of a script that continues work when not given: the count of the work --out
+    holds (its bits depend on it), so that a rerun continues it instead of being refused for a
+    thread count the user never chose; else 0 (all cores). Says which. The work: the study in
+    the directory --out (study=True; recorded in its metadata), or else the interrupted
+    preparation whose checkpoint is `preparation` (prep_checkpoint). --force-new (a study) and
+    --force (a specimen) start afresh: 0."""
+    from . import prep_checkpoint, study_dir
+    fresh = getattr(o, "force_new", False) or getattr(o, "force", False)
+    continued = None
+    if o.threads is None and not fresh:
+        if study:
+            o.threads = study_dir.threads_of(o.out)
+            continued = "its study" if o.threads else None
+        if o.threads is None and preparation is not None:
+            o.threads = prep_checkpoint.saved_threads(preparation)  # refuses an unreadable checkpoint
+            continued = "its interrupted preparation" if o.threads else None
+    o.threads = o.threads or 0
+    if continued:
+        print("%s: continuing %s at its %d engine thread%s (--threads)"
+              % (o.out, continued, o.threads, "" if o.threads == 1 else "s"), flush=True)
     return o.threads
 
 

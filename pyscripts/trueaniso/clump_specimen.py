@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from . import clump_shapes, dem, engines, psd as _psd
+from . import clump_shapes, dem, engines, prep_checkpoint as _checkpointed, psd as _psd, specimen
 
 
 class PreparationError(RuntimeError):
@@ -134,18 +134,6 @@ def random_loose_clumps(n, template, size_distribution, seed, orientation_weight
     return pos[along], quats[along], d[along], start, np.full(3, side)
 
 
-def _run_until(chain, engine, max_steps, chunk, label, progress, also=None):
-    done = 0
-    while done < max_steps:
-        done += chain.run(min(chunk, max_steps - done))
-        if progress:
-            progress(label, chain.scene, engine, done)
-        if engine.reached and (also is None or also()):
-            return done
-    raise PreparationError("%s did not converge within %d steps (p or unbalanced force off target)"
-                           % (label, max_steps))
-
-
 def bounding_diameter(assembly):
     """Largest length of an assembly's clump over its equivalent diameter."""
     return 2.0 * clump_shapes.template(recipe(assembly)["shape"]).bounding_radius
@@ -181,11 +169,12 @@ def recipe(assembly, **overrides):
 
 def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_number=1e-2, prep_unbalanced=1e-2,
                    unbalanced=1e-3, stress_tolerance=100.0, gain=0.002, max_steps=5_000_000, progress=None,
-                   **overrides):
+                   checkpoints=None, **overrides):
     """A clump specimen (assembly "clump1" or "clump2", recipe RECIPES[assembly] with `overrides`)
     consolidated isotropically to `pressure`; returns (scene, log dict). The final state is in
     force and moment balance below `unbalanced` (a probe or static solve with rotations free
-    starts from it)."""
+    starts from it). `checkpoints`: as in specimen.prepare_spheres (an interrupted preparation
+    resumes)."""
     if pressure <= 0:
         raise ValueError("pressure must be > 0")
     r = recipe(assembly, **overrides)
@@ -193,80 +182,92 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         raise ValueError("friction coefficients must be >= 0")
     t0 = time.time()
     tmpl = clump_shapes.template(r["shape"])
-    dist = _psd.SizeDistribution.from_d50_cu(r["d50"], r["cu"])
-    pos, quats, d, start, side = random_loose_clumps(n, tmpl, dist, seed, r["orientation_weights"], r["phi_cell"],
-                                                     layers=r["layers"])
-    t_gen = time.time() - t0
+    resumed = checkpoints.resume() if checkpoints is not None else None
+    if resumed:
+        scene, place = resumed
+    else:
+        dist = _psd.SizeDistribution.from_d50_cu(r["d50"], r["cu"])
+        pos, quats, d, start, side = random_loose_clumps(n, tmpl, dist, seed, r["orientation_weights"],
+                                                         r["phi_cell"], layers=r["layers"])
 
-    def scene_at(factor):
-        s = engines.Scene()
-        s.shear_modulus, s.poisson, s.density, s.friction = 18e9, 0.15, 2500.0, r["mu_prep"]
-        s.cell_size = s.cell_ref_size = side
-        engines.add_clumps(s, tmpl, pos, quats, factor * d)
-        return s
+        def scene_at(factor):
+            s = engines.Scene()
+            s.shear_modulus, s.poisson, s.density, s.friction = 18e9, 0.15, 2500.0, r["mu_prep"]
+            s.cell_size = s.cell_ref_size = side
+            engines.add_clumps(s, tmpl, pos, quats, factor * d)
+            return s
 
-    scene = scene_at(start)
+        scene = scene_at(start)
+        # Stage 1: compaction by radius expansion, rotations blocked or free.
+        scene.block_rotations = r["stage1_rotations"] == "blocked"
+        # The growth scale so far multiplies the controllers' own (one per run between checkpoints).
+        place = dict(stage="gas", steps={}, start_scale=start, grown_scale=1.0, generation_time=time.time() - t0,
+                     max_dt=dem.reference_time_step(scene_at(1.0), pressure))
+        place["elapsed"] = time.time() - t0
     rate = dem.strain_rate_for_inertial_number(inertial_number, r["d50"], scene.density, pressure)
+    expanding = ("gas", "stage 1", "expansion")
 
-    # Stage 1: compaction by radius expansion, rotations blocked or free.
-    scene.block_rotations = r["stage1_rotations"] == "blocked"
-    grow = engines.RadiusExpansion()
-    grow.target_pressure = pressure
-    grow.gain = gain
-    grow.max_growth_rate = rate
-    grow.stress_tolerance = stress_tolerance
-    grow.unbalanced_tolerance = prep_unbalanced
-    chain = dem.Chain(scene, damping=damping, controllers=[grow],
-                      max_dt=dem.reference_time_step(scene_at(1.0), pressure))
-    # The loose start (solid fraction 0.2) carries no stress: grow 10 times faster until the
-    # contact network takes 1 % of the target pressure (the rate cap only matters under load).
-    grow.max_growth_rate = 10.0 * rate
-    steps_gas = 0
-    while grow.pressure < 0.01 * pressure and steps_gas < max_steps:
-        steps_gas += chain.run(500)
-        if progress:  # long specimens spend minutes here: say so
-            progress("expansion (gas)", chain.scene, grow, steps_gas)
-    grow.max_growth_rate = rate
+    def build(st):
+        if st.place["stage"] in expanding:
+            # The loose start (solid fraction 0.2) carries no stress: grow 10 times faster until the
+            # contact network takes 1 % of the target pressure (the rate cap only matters under load).
+            st.controller = specimen.expansion(pressure, gain, 10.0 * rate if st.at("gas") else rate,
+                                               stress_tolerance, prep_unbalanced)
+            st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller], max_dt=st.place["max_dt"])
+        else:
+            st.controller = specimen.consolidation(pressure, gain, rate, stress_tolerance, unbalanced)
+            st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller])
+
+    def fold(st):
+        if st.place["stage"] in expanding:
+            st.place["grown_scale"] *= st.controller.scale
+
+    st = _checkpointed.Stages(scene, place, checkpoints, build, fold)
+    st.run("gas", 500, lambda: st.controller.pressure >= 0.01 * pressure, max_steps, progress,
+           "expansion (gas)", check_first=True)  # long specimens spend minutes here: say so
+    if st.at("gas"):
+        st.controller.max_growth_rate = rate
+        st.advance("stage 1" if r["stage1_pressure"] < pressure else "expansion", new_engines=False)
     # Stage 1 ends when the network first carries stage1_pressure: below the target, rotations are
     # then released and the expansion goes on to the target (the network formed with the stage-1
     # fabric densifies). Waiting for balance at stage1_pressure with rotations blocked only let the
     # blocked packing creep (470,000 steps at 300 clumps for e 0.78 -> 0.71), and the creep is
     # undone by the free stage anyway.
-    p1 = min(r["stage1_pressure"], pressure)
-    if p1 < pressure:
-        steps_grow = steps_gas
-        while grow.pressure < p1 and steps_grow < max_steps:
-            steps_grow += chain.run(500)
-            if progress:
-                progress("stage 1 (rotations %s)" % r["stage1_rotations"], chain.scene, grow, steps_grow)
-        scene.block_rotations = False
-        steps_grow += _run_until(chain, grow, max_steps, 2000, "expansion (free)", progress)
-    else:
-        steps_grow = steps_gas + _run_until(chain, grow, max_steps, 2000, "expansion", progress)
-    scene.rescale(1.0 / (start * grow.scale))
-    scene.cell_ref_size = scene.cell_size
-
-    # Stage 2: rotations free, final friction, the cell servoed to the isotropic stress until the
-    # forces and the moments are balanced.
-    scene.block_rotations = False
-    scene.friction = r["mu_final"]
-    servo = engines.StressServo()
-    servo.target = np.full(3, pressure)
-    servo.gain = gain
-    servo.max_strain_rate = rate
-    servo.stress_tolerance = stress_tolerance
-    servo.unbalanced_tolerance = unbalanced
-    chain = dem.Chain(scene, damping=damping, controllers=[servo])
-    steps_hold = _run_until(chain, servo, max_steps, 2000, "consolidation", progress,
-                            also=lambda: engines.unbalanced_torque(scene) < unbalanced)
+    st.run("stage 1", 500, lambda: st.controller.pressure >= r["stage1_pressure"],
+           max_steps - st.steps("gas"), progress, "stage 1 (rotations %s)" % r["stage1_rotations"], check_first=True)
+    if st.at("stage 1"):
+        st.scene.block_rotations = False
+        st.advance("expansion", new_engines=False)
+    if st.at("expansion"):
+        label = "expansion (free)" if r["stage1_pressure"] < pressure else "expansion"
+        if not st.run("expansion", 2000, lambda: st.controller.reached, max_steps, progress, label):
+            raise PreparationError("%s did not converge within %d steps (p or unbalanced force off target)"
+                                   % (label, max_steps))
+        fold(st)
+        st.scene.rescale(1.0 / (st.place["start_scale"] * st.place["grown_scale"]))
+        st.scene.cell_ref_size = st.scene.cell_size
+        # Stage 2: rotations free, final friction, the cell servoed to the isotropic stress until the
+        # forces and the moments are balanced.
+        st.scene.block_rotations = False
+        st.scene.friction = r["mu_final"]
+        st.advance("consolidation")
+    if not st.run("consolidation", 2000,
+                  lambda: st.controller.reached and engines.unbalanced_torque(st.scene) < unbalanced,
+                  max_steps, progress):
+        raise PreparationError("consolidation did not converge within %d steps (p or unbalanced force off target)"
+                               % max_steps)
+    scene = st.scene
     scene.strain_rate = np.zeros(3)
     scene.velocities = np.zeros((scene.num_bodies, 3))
     scene.angular_velocities = np.zeros((scene.num_bodies, 3))
     log = dict(assembly=assembly, n=n, seed=seed, pressure=pressure, damping=damping,
                inertial_number=inertial_number, prep_unbalanced=prep_unbalanced, unbalanced=unbalanced,
-               stress_tolerance=stress_tolerance, gain=gain, size_scale=1.0 / (start * grow.scale),
-               steps_expansion=steps_grow, steps_consolidation=steps_hold, generation_time=t_gen,
-               wall_time=time.time() - t0, aspect_ratio=clump_shapes.aspect_ratio(tmpl),
-               template_volume_error=tmpl.volume_error_estimate, **{k: (list(v) if isinstance(v, tuple) else v)
-                                                                    for k, v in r.items()})
+               stress_tolerance=stress_tolerance, gain=gain,
+               size_scale=1.0 / (st.place["start_scale"] * st.place["grown_scale"]),
+               steps_expansion=sum(st.steps(k) for k in expanding), steps_consolidation=st.steps("consolidation"),
+               generation_time=st.place["generation_time"], wall_time=st.elapsed(),
+               aspect_ratio=clump_shapes.aspect_ratio(tmpl), template_volume_error=tmpl.volume_error_estimate,
+               **{k: (list(v) if isinstance(v, tuple) else v) for k, v in r.items()})
+    if checkpoints is not None:
+        log["checkpoint_every"] = checkpoints.every
     return scene, log

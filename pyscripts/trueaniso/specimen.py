@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from . import dem, engines, psd as _psd
+from . import dem, engines, prep_checkpoint as _checkpointed, psd as _psd
 
 
 class PreparationError(RuntimeError):
@@ -92,55 +92,84 @@ def new_scene(positions, radii, cell_size, shear_modulus=18e9, poisson=0.15, den
     return s
 
 
-def _run_until(chain, engine, max_steps, chunk, label, progress):
-    done = 0
-    while done < max_steps:
-        done += chain.run(min(chunk, max_steps - done))
-        if progress:
-            progress(label, chain.scene, engine, done)
-        if engine.reached:
-            return done
-    raise PreparationError("%s did not converge within %d steps (p or unbalanced force off target)"
-                           % (label, max_steps))
-
-
-def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=100e3,
-                    mu_prep=0.015, mu_final=0.5, phi_cell=0.60, damping=0.4, inertial_number=1e-2,
-                    prep_unbalanced=1e-2, unbalanced=1e-3, stress_tolerance=100.0, gain=0.002,
-                    max_steps=5_000_000, progress=None):
-    """A sphere specimen consolidated isotropically to `pressure`; returns (scene, log dict)."""
-    if pressure <= 0:
-        raise ValueError("pressure must be > 0")
-    if mu_prep < 0 or mu_final < 0:
-        raise ValueError("friction coefficients must be >= 0")
-    t0 = time.time()
-    pos, radii, scale, side = random_loose_packing(n, size_distribution, seed, phi_cell)
-    scene = new_scene(pos, scale * radii, side, friction=mu_prep)
-    d50 = size_distribution.d50
-    rate = dem.strain_rate_for_inertial_number(inertial_number, d50, scene.density, pressure)
-
+def expansion(pressure, gain, rate, stress_tolerance, unbalanced):
+    """The radius expansion of step 2 (the clumps' first stages too): growth servoed on the mean
+    stress, at most `rate` (d ln r / dt)."""
     grow = engines.RadiusExpansion()
     grow.target_pressure = pressure
     grow.gain = gain
     grow.max_growth_rate = rate
     grow.stress_tolerance = stress_tolerance
-    grow.unbalanced_tolerance = prep_unbalanced
-    chain = dem.Chain(scene, damping=damping, controllers=[grow],
-                      max_dt=dem.reference_time_step(new_scene(pos, radii, side), pressure))
-    steps_grow = _run_until(chain, grow, max_steps, 2000, "expansion", progress)
+    grow.unbalanced_tolerance = unbalanced
+    return grow
 
-    # Back to the sampled radii exactly: they were placed at `scale` and grew by grow.scale.
-    scene.rescale(1.0 / (scale * grow.scale))
-    scene.cell_ref = scene.cell
-    scene.friction = mu_final
-    servo = engines.StressServo()  # all six components: the shear stresses go to zero too
+
+def consolidation(pressure, gain, rate, stress_tolerance, unbalanced):
+    """The cell servo of step 4 (the clumps' stage 2 too): all six components, so the shear
+    stresses go to zero too."""
+    servo = engines.StressServo()
     servo.target = np.full(3, pressure)
     servo.gain = gain
     servo.max_strain_rate = rate
     servo.stress_tolerance = stress_tolerance
     servo.unbalanced_tolerance = unbalanced
-    chain = dem.Chain(scene, damping=damping, controllers=[servo])
-    steps_hold = _run_until(chain, servo, max_steps, 2000, "consolidation", progress)
+    return servo
+
+
+def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=100e3,
+                    mu_prep=0.015, mu_final=0.5, phi_cell=0.60, damping=0.4, inertial_number=1e-2,
+                    prep_unbalanced=1e-2, unbalanced=1e-3, stress_tolerance=100.0, gain=0.002,
+                    max_steps=5_000_000, progress=None, checkpoints=None):
+    """A sphere specimen consolidated isotropically to `pressure`; returns (scene, log dict).
+
+    With `checkpoints` (prep_checkpoint.Checkpoints) the preparation writes its place every so
+    many steps and goes on from the file, and starts from the checkpoint on disk if there is one:
+    an interrupted preparation resumes. Without, nothing is written (the specimen is the same bits
+    as with checkpoints never due)."""
+    if pressure <= 0:
+        raise ValueError("pressure must be > 0")
+    if mu_prep < 0 or mu_final < 0:
+        raise ValueError("friction coefficients must be >= 0")
+    t0 = time.time()
+    resumed = checkpoints.resume() if checkpoints is not None else None
+    if resumed:
+        scene, place = resumed
+    else:
+        pos, radii, start, side = random_loose_packing(n, size_distribution, seed, phi_cell)
+        scene = new_scene(pos, start * radii, side, friction=mu_prep)
+        # The growth scale so far multiplies the controllers' own (one per run between checkpoints).
+        place = dict(stage="expansion", steps={}, start_scale=start, grown_scale=1.0,
+                     max_dt=dem.reference_time_step(new_scene(pos, radii, side), pressure))
+        place["elapsed"] = time.time() - t0
+    rate = dem.strain_rate_for_inertial_number(inertial_number, size_distribution.d50, scene.density, pressure)
+
+    def build(st):
+        if st.at("expansion"):
+            st.controller = expansion(pressure, gain, rate, stress_tolerance, prep_unbalanced)
+            st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller], max_dt=st.place["max_dt"])
+        else:
+            st.controller = consolidation(pressure, gain, rate, stress_tolerance, unbalanced)
+            st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller])
+
+    def fold(st):
+        if st.at("expansion"):
+            st.place["grown_scale"] *= st.controller.scale
+
+    st = _checkpointed.Stages(scene, place, checkpoints, build, fold)
+    if st.at("expansion"):
+        if not st.run("expansion", 2000, lambda: st.controller.reached, max_steps, progress):
+            raise PreparationError("expansion did not converge within %d steps (p or unbalanced force off target)"
+                                   % max_steps)
+        fold(st)
+        # Back to the sampled radii exactly: they were placed at start_scale and grew since.
+        st.scene.rescale(1.0 / (st.place["start_scale"] * st.place["grown_scale"]))
+        st.scene.cell_ref = st.scene.cell
+        st.scene.friction = mu_final
+        st.advance("consolidation")
+    if not st.run("consolidation", 2000, lambda: st.controller.reached, max_steps, progress):
+        raise PreparationError("consolidation did not converge within %d steps (p or unbalanced force off target)"
+                               % max_steps)
+    scene = st.scene
     scene.velocity_gradient = np.zeros((3, 3))
     scene.velocities = np.zeros((scene.num_bodies, 3))
     scene.angular_velocities = np.zeros((scene.num_bodies, 3))
@@ -149,10 +178,12 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
     log = dict(n=n, seed=seed, pressure=pressure, mu_prep=mu_prep, mu_final=mu_final,
                phi_cell=phi_cell, damping=damping, inertial_number=inertial_number,
                prep_unbalanced=prep_unbalanced, unbalanced=unbalanced,
-               stress_tolerance=stress_tolerance, gain=gain, radius_scale=scale * grow.scale,
-               steps_expansion=steps_grow, steps_consolidation=steps_hold,
-               wall_time=time.time() - t0,
-               d50=size_distribution.d50, cu=size_distribution.cu)
+               stress_tolerance=stress_tolerance, gain=gain,
+               radius_scale=st.place["start_scale"] * st.place["grown_scale"],
+               steps_expansion=st.steps("expansion"), steps_consolidation=st.steps("consolidation"),
+               wall_time=st.elapsed(), d50=size_distribution.d50, cu=size_distribution.cu)
+    if checkpoints is not None:
+        log["checkpoint_every"] = checkpoints.every
     return scene, log
 
 

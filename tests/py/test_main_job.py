@@ -180,6 +180,29 @@ def test_kill_9_leaves_no_stale_summary_and_the_rerun_completes(first, tmp_path)
     assert summary["states"] == 4 and summary["probes"] == 12 == len(rows(out))
 
 
+def test_killed_while_preparing_resumes_to_the_same_specimen(first, tmp_path):
+    """Before: a kill while the specimen was prepared lost all of that work (82 min for clump1 at
+    4000 clumps). Now the rerun resumes from the last checkpoint, to the same bits."""
+    out = tmp_path / "W"
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    p = subprocess.Popen(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
+                          "--ids", "1,5"], env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    for line in p.stdout:  # kill just after the first checkpoint of the preparation
+        if line.startswith("checkpoint:"):
+            break
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    assert not (out / "specimen.npz").exists() and (out / ".specimen.npz.checkpoint").exists()
+    proc = main_job(out, "--ids", "1,5")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "resuming the preparation from" in proc.stdout
+    assert not (out / ".specimen.npz.checkpoint").exists()
+    a = specimen_file.scene_arrays(specimen_file.load(str(first[0] / "specimen.npz"))[0])
+    b = specimen_file.scene_arrays(specimen_file.load(str(out / "specimen.npz"))[0])
+    assert all(np.array_equal(a[k], b[k]) for k in a)
+    assert [r["E"] for r in rows(out)] == [r["E"] for r in rows(first[0])]
+
+
 def test_two_studies_cannot_share_a_directory(tmp_path):
     """Before: two run_study.py runs on one --out mixed the specimens of two seeds."""
     from trueaniso import lock

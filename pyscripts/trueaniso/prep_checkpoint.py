@@ -1,0 +1,182 @@
+"""Checkpoints of a preparation in progress, so that an interrupted one resumes where it stopped.
+
+A preparation runs in stages (spheres: expansion, consolidation; clumps: a gas stage and a first
+stage before them). Every ``every`` steps it writes the scene and its place in the stages to one
+file, then goes on *from that file, reloaded*, exactly as a run resumed after an interruption
+does. Both continue from the same bits, so a resumed preparation ends in the specimen that an
+uninterrupted one writes (tests/py/test_prep_checkpoint.py). Reloading is what makes this exact: a
+scene in memory carries more than its file (contacts inside the detection skin, the controllers'
+memory, each contact's radius as grown step by step), and all of it is rebuilt from the file in
+both runs.
+
+The file is bound to the recipe: the options that make the specimen, the engine threads (the
+packing depends on them) and the code version. A run with other options or code refuses to go on
+from it, naming what differs and the way out. ``every`` = 0 writes no checkpoints: then the
+specimen is bit for bit what the code before checkpoints made (how the committed specimens were
+prepared; docs/specimens.md).
+"""
+import json
+import os
+import time
+
+from . import engines, provenance, specimen_file
+from .refusal import Refusal
+
+EVERY = 50_000  # steps: 3 min of a 4000-sphere preparation, 11 min of clump1-4000, 30 min at 53,004
+
+
+class CheckpointMismatch(Refusal):
+    """The checkpoint was written by a preparation with other options or code."""
+
+
+def path_for(out):
+    """The checkpoint of the preparation of specimen file `out`: hidden beside it, like its lock."""
+    directory, name = os.path.split(os.path.abspath(out))
+    return os.path.join(directory, ".%s.checkpoint" % name)
+
+
+def for_specimen(out, settings, every=EVERY, log=None):
+    """The checkpoints of the preparation of specimen file `out` with `settings` (a dict of every
+    option that makes the specimen: assembly, count, seed, recipe), bound also to the engine
+    threads (set them first) and the code version."""
+    recipe = dict(settings, threads=engines.threads(), code=provenance.code_version(), every=every)
+    return Checkpoints(path_for(out), recipe, every, log)
+
+
+def saved_threads(path):
+    """The engine threads of the checkpoint `path`, or None when there is none: an interrupted
+    preparation continues at its own count (its bits depend on it)."""
+    ck = Checkpoints(path, {})
+    saved = ck.saved_recipe()
+    return None if saved is None else saved.get("threads")
+
+
+def _normal(obj):
+    return json.loads(json.dumps(obj, sort_keys=True))
+
+
+class Checkpoints:
+    """Where a preparation writes its place (``path``), what it is bound to (``recipe``, a
+    JSON-able dict) and how often (``every`` steps; 0: never)."""
+
+    def __init__(self, path, recipe, every=EVERY, log=None):
+        if not (isinstance(every, int) and every >= 0):
+            raise ValueError("checkpoint interval must be an integer >= 0 (steps), not %r" % (every,))
+        self.path, self.recipe, self.every = path, _normal(recipe), every
+        self.log = log or (lambda m: None)
+        self.since = 0  # steps since the last checkpoint (or the start of this run)
+
+    def saved_recipe(self):
+        """The recipe of the checkpoint on disk, or None when there is none (read without the
+        scene: to adopt its thread count before the engines start)."""
+        if not os.path.exists(self.path):
+            return None
+        try:
+            _, meta = specimen_file.read(self.path)
+            return meta["parameters"]["checkpoint"]["recipe"]
+        except (specimen_file.SpecimenFileError, KeyError, TypeError) as exc:
+            raise CheckpointMismatch("the preparation checkpoint %s is unusable (%s); remove it, or use --force "
+                                     "to prepare from the start" % (self.path, exc)) from None
+
+    def resume(self):
+        """(scene, place) of the checkpoint on disk, or None. Refuses one of another recipe."""
+        saved = self.saved_recipe()
+        if saved is None:
+            return None
+        diff = sorted(k for k in set(saved) | set(self.recipe) if saved.get(k) != self.recipe.get(k))
+        if diff:
+            raise CheckpointMismatch(
+                "the preparation checkpoint %s was made with other settings (%s); this run cannot go on "
+                "from it. Use the same options (and code) to resume, or --force to prepare from the start"
+                % (self.path, "; ".join("%s: %s there, %s here" % (k, saved.get(k), self.recipe.get(k))
+                                        for k in diff)))
+        scene, meta = specimen_file.load(self.path)
+        place = meta["parameters"]["checkpoint"]["place"]
+        self.log("resuming the preparation from %s (stage %s, %d steps done)"
+                 % (self.path, place["stage"], sum(place["steps"].values())))
+        return scene, place
+
+    def due(self, steps):
+        """Counts `steps` just run; True when a checkpoint is due."""
+        self.since += steps
+        return self.every > 0 and self.since >= self.every
+
+    def write(self, scene, place):
+        """Writes the checkpoint atomically and returns the scene reloaded from it (module doc)."""
+        specimen_file.save(self.path, scene, parameters=dict(checkpoint=dict(recipe=self.recipe, place=place)))
+        self.since = 0
+        reloaded, meta = specimen_file.load(self.path)
+        self.log("checkpoint: stage %s, %d steps (%s)" % (place["stage"], sum(place["steps"].values()), self.path))
+        return reloaded
+
+    def remove(self):
+        if os.path.exists(self.path):
+            os.unlink(self.path)
+
+
+class Stages:
+    """The place of a preparation in its stages, and the loop every stage runs.
+
+    ``place`` is what a checkpoint holds besides the scene: the current stage, the steps each
+    stage has run, and whatever the recipe carries from stage to stage (the radius scale grown
+    so far, the time step cap, the elapsed time). ``build(stages)`` makes the current stage's
+    chain and controller for ``stages.scene``: after a checkpoint's reload, and whenever a stage
+    asks for new engines.
+    """
+
+    def __init__(self, scene, place, checkpoints=None, build=None, fold=None):
+        self.scene, self.place, self.checkpoints = scene, place, checkpoints
+        self.build, self.fold = build, fold
+        self.chain = self.controller = None
+        self.t0 = time.time()
+
+    def at(self, stage):
+        return self.place["stage"] == stage
+
+    def steps(self, stage):
+        return self.place["steps"].get(stage, 0)
+
+    def elapsed(self):
+        return self.place.get("elapsed", 0.0) + time.time() - self.t0
+
+    def run(self, stage, chunk, finished, max_steps, progress=None, label=None, check_first=False):
+        """Runs the current stage `stage` in chunks until finished() (checked before each chunk
+        if check_first, else after it) or max_steps of it (then returns False)."""
+        if not self.at(stage):
+            return True
+        steps = self.place["steps"]
+        steps.setdefault(stage, 0)
+        if self.chain is None:
+            self.build(self)
+        ok = True
+        while True:
+            if check_first and finished():
+                break
+            if steps[stage] >= max_steps:
+                ok = False
+                break
+            n = self.chain.run(min(chunk, max_steps - steps[stage]))
+            steps[stage] += n
+            if progress:
+                progress(label or stage, self.scene, self.controller, steps[stage])
+            if not check_first and finished():
+                break
+            if self.checkpoints is not None and self.checkpoints.due(n):
+                self.checkpoint()
+        return ok
+
+    def checkpoint(self):
+        """Writes the place and goes on from the reloaded scene with new engines (module doc)."""
+        if self.fold:
+            self.fold(self)  # e.g. the radius scale the controller grew, before it is replaced
+        self.place["elapsed"] = self.elapsed()
+        self.t0 = time.time()
+        self.scene = self.checkpoints.write(self.scene, self.place)
+        self.chain = self.controller = None
+        self.build(self)
+
+    def advance(self, stage, new_engines=True):
+        """On to `stage`; with new engines (built when it starts) or the current ones."""
+        self.place["stage"] = stage
+        if new_engines:
+            self.chain = self.controller = None

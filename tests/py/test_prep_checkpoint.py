@@ -1,0 +1,159 @@
+"""An interrupted preparation resumes from its last checkpoint to the specimen an uninterrupted one
+makes, bit for bit (prep_checkpoint's module doc says why it reloads in both runs); a checkpoint of
+other settings is refused; the script cleans up, adopts the checkpoint's thread count, and gets
+through kill -9."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from conftest import SCRIPTS, one_line_error, run_script
+from trueaniso import clump_specimen, engines, prep_checkpoint, specimen, specimen_file
+
+
+@pytest.fixture(autouse=True)
+def one_thread():
+    threads = engines.threads()
+    engines.set_threads(1)  # the packing depends on the count; the recipe records it
+    yield
+    engines.set_threads(threads)
+
+
+class Interrupt(Exception):
+    pass
+
+
+def _stop_after_checkpoints(path, count):
+    """A progress hook that stops the run (as a kill would) once `count` checkpoints were written."""
+    seen = {"n": 0, "mtime": None}
+
+    def hook(label, scene, engine, steps):
+        if os.path.exists(path):
+            m = os.stat(path).st_mtime_ns
+            if m != seen["mtime"]:
+                seen["mtime"], seen["n"] = m, seen["n"] + 1
+                if seen["n"] >= count:
+                    raise Interrupt()
+    return hook
+
+
+def _same_bits(a, b):
+    x, y = specimen_file.scene_arrays(a), specimen_file.scene_arrays(b)
+    differ = [k for k in x if not np.array_equal(np.asarray(x[k]), np.asarray(y[k]))]
+    assert not differ, "arrays differ: %s" % differ
+
+
+def _resumed_equals_uninterrupted(tmp_path, prepare, every, stop_after):
+    whole = prep_checkpoint.Checkpoints(str(tmp_path / "whole.ck"), dict(case=1), every)
+    written = []
+    whole.log = written.append
+    ref, ref_log = prepare(whole, None)
+    assert sum("checkpoint:" in m for m in written) >= stop_after + 1  # else nothing is resumed below
+
+    path = str(tmp_path / "cut.ck")
+    with pytest.raises(Interrupt):
+        prepare(prep_checkpoint.Checkpoints(path, dict(case=1), every), _stop_after_checkpoints(path, stop_after))
+    again = prep_checkpoint.Checkpoints(path, dict(case=1), every)
+    said = []
+    again.log = said.append
+    got, got_log = prepare(again, None)
+    assert said and said[0].startswith("resuming the preparation from")
+    _same_bits(ref, got)
+    for k in ("steps_expansion", "steps_consolidation"):
+        assert got_log[k] == ref_log[k]
+    return ref, got_log
+
+
+def test_spheres_resume_to_the_same_bits(tmp_path):
+    # 100 spheres take ~110,000 steps: checkpoints every 20,000 land in the expansion; the cut
+    # after the second leaves work in both stages.
+    def prepare(ck, hook):
+        return specimen.prepare_spheres(100, seed=7, checkpoints=ck, progress=hook)
+    ref, log = _resumed_equals_uninterrupted(tmp_path, prepare, 20_000, 2)
+    # Without checkpoints the specimen is another one (reloads change the last bits), which is
+    # why the interval is part of the recipe; and a checkpoint never due changes nothing.
+    plain, _ = specimen.prepare_spheres(100, seed=7)
+    never, _ = specimen.prepare_spheres(100, seed=7, checkpoints=prep_checkpoint.Checkpoints(
+        str(tmp_path / "never.ck"), {}, 10_000_000))
+    _same_bits(plain, never)
+    assert not np.array_equal(plain.positions, ref.positions)
+
+
+def test_clumps_resume_to_the_same_bits_across_stages(tmp_path):
+    # clump1's recipe has four stages (gas, stage 1 with rotations blocked, expansion, consolidation);
+    # 60 dimers at inertial number 0.05 take ~20,000 steps, checkpoints every 3,000 cut each stage.
+    def prepare(ck, hook):
+        return clump_specimen.prepare_clumps("clump1", 60, seed=4, inertial_number=5e-2, shape="dimer-1.5",
+                                             checkpoints=ck, progress=hook)
+    _, log = _resumed_equals_uninterrupted(tmp_path, prepare, 3_000, 3)
+    assert log["steps_consolidation"] > 0
+
+
+def test_a_checkpoint_of_other_settings_is_refused(tmp_path):
+    path = str(tmp_path / "ck")
+    with pytest.raises(Interrupt):
+        specimen.prepare_spheres(100, seed=7, progress=_stop_after_checkpoints(path, 1),
+                                 checkpoints=prep_checkpoint.Checkpoints(path, dict(seed=7, n=100), 20_000))
+    other = prep_checkpoint.Checkpoints(path, dict(seed=8, n=100), 20_000)
+    with pytest.raises(prep_checkpoint.CheckpointMismatch, match="seed: 7 there, 8 here.*--force"):
+        specimen.prepare_spheres(100, seed=8, checkpoints=other)
+    with open(path, "wb") as f:
+        f.write(b"not a checkpoint")
+    with pytest.raises(prep_checkpoint.CheckpointMismatch, match="unusable.*remove it, or use --force"):
+        specimen.prepare_spheres(100, seed=7, checkpoints=prep_checkpoint.Checkpoints(path, dict(seed=7, n=100)))
+
+
+def _script(out, *extra):
+    return [sys.executable, os.path.join(SCRIPTS, "prepare_specimen.py"), "--n", "100", "--seed", "9",
+            "--checkpoint-every", "20000", "--progress-every", "0", "--out", str(out), *extra]
+
+
+def test_script_killed_then_rerun_writes_the_uninterrupted_specimen(tmp_path):
+    whole = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--checkpoint-every", 20000, "--threads", 1,
+                       "--out", tmp_path / "whole.npz")
+    assert whole.returncode == 0, whole.stderr
+    assert not os.path.exists(prep_checkpoint.path_for(str(tmp_path / "whole.npz")))  # removed once saved
+
+    out = tmp_path / "cut.npz"
+    ck = prep_checkpoint.path_for(str(out))
+    proc = subprocess.Popen(_script(out, "--threads", "1"), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env=dict(os.environ, OMP_NUM_THREADS="1"))
+    deadline = time.time() + 300
+    while not os.path.exists(ck) and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.05)
+    assert proc.poll() is None, "finished before its first checkpoint"
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert os.path.exists(ck) and not out.exists()
+
+    # A rerun without --threads continues at the checkpoint's count, and says so.
+    again = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--checkpoint-every", 20000,
+                       "--out", out, env=dict(OMP_NUM_THREADS="2"))
+    assert again.returncode == 0, again.stderr
+    assert "continuing its interrupted preparation at its 1 engine thread" in again.stdout
+    assert "resuming the preparation from" in again.stdout
+    assert not os.path.exists(ck)
+    a, _ = specimen_file.load(str(tmp_path / "whole.npz"))
+    b, meta = specimen_file.load(str(out))
+    _same_bits(a, b)
+    assert meta["parameters"]["checkpoint_every"] == 20000 and meta["parameters"]["threads"] == 1
+
+
+def test_script_refuses_other_options_on_a_checkpoint_and_force_starts_over(tmp_path):
+    out = tmp_path / "s.npz"
+    ck = prep_checkpoint.path_for(str(out))
+    with pytest.raises(Interrupt):
+        specimen.prepare_spheres(100, seed=9, progress=_stop_after_checkpoints(ck, 1),
+                                 checkpoints=prep_checkpoint.Checkpoints(ck, dict(seed=9), 20_000))
+    proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--out", out)
+    one_line_error(proc, "other settings", "--force")
+    assert os.path.exists(ck) and not out.exists()  # nothing lost by the refusal
+    forced = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 0,
+                        "--force", "--out", out)
+    assert forced.returncode == 0, forced.stderr
+    assert "removed the checkpoint of an earlier preparation" in forced.stdout
+    assert out.exists() and not os.path.exists(ck)
