@@ -12,6 +12,7 @@ estimated before any work, and a specimen that cannot fit in this machine's memo
 Inside yade-double the result is also written into O (cell and spheres) for viewing or export.
 """
 import json
+import math
 import os
 import sys
 import time
@@ -50,11 +51,14 @@ def options(argv=None):
                    help="cap of the expansion/compression rate as an inertial number")
     p.add_argument("--unbalanced", type=cli.finite, default=1e-3, help="unbalanced force of the final state")
     cli.add_threads_option(p, study=True)
-    p.add_argument("--checkpoint-every", type=cli.count, default=prep_checkpoint.EVERY,
-                   help="steps between checkpoints of the preparation, from which an interrupted run resumes "
-                        "(0: none; the specimen is then bit for bit what versions before checkpoints made)")
+    p.add_argument("--checkpoint-every", type=cli.count, default=None,
+                   help="steps between checkpoints of the preparation, from which an interrupted run resumes; "
+                        "default %d, or an interrupted preparation's own (0: none; the specimen is then bit for "
+                        "bit what versions before checkpoints made)" % prep_checkpoint.EVERY)
     p.add_argument("--out", required=True, help="specimen file (.npz); a .json summary is written beside it")
-    p.add_argument("--force", action="store_true", help="prepare again even if --out is a valid specimen")
+    p.add_argument("--force", action="store_true",
+                   help="prepare again even if --out is a valid specimen (an interrupted preparation with these "
+                        "settings still resumes; one with other settings is discarded)")
     p.add_argument("--wait", action="store_true",
                    help="if another run is preparing --out, wait for it instead of refusing")
     p.add_argument("--progress-every", type=cli.non_negative, default=progress.EVERY,
@@ -125,11 +129,12 @@ def main():
         for stray in os.listdir(directory):
             if stray.startswith(".tmp-") and stray.endswith(("-" + name, "-" + name[:-4] + ".json", "-" + checkpoint)):
                 os.unlink(os.path.join(directory, stray))
-        if o.force and os.path.exists(os.path.join(directory, checkpoint)):
-            os.unlink(os.path.join(directory, checkpoint))
-            print("removed the checkpoint of an earlier preparation of %s (--force)" % o.out, flush=True)
-        # An interrupted preparation goes on at its own thread count; nothing else to continue.
+        # An interrupted preparation goes on at its own thread count and checkpoint interval (its
+        # bits depend on both) unless they are given.
         cli.resolve_threads(o, study=False, preparation=prep_checkpoint.path_for(o.out))
+        if o.checkpoint_every is None:
+            saved = prep_checkpoint.Checkpoints(prep_checkpoint.path_for(o.out), {}).saved_recipe() or {}
+            o.checkpoint_every = saved.get("every", prep_checkpoint.EVERY)
         if o.threads:
             engines.set_threads(o.threads)
         prepare(o, dist)
@@ -142,14 +147,45 @@ def settings(o):
                 unbalanced=o.unbalanced)
 
 
+def differences(o, meta):
+    """The settings of this run that the specimen file was not made with ("seed: 5 there, 1 here");
+    settings a file does not record (older files) are not compared."""
+    p = meta.get("parameters", {})
+    have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"))
+    out = []
+    for k, want in settings(o).items():
+        got = have.get(k)
+        if got is None:
+            continue
+        if isinstance(got, (int, float)) and isinstance(want, (int, float)):
+            same = math.isclose(got, want, rel_tol=1e-9)  # d50 is stored as the distribution computed it
+        else:
+            same = got == want
+        if not same:
+            out.append("%s: %s there, %s here" % (k, got, want))
+    return out
+
+
 def prepare(o, dist):
+    checkpoints = prep_checkpoint.for_specimen(o.out, settings(o), o.checkpoint_every,
+                                               log=None if o.quiet else lambda m: print(m, flush=True))
     if os.path.exists(o.out) and not o.force:
         try:
             scene, meta = specimen_file.load(o.out)
         except specimen_file.SpecimenFileError as exc:
             raise cli.InputError("%s exists but is not usable (%s); remove it or use --force" % (o.out, exc))
+        diff = differences(o, meta)
+        if diff:
+            raise cli.InputError("%s exists and was prepared with other settings (%s); use --force to prepare it "
+                                 "again (it is replaced only when the new one is complete), or another --out"
+                                 % (o.out, "; ".join(diff)))
         print("kept existing specimen %s (use --force to prepare again)" % o.out)
-        prep_checkpoint.Checkpoints(prep_checkpoint.path_for(o.out), {}).remove()  # a run killed after its save
+        pending = checkpoints.differences()
+        if pending == []:
+            checkpoints.remove()  # of a run killed after its save
+        elif pending:
+            print("kept the checkpoint %s of an interrupted preparation with other settings (%s): running with "
+                  "those settings and --force resumes it" % (checkpoints.path, "; ".join(pending)))
         if specimen_file.ensure_summary(o.out, meta):
             print("wrote the missing summary %s from the specimen" % specimen_file.summary_path(o.out))
         report(scene, meta.get("parameters", {}), o)
@@ -167,8 +203,11 @@ def prepare(o, dist):
               % (o.n, o.assembly, o.seed, o.d50, o.cu, o.pressure / 1e3, resources.human_bytes(memory),
                  resources.human_seconds(seconds)), flush=True)
     t0 = time.time()
-    checkpoints = prep_checkpoint.for_specimen(o.out, settings(o), o.checkpoint_every,
-                                               log=None if o.quiet else lambda m: print(m, flush=True))
+    stale = checkpoints.differences()
+    if stale and o.force:  # (one of these settings resumes; another one is refused before any work)
+        checkpoints.remove()
+        print("removed the checkpoint of an earlier preparation of %s with other settings (%s) (--force)"
+              % (o.out, "; ".join(stale)), flush=True)
     try:
         if o.assembly == "sphere":
             scene, log = specimen.prepare_spheres(
@@ -206,4 +245,4 @@ def report(scene, log, o):
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing
-    cli.guarded(main)
+    cli.guarded(main, resumable=True)

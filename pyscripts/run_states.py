@@ -200,4 +200,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing
-    cli.guarded(main)
+    cli.guarded(main, resumable=True)

@@ -140,7 +140,7 @@ def prepare(o, log):
     t0 = time.time()
     bar = progress.Progress("specimen", log, o.progress_every)
     # Checkpoints every so many steps: a run killed while it prepares resumes (prep_checkpoint).
-    checkpoints = prep_checkpoint.for_specimen(path, recipe(o), log=log)
+    checkpoints = prep_checkpoint.for_specimen(path, recipe(o), log=log, way_out="--force-new")
     if o.assembly == "sphere":
         scene, params = specimen.prepare_spheres(o.n, seed=o.seed, progress=bar.preparation, checkpoints=checkpoints)
     else:
@@ -224,4 +224,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing
-    cli.guarded(main)
+    cli.guarded(main, resumable=True)

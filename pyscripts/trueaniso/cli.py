@@ -69,10 +69,11 @@ def resolve_threads(o, study=True, preparation=None):
     holds (its bits depend on it), so that a rerun continues it instead of being refused for a
     thread count the user never chose; else 0 (all cores). Says which. The work: the study in
     the directory --out (study=True; recorded in its metadata), or else the interrupted
-    preparation whose checkpoint is `preparation` (prep_checkpoint). --force-new (a study) and
-    --force (a specimen) start afresh: 0."""
+    preparation whose checkpoint is `preparation` (prep_checkpoint). --force-new starts a study
+    afresh: 0. (prepare_specimen.py's --force redoes a finished specimen; an interrupted
+    preparation of the same settings still resumes, so its count is still adopted.)"""
     from . import prep_checkpoint, study_dir
-    fresh = getattr(o, "force_new", False) or getattr(o, "force", False)
+    fresh = getattr(o, "force_new", False)
     continued = None
     if o.threads is None and not fresh:
         if study:
@@ -261,8 +262,9 @@ def parse(parser, argv=None):
     return parser.parse_args(argv)
 
 
-def guarded(main):
-    """Run main(); refusals and ValueError become one line and exit 2."""
+def guarded(main, resumable=False):
+    """Run main(); refusals and ValueError become one line and exit 2. A resumable script (its
+    work continues from checkpoints: studies, preparations) says so when interrupted."""
     try:
         main()
     except (Refusal, ValueError) as exc:
@@ -270,4 +272,4 @@ def guarded(main):
         # engine); a traceback would hide the one line the user needs.
         fail(str(exc))
     except KeyboardInterrupt:
-        fail("interrupted", 130)
+        fail("interrupted; the same command resumes from the last checkpoint" if resumable else "interrupted", 130)

@@ -223,8 +223,9 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
             st.place["grown_scale"] *= st.controller.scale
 
     st = _checkpointed.Stages(scene, place, checkpoints, build, fold)
-    st.run("gas", 500, lambda: st.controller.pressure >= 0.01 * pressure, max_steps, progress,
-           "expansion (gas)", check_first=True)  # long specimens spend minutes here: say so
+    if not st.run("gas", 500, lambda: st.controller.pressure >= 0.01 * pressure, max_steps, progress,
+                  "expansion (gas)", check_first=True):  # long specimens spend minutes here: say so
+        raise PreparationError("the loose packing did not take 1 %% of the pressure within %d steps" % max_steps)
     if st.at("gas"):
         st.controller.max_growth_rate = rate
         st.advance("stage 1" if r["stage1_pressure"] < pressure else "expansion", new_engines=False)
@@ -233,8 +234,10 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
     # fabric densifies). Waiting for balance at stage1_pressure with rotations blocked only let the
     # blocked packing creep (470,000 steps at 300 clumps for e 0.78 -> 0.71), and the creep is
     # undone by the free stage anyway.
-    st.run("stage 1", 500, lambda: st.controller.pressure >= r["stage1_pressure"],
-           max_steps - st.steps("gas"), progress, "stage 1 (rotations %s)" % r["stage1_rotations"], check_first=True)
+    if not st.run("stage 1", 500, lambda: st.controller.pressure >= r["stage1_pressure"],
+                  max_steps - st.steps("gas"), progress, "stage 1 (rotations %s)" % r["stage1_rotations"],
+                  check_first=True):
+        raise PreparationError("stage 1 did not reach %.4g Pa within %d steps" % (r["stage1_pressure"], max_steps))
     if st.at("stage 1"):
         st.scene.block_rotations = False
         st.advance("expansion", new_engines=False)

@@ -35,12 +35,12 @@ def path_for(out):
     return os.path.join(directory, ".%s.checkpoint" % name)
 
 
-def for_specimen(out, settings, every=EVERY, log=None):
+def for_specimen(out, settings, every=EVERY, log=None, way_out="--force"):
     """The checkpoints of the preparation of specimen file `out` with `settings` (a dict of every
     option that makes the specimen: assembly, count, seed, recipe), bound also to the engine
     threads (set them first) and the code version."""
     recipe = dict(settings, threads=engines.threads(), code=provenance.code_version(), every=every)
-    return Checkpoints(path_for(out), recipe, every, log)
+    return Checkpoints(path_for(out), recipe, every, log, way_out)
 
 
 def saved_threads(path):
@@ -59,11 +59,12 @@ class Checkpoints:
     """Where a preparation writes its place (``path``), what it is bound to (``recipe``, a
     JSON-able dict) and how often (``every`` steps; 0: never)."""
 
-    def __init__(self, path, recipe, every=EVERY, log=None):
+    def __init__(self, path, recipe, every=EVERY, log=None, way_out="--force"):
         if not (isinstance(every, int) and every >= 0):
             raise ValueError("checkpoint interval must be an integer >= 0 (steps), not %r" % (every,))
         self.path, self.recipe, self.every = path, _normal(recipe), every
         self.log = log or (lambda m: None)
+        self.way_out = way_out  # the option that starts afresh, named in refusals
         self.since = 0  # steps since the last checkpoint (or the start of this run)
 
     def saved_recipe(self):
@@ -75,24 +76,31 @@ class Checkpoints:
             _, meta = specimen_file.read(self.path)
             return meta["parameters"]["checkpoint"]["recipe"]
         except (specimen_file.SpecimenFileError, KeyError, TypeError) as exc:
-            raise CheckpointMismatch("the preparation checkpoint %s is unusable (%s); remove it, or use --force "
-                                     "to prepare from the start" % (self.path, exc)) from None
+            raise CheckpointMismatch("the preparation checkpoint %s is unusable (%s); remove it, or use %s "
+                                     "to prepare from the start" % (self.path, exc, self.way_out)) from None
 
-    def resume(self):
-        """(scene, place) of the checkpoint on disk, or None. Refuses one of another recipe."""
+    def differences(self):
+        """What differs between the checkpoint on disk and this run ("seed: 7 there, 8 here"), []
+        when it is this run's, None when there is none."""
         saved = self.saved_recipe()
         if saved is None:
             return None
-        diff = sorted(k for k in set(saved) | set(self.recipe) if saved.get(k) != self.recipe.get(k))
+        return ["%s: %s there, %s here" % (k, saved.get(k), self.recipe.get(k))
+                for k in sorted(set(saved) | set(self.recipe)) if saved.get(k) != self.recipe.get(k)]
+
+    def resume(self):
+        """(scene, place) of the checkpoint on disk, or None. Refuses one of another recipe."""
+        diff = self.differences()
+        if diff is None:
+            return None
         if diff:
             raise CheckpointMismatch(
                 "the preparation checkpoint %s was made with other settings (%s); this run cannot go on "
-                "from it. Use the same options (and code) to resume, or --force to prepare from the start"
-                % (self.path, "; ".join("%s: %s there, %s here" % (k, saved.get(k), self.recipe.get(k))
-                                        for k in diff)))
+                "from it. Use the same options (and code) to resume, or %s to prepare from the start"
+                % (self.path, "; ".join(diff), self.way_out))
         scene, meta = specimen_file.load(self.path)
         place = meta["parameters"]["checkpoint"]["place"]
-        self.log("resuming the preparation from %s (stage %s, %d steps done)"
+        self.log("resuming the preparation from %s (%s, %d steps done)"
                  % (self.path, place["stage"], sum(place["steps"].values())))
         return scene, place
 
@@ -106,10 +114,14 @@ class Checkpoints:
         specimen_file.save(self.path, scene, parameters=dict(checkpoint=dict(recipe=self.recipe, place=place)))
         self.since = 0
         reloaded, meta = specimen_file.load(self.path)
-        self.log("checkpoint: stage %s, %d steps (%s)" % (place["stage"], sum(place["steps"].values()), self.path))
+        self.log("checkpoint: %s, step %d of it, %d in all (%s)" % (place["stage"], place["steps"][place["stage"]],
+                                                                  sum(place["steps"].values()), self.path))
         return reloaded
 
     def remove(self):
+        if os.path.isdir(self.path):
+            raise CheckpointMismatch("%s should be a preparation checkpoint but is a directory; move it away"
+                                     % self.path)
         if os.path.exists(self.path):
             os.unlink(self.path)
 
@@ -140,30 +152,34 @@ class Stages:
         return self.place.get("elapsed", 0.0) + time.time() - self.t0
 
     def run(self, stage, chunk, finished, max_steps, progress=None, label=None, check_first=False):
-        """Runs the current stage `stage` in chunks until finished() (checked before each chunk
-        if check_first, else after it) or max_steps of it (then returns False)."""
+        """Runs the current stage `stage` in chunks until finished(), checked after each chunk and,
+        if check_first (a stage that may have nothing left to do), before the first; False when
+        max_steps of the stage ran out first."""
         if not self.at(stage):
             return True
         steps = self.place["steps"]
         steps.setdefault(stage, 0)
-        if self.chain is None:
+        fresh = self.chain is None  # new engines (a start, a resume): finished() has nothing measured yet
+        if fresh:
             self.build(self)
-        ok = True
         while True:
-            if check_first and finished():
-                break
+            # A condition checked first reads the controller's last measurement; a checkpoint is
+            # written only when the stage is not finished, so after its reload the stage goes on
+            # without asking (the new controller has measured nothing: it would say p = 0).
+            if check_first and not fresh and finished():
+                return True
             if steps[stage] >= max_steps:
-                ok = False
-                break
+                return False
             n = self.chain.run(min(chunk, max_steps - steps[stage]))
+            fresh = False
             steps[stage] += n
             if progress:
                 progress(label or stage, self.scene, self.controller, steps[stage])
-            if not check_first and finished():
-                break
+            if finished():
+                return True
             if self.checkpoints is not None and self.checkpoints.due(n):
                 self.checkpoint()
-        return ok
+                fresh = True
 
     def checkpoint(self):
         """Writes the place and goes on from the reloaded scene with new engines (module doc)."""

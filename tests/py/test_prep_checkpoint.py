@@ -85,12 +85,18 @@ def test_spheres_resume_to_the_same_bits(tmp_path):
 
 def test_clumps_resume_to_the_same_bits_across_stages(tmp_path):
     # clump1's recipe has four stages (gas, stage 1 with rotations blocked, expansion, consolidation);
-    # 60 dimers at inertial number 0.05 take ~20,000 steps, checkpoints every 3,000 cut each stage.
+    # 60 dimers at inertial number 0.05 take ~20,000 steps. A checkpoint every 500 steps, one chunk
+    # of the gas stage and stage 1, cuts every stage many times. Before: after such a checkpoint the
+    # new controller had measured nothing (p = 0), the gas stage asked it whether it was done and
+    # never ended: 5,000,000 steps, then stage 1 skipped, and a looser specimen saved (an outside
+    # try found it); max_steps stops that here.
     def prepare(ck, hook):
         return clump_specimen.prepare_clumps("clump1", 60, seed=4, inertial_number=5e-2, shape="dimer-1.5",
-                                             checkpoints=ck, progress=hook)
-    _, log = _resumed_equals_uninterrupted(tmp_path, prepare, 3_000, 3)
+                                             checkpoints=ck, progress=hook, max_steps=200_000)
+    _, log = _resumed_equals_uninterrupted(tmp_path, prepare, 500, 7)
+    _, plain = prepare(None, None)
     assert log["steps_consolidation"] > 0
+    assert log["steps_expansion"] < 1.5 * plain["steps_expansion"]  # reloads perturb the path, not its length
 
 
 def test_a_checkpoint_of_other_settings_is_refused(tmp_path):
@@ -157,3 +163,42 @@ def test_script_refuses_other_options_on_a_checkpoint_and_force_starts_over(tmp_
     assert forced.returncode == 0, forced.stderr
     assert "removed the checkpoint of an earlier preparation" in forced.stdout
     assert out.exists() and not os.path.exists(ck)
+
+
+def test_an_existing_specimen_of_other_settings_is_refused_and_a_checkpoint_beside_it_kept(tmp_path, specimen_100):
+    """Before: an existing --out was kept whatever the options asked (seed 5 kept for --seed 1),
+    and a checkpoint of an interrupted --force remake beside it was deleted without a word."""
+    import shutil
+    out = tmp_path / "s.npz"
+    shutil.copy(specimen_100, out)  # 100 spheres, seed 3
+    one_line_error(run_script("prepare_specimen.py", "--n", 100, "--seed", 4, "--threads", 1, "--out", out),
+                   "prepared with other settings", "seed: 3 there, 4 here", "--force")
+    ck = prep_checkpoint.path_for(str(out))
+    with pytest.raises(Interrupt):  # an interrupted remake with seed 4 (as --force --seed 4 would leave)
+        specimen.prepare_spheres(100, seed=4, progress=_stop_after_checkpoints(ck, 1),
+                                 checkpoints=prep_checkpoint.Checkpoints(ck, dict(seed=4), 20_000))
+    kept = run_script("prepare_specimen.py", "--n", 100, "--seed", 3, "--threads", 1, "--out", out)
+    assert kept.returncode == 0 and "kept existing specimen" in kept.stdout, kept.stderr
+    assert "kept the checkpoint" in kept.stdout and os.path.exists(ck)
+
+
+def test_force_resumes_a_checkpoint_of_its_own_settings_and_adopts_its_interval(tmp_path, specimen_100):
+    """--force redoes a finished specimen; an interrupted --force run of the same settings resumes
+    (starting over would give the same bits, later). Without --checkpoint-every, the checkpoint's
+    interval is taken, as its thread count is."""
+    import shutil
+    out = tmp_path / "s.npz"
+    shutil.copy(specimen_100, out)
+    ck = prep_checkpoint.path_for(str(out))
+    proc = subprocess.Popen(_script(out, "--threads", "1", "--force"), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=dict(os.environ, OMP_NUM_THREADS="1"))
+    deadline = time.time() + 300
+    while not os.path.exists(ck) and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert os.path.exists(ck)
+    again = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--force", "--out", out)
+    assert again.returncode == 0, again.stderr
+    assert "resuming the preparation from" in again.stdout and not os.path.exists(ck)
+    assert specimen_file.read(str(out))[1]["parameters"]["checkpoint_every"] == 20000
