@@ -12,14 +12,13 @@ estimated before any work, and a specimen that cannot fit in this machine's memo
 Inside yade-double the result is also written into O (cell and spheres) for viewing or export.
 """
 import json
-import math
 import os
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
 from trueaniso import (clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance, psd,  # noqa: E402
-                       resources, specimen, specimen_file)
+                       resources, specimen, specimen_file, study_dir)
 
 ASSEMBLIES = ("sphere", "clump1", "clump2")
 ALIASES = {"spheres": "sphere"}
@@ -112,7 +111,7 @@ def validate(o):
         raise cli.InputError(problem)
     # Memory goes with the member spheres (contacts, cell lists), not with the bodies.
     spheres = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
-    memory, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())  # None: at most all
+    memory, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
     resources.check_memory(memory, "a specimen of %d %s (%d member spheres)" % (o.n, o.assembly, spheres))
     return dist
 
@@ -123,7 +122,7 @@ def main():
     directory, name = os.path.split(os.path.abspath(o.out))
     # One preparation per output at a time; under the lock, the temporary files of an
     # interrupted preparation of this output are removed.
-    with lock.held(directory, wait=o.wait, name=".%s.lock" % name, what="specimen output",
+    with lock.held(directory, wait=o.wait, name=".%s.lock" % name, what="specimen output %s" % o.out,
                    log=lambda m: print(m, flush=True)):
         checkpoint = os.path.basename(prep_checkpoint.path_for(o.out))
         for stray in os.listdir(directory):
@@ -152,18 +151,8 @@ def differences(o, meta):
     settings a file does not record (older files) are not compared."""
     p = meta.get("parameters", {})
     have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"))
-    out = []
-    for k, want in settings(o).items():
-        got = have.get(k)
-        if got is None:
-            continue
-        if isinstance(got, (int, float)) and isinstance(want, (int, float)):
-            same = math.isclose(got, want, rel_tol=1e-9)  # d50 is stored as the distribution computed it
-        else:
-            same = got == want
-        if not same:
-            out.append("%s: %s there, %s here" % (k, got, want))
-    return out
+    want = {k: v for k, v in settings(o).items() if have.get(k) is not None}
+    return study_dir.said(study_dir.differences({k: have[k] for k in want}, want, rel_tol=1e-9))
 
 
 def prepare(o, dist):

@@ -33,8 +33,10 @@ def _holder(fd):
 
 
 @contextlib.contextmanager
-def held(directory, wait=False, log=print, name=LOCK_NAME, what="results directory"):
-    """Hold the lock of `directory` (created if missing) for the block."""
+def held(directory, wait=False, log=print, name=LOCK_NAME, what=None):
+    """Hold the lock of `directory` (created if missing) for the block; `what` names the thing
+    locked in messages (default: the results directory)."""
+    what = what or "results directory %s" % directory
     os.makedirs(directory, exist_ok=True)
     path = os.path.realpath(os.path.join(directory, name))
     if path in _held:
@@ -51,9 +53,9 @@ def held(directory, wait=False, log=print, name=LOCK_NAME, what="results directo
         except BlockingIOError:
             holder = _holder(fd)
             if not wait:
-                raise Busy("%s %s is in use by another run (%s); wait for it to end, or pass --wait to queue "
-                           "behind it" % (what, directory, holder)) from None
-            log("waiting for the run that holds %s %s (%s) ..." % (what, directory, holder))
+                raise Busy("%s is in use by another run (%s); wait for it to end, or pass --wait to queue "
+                           "behind it" % (what, holder)) from None
+            log("waiting for the run that holds %s (%s) ..." % (what, holder))
             fcntl.flock(fd, fcntl.LOCK_EX)
         os.ftruncate(fd, 0)
         os.lseek(fd, 0, os.SEEK_SET)

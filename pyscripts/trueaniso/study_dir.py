@@ -12,6 +12,7 @@ files (``.tmp-*``) that a killed run left behind are removed: no live writer can
 docs/runs.md states the contract.
 """
 import json
+import math
 import os
 import shutil
 import time
@@ -125,11 +126,24 @@ def _show(v):
 _ABSENT = object()
 
 
-def differences(old, new):
-    """[(field, value in the study, value in this run)] over the flattened fingerprints."""
+def differences(old, new, rel_tol=0.0):
+    """[(field, value there, value here)] over the flattened dicts (a field one lacks is _ABSENT).
+    The one comparison behind every refusal that names what differs: a study's fingerprint, a
+    preparation checkpoint's recipe, an existing specimen's settings. Numbers within `rel_tol`
+    are the same (a specimen file stores d50 as the size distribution computed it)."""
     a, b = _flat(old), _flat(new)
     return [(k, a.get(k, _ABSENT), b.get(k, _ABSENT)) for k in sorted(set(a) | set(b))
-            if a.get(k, _ABSENT) != b.get(k, _ABSENT)]
+            if not _same(a.get(k, _ABSENT), b.get(k, _ABSENT), rel_tol)]
+
+
+def said(diff):
+    """The differences in words, one per field: "seed: 7 there, 8 here"."""
+    return ["%s: %s there, %s here" % (k, _show(x), _show(y)) for k, x, y in diff]
+
+
+def _same(x, y, rel_tol):
+    numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (x, y))
+    return math.isclose(x, y, rel_tol=rel_tol) if numbers and rel_tol else x == y
 
 
 def states_table(states):

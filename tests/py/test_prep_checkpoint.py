@@ -99,18 +99,40 @@ def test_clumps_resume_to_the_same_bits_across_stages(tmp_path):
     assert log["steps_expansion"] < 1.5 * plain["steps_expansion"]  # reloads perturb the path, not its length
 
 
-def test_a_checkpoint_of_other_settings_is_refused(tmp_path):
+def test_a_checkpoint_of_other_settings_is_refused(tmp_path, monkeypatch):
     path = str(tmp_path / "ck")
     with pytest.raises(Interrupt):
         specimen.prepare_spheres(100, seed=7, progress=_stop_after_checkpoints(path, 1),
                                  checkpoints=prep_checkpoint.Checkpoints(path, dict(seed=7, n=100), 20_000))
     other = prep_checkpoint.Checkpoints(path, dict(seed=8, n=100), 20_000)
+    # One full read per version of the file, however often it is asked (before: one per question,
+    # 20 MB each at 53,004 spheres); a file written since is read again (below: "unusable").
+    reads = []
+    read = specimen_file.read
+    monkeypatch.setattr(specimen_file, "read", lambda p: reads.append(p) or read(p))
+    assert [other.differences(), other.differences(), prep_checkpoint.saved_threads(path)] == \
+        [["seed: 7 there, 8 here"]] * 2 + [None]  # (this recipe records no thread count)
+    assert len(reads) == 1
     with pytest.raises(prep_checkpoint.CheckpointMismatch, match="seed: 7 there, 8 here.*--force"):
         specimen.prepare_spheres(100, seed=8, checkpoints=other)
     with open(path, "wb") as f:
         f.write(b"not a checkpoint")
     with pytest.raises(prep_checkpoint.CheckpointMismatch, match="unusable.*remove it, or use --force"):
         specimen.prepare_spheres(100, seed=7, checkpoints=prep_checkpoint.Checkpoints(path, dict(seed=7, n=100)))
+
+
+def test_a_second_preparation_of_the_same_file_is_refused_naming_the_file(tmp_path):
+    """Before: the refusal named the directory ("specimen output /tmp/x is in use"), which holds
+    other specimens that can be prepared at the same time."""
+    from trueaniso import lock
+    out = tmp_path / "s.npz"
+    with lock.held(str(tmp_path), name=".s.npz.lock"):
+        proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--out", out)
+        other = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 0,
+                           "--out", tmp_path / "t.npz")
+    one_line_error(proc, "specimen output %s is in use by another run" % out, "--wait")
+    assert not out.exists()
+    assert other.returncode == 0, other.stderr  # another file of the same directory is not locked
 
 
 def _script(out, *extra):

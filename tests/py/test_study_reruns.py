@@ -283,3 +283,17 @@ def test_a_worker_returns_its_rows_and_the_state_not_reached(specimen_100, tmp_p
     assert [r["state"] for r, _ in got] == [6] and failure is None and (out / "states" / "6.npz").exists()
     got, failure = study._state_worker(run.job(path, 1))
     assert got == [] and "sigma_z = 80000 Pa not reached" in failure
+
+
+def test_differences_are_named_one_way_for_studies_checkpoints_and_specimens():
+    """study_dir.differences serves the study fingerprint, the preparation checkpoint and the
+    specimen file's settings: nested fields flattened, a missing field named, numbers within
+    rel_tol the same (a specimen stores d50 as the distribution computed it), text compared as text."""
+    from trueaniso import study_dir
+    there = dict(seed=3, d50=1e-3 * (1 + 1e-12), law=dict(mu=0.5), law_name="hertz")
+    here = dict(seed=4, d50=1e-3, law=dict(mu=0.5, rolling=0.1), law_name="hertz")
+    assert study_dir.said(study_dir.differences(there, here, rel_tol=1e-9)) == [
+        "law.rolling: absent there, 0.1 here", "seed: 3 there, 4 here"]
+    assert [k for k, _, _ in study_dir.differences(there, here)] == ["d50", "law.rolling", "seed"]
+    assert study_dir.said(study_dir.differences(dict(a="clump1"), dict(a="clump2"), rel_tol=0.5)) == [
+        'a: "clump1" there, "clump2" here']
