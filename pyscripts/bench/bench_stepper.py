@@ -98,7 +98,7 @@ def options():
     p.add_argument("--codes", default="ours,yade,lammps granular,lammps gran/hertz/history",
                    help="codes to time, comma separated, from: " + ", ".join(CODES))
     p.add_argument("--threads", default="1,2", help="thread counts to time, comma separated")
-    p.add_argument("--repeats", type=int, default=3, help="timed runs per setting (the best is kept)")
+    p.add_argument("--repeats", type=int, default=3, help="timed runs per setting (their median is reported)")
     p.add_argument("--tile", type=int, default=1, help="step the specimen tiled K x K x K times (K^3 x its spheres)")
     p.add_argument("--yade-steps", type=int, default=0, help="timed steps of YADE (0: 2000), slower by an order")
     p.add_argument("--doc", help="Markdown file whose stepper table is replaced")
