@@ -13,7 +13,14 @@ Inside yade-double the result is also written into O (cell and spheres) for view
 """
 import json
 import os
+import signal
 import sys
+
+# Ctrl-C while Python loads numpy and the engines (up to a second): one line and nothing written.
+# A KeyboardInterrupt there became a traceback, numpy's ImportError or a crash; cli.guarded
+# gives Ctrl-C back its usual meaning when the work starts.
+signal.signal(signal.SIGINT, lambda *_: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
+                                         os._exit(130)))
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))

@@ -22,6 +22,9 @@ def _find_extension():
             if path in sys.path:
                 sys.path.remove(path)
             sys.path.insert(0, path)
+    # numpy first, from Python: the module's C initialisation imports it too, and an exception
+    # there (Ctrl-C while numpy loads) crashed the interpreter (SIGSEGV) instead of raising.
+    import numpy  # noqa: F401
     try:
         import _trueaniso  # noqa: F401
     except ImportError as exc:  # pragma: no cover - message for users, tested by hand

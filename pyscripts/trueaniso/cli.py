@@ -10,6 +10,7 @@
 import argparse
 import math
 import os
+import signal
 import sys
 
 from . import param_table
@@ -265,6 +266,9 @@ def parse(parser, argv=None):
 def guarded(main, resumable=False):
     """Run main(); refusals and ValueError become one line and exit 2. A resumable script (its
     work continues from checkpoints: studies, preparations) says so when interrupted."""
+    # The scripts exit at once on Ctrl-C while they start (their first lines); from here on it
+    # raises KeyboardInterrupt again, as under yade-double, so that the line below says what to do.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         main()
     except (Refusal, ValueError) as exc:

@@ -182,3 +182,17 @@ def test_memory_estimate_bounds_the_measured_peak():
     assert 162.6e6 < memory < 1.5 * 162.6e6
     # yade-double alone is 252 MB with numpy and the module (measured): its allowance covers it
     assert resources.INTERPRETER_BYTES["yade"] > 252e6 > resources.INTERPRETER_BYTES["python3"]
+
+
+@pytest.mark.parametrize("name", ["prepare_specimen.py", "run_states.py", "run_study.py"])
+def test_ctrl_c_while_starting_is_one_line(tmp_path, name):
+    """Ctrl-C while a script still loads numpy and the engines (0.2-1 s) printed a traceback,
+    numpy's ImportError or crashed (SIGSEGV) before: the scripts' guard was not yet running.
+    A numpy whose import sends the script SIGINT stands for the key pressed in that window."""
+    fake = tmp_path / "fake" / "numpy"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("import os, signal, time\nos.kill(os.getpid(), signal.SIGINT)\ntime.sleep(30)\n")
+    proc = run_script(name, "--help", env={"PYTHONPATH": str(tmp_path / "fake")}, cwd=tmp_path, timeout=60)
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr == "error: interrupted while starting; nothing was done\n"
+    assert proc.stdout == "" and sorted(p.name for p in tmp_path.iterdir()) == ["fake"]
