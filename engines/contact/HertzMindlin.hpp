@@ -26,33 +26,49 @@ class HertzMindlin {
         hertzUnit_(4.0 / 3.0 * m.contactModulus() * std::sqrt(0.5)), beta_(m.rollingStiffness),
         etaR_(m.rollingFriction) {}
 
-  // What one evaluation gives a touching contact.
-  struct Response {
-    Real N;         // normal force (> 0)
-    Vec3 Fs;        // tangential force on sphere 2
-    bool sliding;   // at the Coulomb cap after this increment
+  // Touching contacts of one step, held by component so that the law runs over several contacts
+  // at once: the compiler puts two contacts in the two lanes of an SSE2 register (the x86-64
+  // baseline, no FMA), where each lane does the arithmetic of the scalar law in its order, so a
+  // contact's result does not depend on its neighbours in the batch. The force loop fills a batch
+  // with the contacts' geometry, kinematics and history, evaluates it, and reads the forces back.
+  struct Batch {
+    static constexpr int kSize = 32;
+    Real nx[kSize], ny[kSize], nz[kSize];  // the current unit normal n (sphere 1 -> 2)
+    Real px[kSize], py[kSize], pz[kSize];  // the normal at the last evaluation
+    Real fx[kSize], fy[kSize], fz[kSize];  // in: the tangential force at the last evaluation; out: this step's
+    Real ux[kSize], uy[kSize], uz[kSize];  // dus: the step's tangential relative displacement (normal to n)
+    Real twist[kSize];                     // the pair's spin about n times dt
+    Real delta[kSize], rbar[kSize];        // overlap > 0; Eq. (7)
+    Real loaded[kSize];                    // 1: the contact carried a force at the last evaluation, else 0
+    Real N[kSize];                         // out: normal force (> 0)
+    Real sliding[kSize];                   // out: 1 if at the Coulomb cap after this increment, else 0
   };
 
-  // One touching contact, one step. delta > 0: overlap; rbar: Eq. (7); n: the current unit
-  // normal (sphere 1 -> 2). History: `loaded` (the contact carried a force at the last
-  // evaluation), its normal `nPrev` and tangential force `FsPrev`. Kinematics of the step: the
-  // tangential relative displacement `dus` (in the plane normal to n) and the `twist`, the
-  // pair's spin about n times dt.
-  // Inlined into the force loop: a call per contact costs ~6 % of the loop (callgrind).
-  __attribute__((always_inline)) inline Response evaluate(Real delta, Real rbar, const Vec3& n, bool loaded,
-                                                          const Vec3& nPrev, const Vec3& FsPrev, const Vec3& dus,
-                                                          Real twist) const {
-    // N = (4/3) E* sqrt(R*) delta^(3/2), R* = rbar/2; k_s = (C_s/C_n) 1.5 N/delta written with
-    // sqrt(delta) instead of a division (the same number, one operation fewer per contact).
-    const Real sqrtDelta = std::sqrt(delta);
-    const Real coef = hertzUnit_ * std::sqrt(rbar);
-    Response r;
-    r.N = coef * delta * sqrtDelta;
-    const Real ks = ratio_ * 1.5 * coef * sqrtDelta;
-    r.Fs = loaded ? rotateWithContact(FsPrev, nPrev, n, twist) : Vec3::Zero();  // new contact: no history
-    r.Fs -= ks * dus;
-    r.sliding = capShear(r.Fs, r.N);
-    return r;
+  // Contacts 0..m-1 of the batch, one step each. N = (4/3) E* sqrt(R*) delta^(3/2), R* = rbar/2;
+  // k_s = (C_s/C_n) 1.5 N/delta written with sqrt(delta) instead of a division. The tangential
+  // force is the last one carried with the contact frame (rotateWithContact; a new contact has
+  // none), incremented by -k_s dus and capped at mu N (Coulomb). Branch-free, so that the loop
+  // vectorises: both sides of each choice are computed and one is kept.
+  // Out of line (contact/HertzMindlin.cpp), built with the vectorising flags of engines/CMakeLists.txt.
+  void evaluate(Batch& q, int m) const;
+
+  // One contact alone, through a batch of one (for tests and one-off callers): the same
+  // arithmetic as in a full batch, since the lanes are independent.
+  struct Response {
+    Real N;        // normal force (> 0)
+    Vec3 Fs;       // tangential force on sphere 2
+    bool sliding;  // at the Coulomb cap after this increment
+  };
+  Response evaluate(Real delta, Real rbar, const Vec3& n, bool loaded, const Vec3& nPrev, const Vec3& FsPrev,
+                    const Vec3& dus, Real twist) const {
+    Batch q;
+    q.nx[0] = n.x(); q.ny[0] = n.y(); q.nz[0] = n.z();
+    q.px[0] = nPrev.x(); q.py[0] = nPrev.y(); q.pz[0] = nPrev.z();
+    q.fx[0] = FsPrev.x(); q.fy[0] = FsPrev.y(); q.fz[0] = FsPrev.z();
+    q.ux[0] = dus.x(); q.uy[0] = dus.y(); q.uz[0] = dus.z();
+    q.twist[0] = twist; q.delta[0] = delta; q.rbar[0] = rbar; q.loaded[0] = loaded ? 1.0 : 0.0;
+    evaluate(q, 1);
+    return {q.N[0], Vec3(q.fx[0], q.fy[0], q.fz[0]), q.sliding[0] != 0};
   }
 
   // Normal sub-model.
@@ -103,37 +119,44 @@ class HertzMindlin {
   // positions (dt = 0) must not drift by round-off however often it runs.
   __attribute__((always_inline)) static inline Vec3 rotateWithContact(const Vec3& Fs, const Vec3& a, const Vec3& b,
                                                                      Real twist) {
-    if (twist == 0.0 && a == b) return Fs;
-    const Real c = a.dot(b);
-    if (c <= -1.0 + 1e-12) return Vec3::Zero();  // normal reversed: the old frame is meaningless
-    const Vec3 w = a.cross(b);
-    Vec3 v = c * Fs + w.cross(Fs) + (w.dot(Fs) / (1.0 + c)) * w;
-    if (twist != 0.0) {
-      // Cayley form of a rotation about b: exactly orthogonal, no trigonometric call; its
-      // angle 2 atan(twist/2) equals twist to O(twist^3), far below the step's other errors.
-      const Real t = 0.5 * twist, s = 1.0 / (1.0 + t * t);
-      v = ((1.0 - t * t) * s) * v + (2.0 * t * s) * b.cross(v);
-    }
-    return v - b.dot(v) * b;  // keep it in the tangent plane against round-off drift
+    Real x = Fs.x(), y = Fs.y(), z = Fs.z();
+    carry(x, y, z, a.x(), a.y(), a.z(), b.x(), b.y(), b.z(), twist);
+    return Vec3(x, y, z);
+  }
+
+  // rotateWithContact on components, (fx, fy, fz) carried from normal a to normal b, in place.
+  // Branch-free (see evaluate); the order of every sum is that of Eigen's products on Vec3 (a dot
+  // product is (x x' + y y') + z z'), so both callers keep the bits of the vector form.
+  __attribute__((always_inline)) static inline void carry(Real& fx, Real& fy, Real& fz, Real ax, Real ay, Real az,
+                                                         Real bx, Real by, Real bz, Real twist) {
+    const bool unchanged = (twist == 0.0) & (ax == bx) & (ay == by) & (az == bz);  // &: no branch
+    const Real c = ax * bx + ay * by + az * bz;
+    const bool reversed = c <= -1.0 + 1e-12;  // normal reversed: the old frame is meaningless
+    const Real wx = ay * bz - az * by, wy = az * bx - ax * bz, wz = ax * by - ay * bx;
+    const Real along = (wx * fx + wy * fy + wz * fz) / (1.0 + c);
+    Real vx = c * fx + (wy * fz - wz * fy) + along * wx;
+    Real vy = c * fy + (wz * fx - wx * fz) + along * wy;
+    Real vz = c * fz + (wx * fy - wy * fx) + along * wz;
+    // Cayley form of a rotation about b: exactly orthogonal, no trigonometric call; its angle
+    // 2 atan(twist/2) equals twist to O(twist^3), far below the step's other errors.
+    const Real t = 0.5 * twist, s = 1.0 / (1.0 + t * t);
+    const Real k1 = (1.0 - t * t) * s, k2 = 2.0 * t * s;
+    const Real tx = k1 * vx + k2 * (by * vz - bz * vy);
+    const Real ty = k1 * vy + k2 * (bz * vx - bx * vz);
+    const Real tz = k1 * vz + k2 * (bx * vy - by * vx);
+    if (twist != 0.0) { vx = tx; vy = ty; vz = tz; }
+    const Real p = bx * vx + by * vy + bz * vz;  // keep it in the tangent plane against round-off drift
+    vx -= p * bx; vy -= p * by; vz -= p * bz;
+    fx = unchanged ? fx : reversed ? 0.0 : vx;
+    fy = unchanged ? fy : reversed ? 0.0 : vy;
+    fz = unchanged ? fz : reversed ? 0.0 : vz;
   }
 
   // A vector the cap has already scaled lies within a few ulps of it and is left as it is (slack
   // 8 ulps of its squared norm): re-evaluating a contact without increment must not rescale it
   // by 1 - 1e-16 each time.
   static constexpr Real kCapSlack = 1.0 + 8.0 * std::numeric_limits<Real>::epsilon();
-  // Coulomb: |Fs| <= mu N. Returns true if the force was capped (sliding). Written out rather
-  // than calling capMagnitude: that call changed GCC 12's register allocation of the sheared
-  // force loop, and the paper's loop keeps its machine code (docs/rolling.md).
-  bool capShear(Vec3& Fs, Real N) const {
-    const Real cap = mu_ * N;
-    const Real f2 = Fs.squaredNorm();
-    if (f2 > cap * cap * kCapSlack) {
-      Fs *= cap / std::sqrt(f2);
-      return true;
-    }
-    return false;
-  }
-  // The same cap with the same slack for the rolling moment.
+  // The Coulomb cap |Fs| <= mu N of evaluate, with the same slack, for the rolling moment.
   static bool capMagnitude(Vec3& v, Real cap) {
     const Real v2 = v.squaredNorm();
     if (v2 > cap * cap * kCapSlack) {

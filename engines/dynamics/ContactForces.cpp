@@ -67,47 +67,85 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     const int share = nc / threads, extra = nc % threads;
     const int lo = t < extra ? t * (share + 1) : t * share + extra;
     const int hi = lo + share + (t < extra ? 1 : 0);
-    // Two passes over each batch of kBatch pairs: the geometry of every pair (the square root and
-    // division of the distance), then the law and the forces of the touching ones. The first
-    // pass's iterations are short and independent, so the processor overlaps their sqrt/division
-    // chains, which one iteration of ~250 instructions did not let it do. Forces are added in
-    // pair order as before: the same bits. Measured against the single loop (bench_builds.py,
-    // docs/benchmarks.md): +6 to +15 % at 4000-16,000 spheres, none resolved at 32,000; a third
-    // pass for the force additions and a branchless first pass measured no better.
-    constexpr int kBatch = 32;
+    // Each thread's pairs in batches of kBatch, in three passes:
+    //  1. the geometry of every pair (the square root and division of the distance): short,
+    //     independent iterations, so the processor overlaps their sqrt/division chains, which one
+    //     iteration of ~250 instructions did not let it do;
+    //  2. the kinematics of the touching ones (relative velocity, lever arms, spin), into the law's
+    //     batch, then the law on the whole batch (HertzMindlin::evaluate, two contacts at a time);
+    //  3. the forces stored and added to the bodies, in pair order.
+    // Every contact does the arithmetic of the single loop that came before, in its order: the same
+    // bits (1 and 2 threads, clumps, rolling resistance; a study's CSV). Measured in
+    // docs/benchmarks.md ("Stepper changes").
+    constexpr int kBatch = HertzMindlin::Batch::kSize;
     struct Touch {  // a touching pair of the batch and its geometry
       Vec3 n, d;
       Real delta;
       int c;
     };
+    // A touching pair's motion, by component like the law's batch: its relative velocity (the
+    // bodies' and the affine field's), the spins of its bodies and the lever arms to the contact
+    // point. The loops over it that hold no choice run two pairs at a time (see HertzMindlin::Batch).
+    struct Motion {
+      Real vx[kBatch], vy[kBatch], vz[kBatch];        // relative velocity at the centres; then at the contact
+      Real w1x[kBatch], w1y[kBatch], w1z[kBatch];     // angular velocity of body a
+      Real w2x[kBatch], w2y[kBatch], w2z[kBatch];     // ... of body b
+      Real a1x[kBatch], a1y[kBatch], a1z[kBatch];     // lever arm of body a to the contact point
+      Real a2x[kBatch], a2y[kBatch], a2z[kBatch];     // ... of body b
+      Real t1x[kBatch], t1y[kBatch], t1z[kBatch];     // out: moment of the contact force about a's centre
+      Real t2x[kBatch], t2y[kBatch], t2z[kBatch];     // ... about b's centre
+      Real Fx[kBatch], Fy[kBatch], Fz[kBatch];        // out: the contact force on body b
+    };
+    struct Gap {  // every pair of the batch: the distance vector and what follows from it
+      Real dx[kBatch], dy[kBatch], dz[kBatch], rsum[kBatch], dist2[kBatch], overlap[kBatch], inv[kBatch];
+    };
+    Gap gap;
     Touch touch[kBatch];
+    Vec3 branches[kBatch];
+    HertzMindlin::Batch q;
+    Motion v;
+    const Real halfDt = 0.5 * dt;
     for (int c0 = lo; c0 < hi; c0 += kBatch) {
       const int c1 = std::min(hi, c0 + kBatch);
-      int m = 0;
-      for (int c = c0; c < c1; ++c) {
+      // The distance of every pair: gathered, then its square root and division two pairs at a
+      // time (a third of the force loop's time went to them one pair at a time, perf), then the
+      // pairs sorted into touching and not.
+      const int nk = c1 - c0;
+      for (int k = 0; k < nk; ++k) {
+        const int c = c0 + k;
         const int i = C.m1[c], j = C.m2[c];
         const int a = Clumps ? C.b1[c] : i, b = Clumps ? C.b2[c] : j;
         const Vec3 sh = Sheared ? Vec3(hSize * C.shift[c].cast<Real>()) : Vec3(C.shift[c].cast<Real>().cwiseProduct(h));
         const Vec3& pi = Clumps ? M.pos[i] : B.pos[a];
         const Vec3 pj = (Clumps ? M.pos[j] : B.pos[b]) + sh;
         const Vec3 d = pj - pi;
-        const Real rsum = M.radius[i] + M.radius[j];
-        const Real dist2 = d.squaredNorm();
-        if (dist2 >= rsum * rsum) {  // not touching: a contact ends and forgets its history
+        gap.dx[k] = d.x(); gap.dy[k] = d.y(); gap.dz[k] = d.z();
+        gap.rsum[k] = M.radius[i] + M.radius[j];
+        gap.dist2[k] = d.squaredNorm();
+      }
+      for (int k = 0; k < nk; ++k) {
+        const Real dist = std::sqrt(gap.dist2[k]);
+        gap.overlap[k] = gap.rsum[k] - dist;
+        gap.inv[k] = 1.0 / dist;
+      }
+      int m = 0;
+      for (int k = 0; k < nk; ++k) {
+        const int c = c0 + k;
+        const Real rsum = gap.rsum[k];
+        if (gap.dist2[k] >= rsum * rsum) {  // not touching: a contact ends and forgets its history
           if (C.normalForce[c] != 0) {
             C.normalForce[c] = 0;
             C.shearForce[c].setZero();
             if constexpr (Rolling) C.rollingMoment[c].setZero();
           }
-          C.overlap[c] = rsum - std::sqrt(dist2);
+          C.overlap[c] = gap.overlap[k];
           continue;
         }
-        const Real dist = std::sqrt(dist2);
-        Touch& q = touch[m++];
-        q.n = d * (1.0 / dist);
-        q.d = d;
-        q.delta = rsum - dist;
-        q.c = c;
+        Touch& g = touch[m++];
+        g.d = Vec3(gap.dx[k], gap.dy[k], gap.dz[k]);
+        g.n = g.d * gap.inv[k];
+        g.delta = gap.overlap[k];
+        g.c = c;
       }
       for (int k = 0; k < m; ++k) {
         const int c = touch[k].c;
@@ -118,32 +156,82 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         const Vec3 sh = Sheared ? Vec3(hSize * C.shift[c].cast<Real>()) : Vec3(C.shift[c].cast<Real>().cwiseProduct(h));
         const Real ri = M.radius[i], rj = M.radius[j];
         const Vec3 branch = Clumps ? Vec3(B.pos[b] + sh - B.pos[a]) : touch[k].d;
-
-        // Lever arms from the body centres to the contact point, mid-overlap as in YADE's ScGeom.
-        const Real arm1len = ri - 0.5 * delta, arm2len = rj - 0.5 * delta;
+        branches[k] = branch;
         // Velocities are fluctuations: the affine field adds L (x_b - x_a) = L branch.
-        Vec3 vrel = B.vel[b] - B.vel[a] + (Sheared ? Vec3(L * branch) : Vec3(rate.cwiseProduct(branch)));
-        Vec3 arm1, arm2;
+        const Vec3 vrel = B.vel[b] - B.vel[a] + (Sheared ? Vec3(L * branch) : Vec3(rate.cwiseProduct(branch)));
+        v.vx[k] = vrel.x(); v.vy[k] = vrel.y(); v.vz[k] = vrel.z();
+        if (Rotations) {
+          // Lever arms from the body centres to the contact point, mid-overlap as in YADE's
+          // ScGeom; (x + sh) - sh as before, which is not always x in floating point.
+          const Real arm1len = ri - 0.5 * delta, arm2len = rj - 0.5 * delta;
+          const Vec3 arm1 = (Clumps ? Vec3(M.pos[i] - B.pos[a]) : Vec3::Zero()) + arm1len * n;
+          const Vec3 arm2 = (Clumps ? Vec3(Vec3(M.pos[j] + sh) - sh - B.pos[b]) : Vec3::Zero()) - arm2len * n;
+          v.a1x[k] = arm1.x(); v.a1y[k] = arm1.y(); v.a1z[k] = arm1.z();
+          v.a2x[k] = arm2.x(); v.a2y[k] = arm2.y(); v.a2z[k] = arm2.z();
+          const Vec3& w1 = B.angVel[a];
+          const Vec3& w2 = B.angVel[b];
+          v.w1x[k] = w1.x(); v.w1y[k] = w1.y(); v.w1z[k] = w1.z();
+          v.w2x[k] = w2.x(); v.w2y[k] = w2.y(); v.w2z[k] = w2.z();
+        }
+        const Vec3& nPrev = C.normal[c];
+        const Vec3& FsPrev = C.shearForce[c];
+        q.nx[k] = n.x(); q.ny[k] = n.y(); q.nz[k] = n.z();
+        q.px[k] = nPrev.x(); q.py[k] = nPrev.y(); q.pz[k] = nPrev.z();
+        q.fx[k] = FsPrev.x(); q.fy[k] = FsPrev.y(); q.fz[k] = FsPrev.z();
+        q.delta[k] = delta;
+        q.rbar[k] = C.rbar[c];
+        q.loaded[k] = C.normalForce[c] > 0 ? 1.0 : 0.0;
+      }
+      // The relative velocity at the contact point, the spin about n and the tangential increment:
+      // vrel + w2 x arm2 - w1 x arm1, (dt/2) n.(w1 + w2), (vrel - (n.vrel) n) dt.
+      for (int k = 0; k < m; ++k) {
+        Real vx = v.vx[k], vy = v.vy[k], vz = v.vz[k];
+        const Real nx = q.nx[k], ny = q.ny[k], nz = q.nz[k];
         Real twist = 0;
         if (Rotations) {
-          // (x + sh) - sh as before, which is not always x in floating point.
-          arm1 = (Clumps ? Vec3(M.pos[i] - B.pos[a]) : Vec3::Zero()) + arm1len * n;
-          arm2 = (Clumps ? Vec3(Vec3(M.pos[j] + sh) - sh - B.pos[b]) : Vec3::Zero()) - arm2len * n;
-          vrel += B.angVel[b].cross(arm2) - B.angVel[a].cross(arm1);
-          twist = 0.5 * dt * n.dot(B.angVel[a] + B.angVel[b]);
+          const Real w1x = v.w1x[k], w1y = v.w1y[k], w1z = v.w1z[k];
+          const Real w2x = v.w2x[k], w2y = v.w2y[k], w2z = v.w2z[k];
+          const Real a1x = v.a1x[k], a1y = v.a1y[k], a1z = v.a1z[k];
+          const Real a2x = v.a2x[k], a2y = v.a2y[k], a2z = v.a2z[k];
+          vx += (w2y * a2z - w2z * a2y) - (w1y * a1z - w1z * a1y);
+          vy += (w2z * a2x - w2x * a2z) - (w1z * a1x - w1x * a1z);
+          vz += (w2x * a2y - w2y * a2x) - (w1x * a1y - w1y * a1x);
+          twist = halfDt * (nx * (w1x + w2x) + ny * (w1y + w2y) + nz * (w1z + w2z));
         }
-        const Vec3 dus = (vrel - n.dot(vrel) * n) * dt;
-        const HertzMindlin::Response r =
-            law.evaluate(delta, C.rbar[c], n, C.normalForce[c] > 0, C.normal[c], C.shearForce[c], dus, twist);
-        if (r.sliding) ++sliding;
+        const Real vn = nx * vx + ny * vy + nz * vz;
+        q.ux[k] = (vx - vn * nx) * dt;
+        q.uy[k] = (vy - vn * ny) * dt;
+        q.uz[k] = (vz - vn * nz) * dt;
+        q.twist[k] = twist;
+      }
+      law.evaluate(q, m);
+      // The contact force on body b and its moments about the two centres.
+      for (int k = 0; k < m; ++k) {
+        const Real N = q.N[k];
+        const Real Fx = N * q.nx[k] + q.fx[k], Fy = N * q.ny[k] + q.fy[k], Fz = N * q.nz[k] + q.fz[k];
+        v.Fx[k] = Fx; v.Fy[k] = Fy; v.Fz[k] = Fz;
+        if (Rotations) {
+          const Real a1x = v.a1x[k], a1y = v.a1y[k], a1z = v.a1z[k];
+          const Real a2x = v.a2x[k], a2y = v.a2y[k], a2z = v.a2z[k];
+          v.t1x[k] = a1y * Fz - a1z * Fy; v.t1y[k] = a1z * Fx - a1x * Fz; v.t1z[k] = a1x * Fy - a1y * Fx;
+          v.t2x[k] = a2y * Fz - a2z * Fy; v.t2y[k] = a2z * Fx - a2x * Fz; v.t2z[k] = a2x * Fy - a2y * Fx;
+        }
+      }
+      for (int k = 0; k < m; ++k) {
+        const int c = touch[k].c;
+        const Vec3& n = touch[k].n;
+        const Real delta = touch[k].delta;
+        const int a = Clumps ? C.b1[c] : C.m1[c], b = Clumps ? C.b2[c] : C.m2[c];
+        const Real N = q.N[k];
+        if (q.sliding[k] != 0) ++sliding;
         if constexpr (Rolling) {
           // Relative rolling rotation of the step: the spin difference off the normal (the part
           // along n is twist, which this sub-model does not resist).
           const Vec3 dw = (B.angVel[b] - B.angVel[a]) * dt;
-          const Real ks = law.shearStiffness(HertzMindlin::normalStiffness(r.N, delta));
+          const Real ks = law.shearStiffness(HertzMindlin::normalStiffness(N, delta));
           bool capped;
-          const Vec3 Mr = law.rollingMoment(C.rbar[c], r.N, ks, n, C.normalForce[c] > 0, C.normal[c], C.rollingMoment[c],
-                                 dw - n.dot(dw) * n, twist, capped);
+          const Vec3 Mr = law.rollingMoment(C.rbar[c], N, ks, n, C.normalForce[c] > 0, C.normal[c], C.rollingMoment[c],
+                                            dw - n.dot(dw) * n, q.twist[k], capped);
           if (capped) ++rollingCappedHere;
           C.rollingMoment[c] = Mr;
           T[a] -= Mr;  // the moment on body b, its opposite on body a
@@ -151,16 +239,16 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         }
 
         C.normal[c] = n;
-        C.branch[c] = branch;
+        C.branch[c] = branches[k];
         C.overlap[c] = delta;
-        C.normalForce[c] = r.N;
-        C.shearForce[c] = r.Fs;
-        const Vec3 Fc = r.N * n + r.Fs;  // force on body b; body a receives -Fc
+        C.normalForce[c] = N;
+        C.shearForce[c] = Vec3(q.fx[k], q.fy[k], q.fz[k]);
+        const Vec3 Fc(v.Fx[k], v.Fy[k], v.Fz[k]);  // force on body b; body a receives -Fc
         F[a] -= Fc;
         F[b] += Fc;
         if (Rotations) {
-          T[a] -= arm1.cross(Fc);
-          T[b] += arm2.cross(Fc);
+          T[a] -= Vec3(v.t1x[k], v.t1y[k], v.t1z[k]);
+          T[b] += Vec3(v.t2x[k], v.t2y[k], v.t2z[k]);
         }
       }
     }
