@@ -68,15 +68,15 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     const int lo = t < extra ? t * (share + 1) : t * share + extra;
     const int hi = lo + share + (t < extra ? 1 : 0);
     // Each thread's pairs in batches of kBatch, in three passes:
-    //  1. the geometry of every pair (the square root and division of the distance): short,
-    //     independent iterations, so the processor overlaps their sqrt/division chains, which one
-    //     iteration of ~250 instructions did not let it do;
-    //  2. the kinematics of the touching ones (relative velocity, lever arms, spin), into the law's
-    //     batch, then the law on the whole batch (HertzMindlin::evaluate, two contacts at a time);
+    //  1. the distance of every pair, its square root and division two pairs at a time, then the
+    //     pairs sorted into touching and not;
+    //  2. the kinematics of the touching ones (relative velocity, lever arms, spin), then the law
+    //     on the whole batch (HertzMindlin::evaluate) and the contact forces and moments, the
+    //     arithmetic again two contacts at a time in loops without a choice (SSE2 lanes);
     //  3. the forces stored and added to the bodies, in pair order.
     // Every contact does the arithmetic of the single loop that came before, in its order: the same
-    // bits (1 and 2 threads, clumps, rolling resistance; a study's CSV). Measured in
-    // docs/benchmarks.md ("Stepper changes").
+    // bits (checked on 1 and 2 threads, rotations free and blocked, rolling resistance, clump1 and
+    // clump2 preparations; docs/benchmarks.md, "Two contacts at a time", with what it gained).
     constexpr int kBatch = HertzMindlin::Batch::kSize;
     struct Touch {  // a touching pair of the batch and its geometry
       Vec3 n, d;
