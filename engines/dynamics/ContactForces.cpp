@@ -56,6 +56,26 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     std::fill(F, F + nb, Vec3::Zero());
     if (Rotations) std::fill(T, T + nb, Vec3::Zero());
     long rollingCappedHere = 0;
+    // The arrays as local pointers: read through C, B and M (the team's shared references), the
+    // compiler must load each array's address again after every store to a force or a contact,
+    // which took a tenth of the loop (perf). Local pointers it keeps in registers; the same bits.
+    const int* const m1 = C.m1.data();
+    const int* const m2 = C.m2.data();
+    const int* const b1 = C.b1.data();
+    const int* const b2 = C.b2.data();
+    const Vec3i* const shift = C.shift.data();
+    const Real* const rbar = C.rbar.data();
+    Vec3* const normal = C.normal.data();
+    Vec3* const pairBranch = C.branch.data();
+    Real* const overlap = C.overlap.data();
+    Real* const normalForce = C.normalForce.data();
+    Vec3* const shearForce = C.shearForce.data();
+    Vec3* const rollingMoment = C.rollingMoment.data();
+    const Vec3* const memberPos = M.pos.data();
+    const Real* const radius = M.radius.data();
+    const Vec3* const pos = B.pos.data();
+    const Vec3* const vel = B.vel.data();
+    const Vec3* const angVel = B.angVel.data();
 
     // This thread's contacts: the partition of libgomp's schedule(static), which the loop had,
     // written out so that the loop can walk them in batches (below). Any partition is correct;
@@ -78,11 +98,6 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     // bits (checked on 1 and 2 threads, rotations free and blocked, rolling resistance, clump1 and
     // clump2 preparations; docs/benchmarks.md, "Two contacts at a time", with what it gained).
     constexpr int kBatch = HertzMindlin::Batch::kSize;
-    struct Touch {  // a touching pair of the batch and its geometry
-      Vec3 n, d;
-      Real delta;
-      int c;
-    };
     // A touching pair's motion, by component like the law's batch: its relative velocity (the
     // bodies' and the affine field's), the spins of its bodies and the lever arms to the contact
     // point. The loops over it that hold no choice run two pairs at a time (see HertzMindlin::Batch).
@@ -100,8 +115,8 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       Real dx[kBatch], dy[kBatch], dz[kBatch], rsum[kBatch], dist2[kBatch], overlap[kBatch], inv[kBatch];
     };
     Gap gap;
-    Touch touch[kBatch];
-    Vec3 branches[kBatch];
+    int pairOf[kBatch];      // the touching pairs of the batch, in pair order
+    Vec3 branches[kBatch];   // their branch vectors
     HertzMindlin::Batch q;
     Motion v;
     const Real halfDt = 0.5 * dt;
@@ -113,14 +128,14 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       const int nk = c1 - c0;
       for (int k = 0; k < nk; ++k) {
         const int c = c0 + k;
-        const int i = C.m1[c], j = C.m2[c];
-        const int a = Clumps ? C.b1[c] : i, b = Clumps ? C.b2[c] : j;
-        const Vec3 sh = Sheared ? Vec3(hSize * C.shift[c].cast<Real>()) : Vec3(C.shift[c].cast<Real>().cwiseProduct(h));
-        const Vec3& pi = Clumps ? M.pos[i] : B.pos[a];
-        const Vec3 pj = (Clumps ? M.pos[j] : B.pos[b]) + sh;
+        const int i = m1[c], j = m2[c];
+        const int a = Clumps ? b1[c] : i, b = Clumps ? b2[c] : j;
+        const Vec3 sh = Sheared ? Vec3(hSize * shift[c].cast<Real>()) : Vec3(shift[c].cast<Real>().cwiseProduct(h));
+        const Vec3& pi = Clumps ? memberPos[i] : pos[a];
+        const Vec3 pj = (Clumps ? memberPos[j] : pos[b]) + sh;
         const Vec3 d = pj - pi;
         gap.dx[k] = d.x(); gap.dy[k] = d.y(); gap.dz[k] = d.z();
-        gap.rsum[k] = M.radius[i] + M.radius[j];
+        gap.rsum[k] = radius[i] + radius[j];
         gap.dist2[k] = d.squaredNorm();
       }
       for (int k = 0; k < nk; ++k) {
@@ -128,59 +143,70 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         gap.overlap[k] = gap.rsum[k] - dist;
         gap.inv[k] = 1.0 / dist;
       }
-      int m = 0;
+      // The pairs sorted into touching and not without a branch: which way a pair goes is a coin
+      // toss to the processor (two in three touch), and its mispredictions cost more than the
+      // stores to both lists. NaN distances count as touching, as the test dist2 >= rsum^2 had it.
+      int touching[kBatch], apart[kBatch];
+      int m = 0, gone = 0;
       for (int k = 0; k < nk; ++k) {
-        const int c = c0 + k;
-        const Real rsum = gap.rsum[k];
-        if (gap.dist2[k] >= rsum * rsum) {  // not touching: a contact ends and forgets its history
-          if (C.normalForce[c] != 0) {
-            C.normalForce[c] = 0;
-            C.shearForce[c].setZero();
-            if constexpr (Rolling) C.rollingMoment[c].setZero();
-          }
-          C.overlap[c] = gap.overlap[k];
-          continue;
+        const bool isApart = gap.dist2[k] >= gap.rsum[k] * gap.rsum[k];
+        touching[m] = k;
+        apart[gone] = k;
+        m += !isApart;
+        gone += isApart;
+      }
+      for (int e = 0; e < gone; ++e) {  // not touching: a contact ends and forgets its history
+        const int k = apart[e], c = c0 + k;
+        if (normalForce[c] != 0) {
+          normalForce[c] = 0;
+          shearForce[c].setZero();
+          if constexpr (Rolling) rollingMoment[c].setZero();
         }
-        Touch& g = touch[m++];
-        g.d = Vec3(gap.dx[k], gap.dy[k], gap.dz[k]);
-        g.n = g.d * gap.inv[k];
-        g.delta = gap.overlap[k];
-        g.c = c;
+        overlap[c] = gap.overlap[k];
+      }
+      for (int e = 0; e < m; ++e) {
+        // The touching pair's geometry straight into the law's batch: the normal from the
+        // distance's scalars (reading back a vector just stored as three scalars as one two-lane
+        // load stalls store forwarding, 11 % of the loop by perf), its overlap and its pair.
+        const int k = touching[e];
+        const Real inv = gap.inv[k];
+        q.nx[e] = gap.dx[k] * inv; q.ny[e] = gap.dy[k] * inv; q.nz[e] = gap.dz[k] * inv;
+        q.delta[e] = gap.overlap[k];
+        pairOf[e] = c0 + k;
+        if (!Clumps) branches[e] = Vec3(gap.dx[k], gap.dy[k], gap.dz[k]);  // a clump's: centre to centre, below
       }
       for (int k = 0; k < m; ++k) {
-        const int c = touch[k].c;
-        const Vec3& n = touch[k].n;
-        const Real delta = touch[k].delta;
-        const int i = C.m1[c], j = C.m2[c];
-        const int a = Clumps ? C.b1[c] : i, b = Clumps ? C.b2[c] : j;
-        const Vec3 sh = Sheared ? Vec3(hSize * C.shift[c].cast<Real>()) : Vec3(C.shift[c].cast<Real>().cwiseProduct(h));
-        const Real ri = M.radius[i], rj = M.radius[j];
-        const Vec3 branch = Clumps ? Vec3(B.pos[b] + sh - B.pos[a]) : touch[k].d;
-        branches[k] = branch;
+        const int c = pairOf[k];
+        const Vec3 n(q.nx[k], q.ny[k], q.nz[k]);
+        const Real delta = q.delta[k];
+        const int i = m1[c], j = m2[c];
+        const int a = Clumps ? b1[c] : i, b = Clumps ? b2[c] : j;
+        const Vec3 sh = Sheared ? Vec3(hSize * shift[c].cast<Real>()) : Vec3(shift[c].cast<Real>().cwiseProduct(h));
+        const Real ri = radius[i], rj = radius[j];
+        if (Clumps) branches[k] = pos[b] + sh - pos[a];
+        const Vec3& branch = branches[k];
         // Velocities are fluctuations: the affine field adds L (x_b - x_a) = L branch.
-        const Vec3 vrel = B.vel[b] - B.vel[a] + (Sheared ? Vec3(L * branch) : Vec3(rate.cwiseProduct(branch)));
+        const Vec3 vrel = vel[b] - vel[a] + (Sheared ? Vec3(L * branch) : Vec3(rate.cwiseProduct(branch)));
         v.vx[k] = vrel.x(); v.vy[k] = vrel.y(); v.vz[k] = vrel.z();
         if (Rotations) {
           // Lever arms from the body centres to the contact point, mid-overlap as in YADE's
           // ScGeom; (x + sh) - sh as before, which is not always x in floating point.
           const Real arm1len = ri - 0.5 * delta, arm2len = rj - 0.5 * delta;
-          const Vec3 arm1 = (Clumps ? Vec3(M.pos[i] - B.pos[a]) : Vec3::Zero()) + arm1len * n;
-          const Vec3 arm2 = (Clumps ? Vec3(Vec3(M.pos[j] + sh) - sh - B.pos[b]) : Vec3::Zero()) - arm2len * n;
+          const Vec3 arm1 = (Clumps ? Vec3(memberPos[i] - pos[a]) : Vec3::Zero()) + arm1len * n;
+          const Vec3 arm2 = (Clumps ? Vec3(Vec3(memberPos[j] + sh) - sh - pos[b]) : Vec3::Zero()) - arm2len * n;
           v.a1x[k] = arm1.x(); v.a1y[k] = arm1.y(); v.a1z[k] = arm1.z();
           v.a2x[k] = arm2.x(); v.a2y[k] = arm2.y(); v.a2z[k] = arm2.z();
-          const Vec3& w1 = B.angVel[a];
-          const Vec3& w2 = B.angVel[b];
+          const Vec3& w1 = angVel[a];
+          const Vec3& w2 = angVel[b];
           v.w1x[k] = w1.x(); v.w1y[k] = w1.y(); v.w1z[k] = w1.z();
           v.w2x[k] = w2.x(); v.w2y[k] = w2.y(); v.w2z[k] = w2.z();
         }
-        const Vec3& nPrev = C.normal[c];
-        const Vec3& FsPrev = C.shearForce[c];
-        q.nx[k] = n.x(); q.ny[k] = n.y(); q.nz[k] = n.z();
+        const Vec3& nPrev = normal[c];
+        const Vec3& FsPrev = shearForce[c];
         q.px[k] = nPrev.x(); q.py[k] = nPrev.y(); q.pz[k] = nPrev.z();
         q.fx[k] = FsPrev.x(); q.fy[k] = FsPrev.y(); q.fz[k] = FsPrev.z();
-        q.delta[k] = delta;
-        q.rbar[k] = C.rbar[c];
-        q.loaded[k] = C.normalForce[c] > 0 ? 1.0 : 0.0;
+        q.rbar[k] = rbar[c];
+        q.loaded[k] = normalForce[c] > 0 ? 1.0 : 0.0;
       }
       // The relative velocity at the contact point, the spin about n and the tangential increment:
       // vrel + w2 x arm2 - w1 x arm1, (dt/2) n.(w1 + w2), (vrel - (n.vrel) n) dt.
@@ -218,31 +244,31 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         }
       }
       for (int k = 0; k < m; ++k) {
-        const int c = touch[k].c;
-        const Vec3& n = touch[k].n;
-        const Real delta = touch[k].delta;
-        const int a = Clumps ? C.b1[c] : C.m1[c], b = Clumps ? C.b2[c] : C.m2[c];
+        const int c = pairOf[k];
+        const Vec3 n(q.nx[k], q.ny[k], q.nz[k]);
+        const Real delta = q.delta[k];
+        const int a = Clumps ? b1[c] : m1[c], b = Clumps ? b2[c] : m2[c];
         const Real N = q.N[k];
         if (q.sliding[k] != 0) ++sliding;
         if constexpr (Rolling) {
           // Relative rolling rotation of the step: the spin difference off the normal (the part
           // along n is twist, which this sub-model does not resist).
-          const Vec3 dw = (B.angVel[b] - B.angVel[a]) * dt;
+          const Vec3 dw = (angVel[b] - angVel[a]) * dt;
           const Real ks = law.shearStiffness(HertzMindlin::normalStiffness(N, delta));
           bool capped;
-          const Vec3 Mr = law.rollingMoment(C.rbar[c], N, ks, n, C.normalForce[c] > 0, C.normal[c], C.rollingMoment[c],
+          const Vec3 Mr = law.rollingMoment(rbar[c], N, ks, n, normalForce[c] > 0, normal[c], rollingMoment[c],
                                             dw - n.dot(dw) * n, q.twist[k], capped);
           if (capped) ++rollingCappedHere;
-          C.rollingMoment[c] = Mr;
+          rollingMoment[c] = Mr;
           T[a] -= Mr;  // the moment on body b, its opposite on body a
           T[b] += Mr;
         }
 
-        C.normal[c] = n;
-        C.branch[c] = branches[k];
-        C.overlap[c] = delta;
-        C.normalForce[c] = N;
-        C.shearForce[c] = Vec3(q.fx[k], q.fy[k], q.fz[k]);
+        normal[c] = n;
+        pairBranch[c] = branches[k];
+        overlap[c] = delta;
+        normalForce[c] = N;
+        shearForce[c] = Vec3(q.fx[k], q.fy[k], q.fz[k]);
         const Vec3 Fc(v.Fx[k], v.Fy[k], v.Fz[k]);  // force on body b; body a receives -Fc
         F[a] -= Fc;
         F[b] += Fc;
