@@ -19,11 +19,12 @@ import os
 import signal
 import sys
 
-# Ctrl-C while Python loads numpy and the engines (up to a second): one line and nothing written.
-# A KeyboardInterrupt there became a traceback, numpy's ImportError or a crash; cli.guarded
-# gives Ctrl-C back its usual meaning when the work starts.
-signal.signal(signal.SIGINT, lambda *_: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
-                                         os._exit(130)))
+# Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
+# and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
+# crash; cli.guarded gives both signals their meaning for the work when it starts.
+for _signal in (signal.SIGINT, signal.SIGTERM):
+    signal.signal(_signal, lambda number, _: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
+                                              os._exit(128 + number)))
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))

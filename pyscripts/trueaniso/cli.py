@@ -263,17 +263,30 @@ def parse(parser, argv=None):
     return parser.parse_args(argv)
 
 
+class Terminated(BaseException):
+    """SIGTERM as an exception, like KeyboardInterrupt for SIGINT (not an Exception, so that no
+    `except Exception` in the library swallows it)."""
+
+
+def _terminate(number, frame):
+    raise Terminated()
+
+
 def guarded(main, resumable=False):
     """Run main(); refusals and ValueError become one line and exit 2. A resumable script (its
-    work continues from checkpoints: studies, preparations) says so when interrupted."""
+    work continues from checkpoints: studies, preparations) says so when interrupted, by Ctrl-C or
+    by SIGTERM: what a scheduler sends at the time limit, `kill` by default, and what mpiexec sends
+    its ranks when it is interrupted itself (without this, such a run ended with no word)."""
     # The scripts exit at once on Ctrl-C while they start (their first lines); from here on it
     # raises KeyboardInterrupt again, as under yade-double, so that the line below says what to do.
     signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, _terminate)
     try:
         main()
     except (Refusal, ValueError) as exc:
         # ValueError: validation inside the library (bad specimen contents, bad arguments to an
         # engine); a traceback would hide the one line the user needs.
         fail(str(exc))
-    except KeyboardInterrupt:
-        fail("interrupted; the same command resumes from the last checkpoint" if resumable else "interrupted", 130)
+    except (KeyboardInterrupt, Terminated) as exc:
+        status = 128 + (signal.SIGTERM if isinstance(exc, Terminated) else signal.SIGINT)
+        fail("interrupted; the same command resumes from the last checkpoint" if resumable else "interrupted", status)

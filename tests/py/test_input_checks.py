@@ -3,6 +3,7 @@ input is one line 'error: ...' with exit status 2, before a preparation or a sta
 nothing is written. Each case names what the code before did with it."""
 import os
 import shutil
+import signal
 import subprocess
 import sys
 
@@ -184,15 +185,17 @@ def test_memory_estimate_bounds_the_measured_peak():
     assert resources.INTERPRETER_BYTES["yade"] > 252e6 > resources.INTERPRETER_BYTES["python3"]
 
 
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
 @pytest.mark.parametrize("name", ["prepare_specimen.py", "run_states.py", "run_study.py"])
-def test_ctrl_c_while_starting_is_one_line(tmp_path, name):
+def test_ctrl_c_while_starting_is_one_line(tmp_path, name, sig):
     """Ctrl-C while a script still loads numpy and the engines (0.2-1 s) printed a traceback,
-    numpy's ImportError or crashed (SIGSEGV) before: the scripts' guard was not yet running.
-    A numpy whose import sends the script SIGINT stands for the key pressed in that window."""
+    numpy's ImportError or crashed (SIGSEGV) before: the scripts' guard was not yet running; a
+    SIGTERM there ended it with no word. A numpy whose import sends the script the signal stands
+    for the key pressed (or the kill) in that window."""
     fake = tmp_path / "fake" / "numpy"
     fake.mkdir(parents=True)
-    (fake / "__init__.py").write_text("import os, signal, time\nos.kill(os.getpid(), signal.SIGINT)\ntime.sleep(30)\n")
+    (fake / "__init__.py").write_text("import os, signal, time\nos.kill(os.getpid(), signal.%s)\ntime.sleep(30)\n" % sig)
     proc = run_script(name, "--help", env={"PYTHONPATH": str(tmp_path / "fake")}, cwd=tmp_path, timeout=60)
-    assert proc.returncode == 130, proc.stderr
+    assert proc.returncode == 128 + getattr(signal, sig), proc.stderr
     assert proc.stderr == "error: interrupted while starting; nothing was done\n"
     assert proc.stdout == "" and sorted(p.name for p in tmp_path.iterdir()) == ["fake"]

@@ -119,6 +119,26 @@ def test_killed_mpi_job_resumes_to_the_same_values(serial, specimen_100, tmp_pat
     assert values(out) == values(serial)
 
 
+def test_ctrl_c_on_mpiexec_says_the_job_resumes(specimen_100, tmp_path):
+    """Ctrl-C on mpiexec: mpiexec sends its ranks SIGTERM, which ended the master with no word
+    (exit 1, nothing on stderr) before cli.guarded turned SIGTERM into the resume line. Thirteen
+    states, so that the job is still running when mpiexec acts, about 1 s after the signal."""
+    out = tmp_path / "study"
+    cmd = mpi_cmd(specimen_100, out, ranks=3)
+    cmd[cmd.index("--ids") + 1] = ",".join(str(i) for i in range(1, 14))
+    p = subprocess.Popen(cmd, env=mpi_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 300
+    while p.poll() is None and time.time() < deadline:
+        if (out / "states").is_dir() and any(n.endswith(".npz") for n in os.listdir(out / "states")):
+            break
+        time.sleep(0.01)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode != 0, "the job ended before the signal: give it more states"
+    assert len(values(out)) < 13, "every row was written: the signal interrupted nothing"
+    assert "error: interrupted; the same command resumes from the last checkpoint" in err, err[-3000:]
+
+
 def test_mpi_without_workers_is_refused(specimen_100, tmp_path):
     proc = run_script("run_states.py", "--mpi", "--specimen", str(specimen_100), "--out", str(tmp_path / "x"),
                       "--ids", "1")

@@ -84,6 +84,29 @@ def test_kill_9_then_rerun_gives_the_uninterrupted_rows(base, specimen_100, tmp_
     assert values(out) == values(base)
 
 
+def test_sigterm_says_the_study_resumes_and_it_does(specimen_100, tmp_path):
+    """SIGTERM (kill's default, a scheduler's time limit) ended a study with no word before: Python's
+    default action. Now one line says the same command resumes, exit 143 (128 + 15), and it does."""
+    out = tmp_path / "study"
+    ids = ("--ids", "1,2,3,4,5,6,7,8", "--probes", "z")
+    p = subprocess.Popen([sys.executable, os.path.join(SCRIPTS, "run_states.py"), "--specimen", str(specimen_100),
+                          "--out", str(out), *ids], env=dict(os.environ, OMP_NUM_THREADS="1"),
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 300
+    while p.poll() is None and time.time() < deadline:
+        if (out / "probes.csv").exists() and (out / "probes.csv").stat().st_size > 0:
+            break
+        time.sleep(0.01)
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 143, "status %d (0: the study ended before the signal), stderr:\n%s" % (p.returncode, err)
+    assert err.splitlines()[-1] == "error: interrupted; the same command resumes from the last checkpoint", err
+    assert len(rows(out)) < 8
+    proc = states(specimen_100, out, *ids)
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(int(r["state"]) for r in rows(out)) == list(range(1, 9))  # each once, in the order of its path
+
+
 def test_torn_row_is_redone_not_counted(base, specimen_100, tmp_path):
     """Before: a row cut mid-line (kill -9 during a write, a full disk) counted as done forever."""
     out = copy(base, tmp_path)
