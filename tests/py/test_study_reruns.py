@@ -65,20 +65,26 @@ def test_resume_from_checkpoints_is_bit_identical(base, specimen_100, tmp_path):
     assert {r["state"]: r["state_from"] for r in rows(out)} == {"1": "specimen", "2": "specimen", "3": "2"}
 
 
-def test_kill_9_then_rerun_gives_the_uninterrupted_rows(base, specimen_100, tmp_path):
-    """A real kill -9 at whatever moment the first row appears; the rerun repairs and completes."""
-    out = tmp_path / "study"
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    p = subprocess.Popen([sys.executable, os.path.join(SCRIPTS, "run_states.py"), "--specimen", str(specimen_100),
-                          "--out", str(out), "--ids", "1,2,3", "--probes", "zx"], env=env,
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+def running_until_first_row(spec, out, *args):
+    """run_states.py started in the background on one thread, handed back once its first row is in
+    probes.csv (or it has ended, or 300 s have passed); its stderr is a pipe for the caller."""
+    p = subprocess.Popen([sys.executable, os.path.join(SCRIPTS, "run_states.py"), "--specimen", str(spec),
+                          "--out", str(out), *args], env=dict(os.environ, OMP_NUM_THREADS="1"),
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 300
     while p.poll() is None and time.time() < deadline:
         if (out / "probes.csv").exists() and (out / "probes.csv").stat().st_size > 0:
             break
-        time.sleep(0.05)
+        time.sleep(0.01)
+    return p
+
+
+def test_kill_9_then_rerun_gives_the_uninterrupted_rows(base, specimen_100, tmp_path):
+    """A real kill -9 at whatever moment the first row appears; the rerun repairs and completes."""
+    out = tmp_path / "study"
+    p = running_until_first_row(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
     p.send_signal(signal.SIGKILL)
-    p.wait()
+    p.communicate(timeout=120)
     proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
     assert proc.returncode == 0, proc.stderr
     assert values(out) == values(base)
@@ -89,14 +95,7 @@ def test_sigterm_says_the_study_resumes_and_it_does(specimen_100, tmp_path):
     default action. Now one line says the same command resumes, exit 143 (128 + 15), and it does."""
     out = tmp_path / "study"
     ids = ("--ids", "1,2,3,4,5,6,7,8", "--probes", "z")
-    p = subprocess.Popen([sys.executable, os.path.join(SCRIPTS, "run_states.py"), "--specimen", str(specimen_100),
-                          "--out", str(out), *ids], env=dict(os.environ, OMP_NUM_THREADS="1"),
-                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 300
-    while p.poll() is None and time.time() < deadline:
-        if (out / "probes.csv").exists() and (out / "probes.csv").stat().st_size > 0:
-            break
-        time.sleep(0.01)
+    p = running_until_first_row(specimen_100, out, *ids)
     p.send_signal(signal.SIGTERM)
     _, err = p.communicate(timeout=120)
     assert p.returncode == 143, "status %d (0: the study ended before the signal), stderr:\n%s" % (p.returncode, err)
