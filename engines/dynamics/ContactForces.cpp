@@ -89,7 +89,8 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     const int hi = lo + share + (t < extra ? 1 : 0);
     // Each thread's pairs in batches of kBatch, in three passes:
     //  1. the distance of every pair, its square root and division two pairs at a time, then the
-    //     pairs sorted into touching and not;
+    //     pairs sorted into touching and not, the touching ones' normal and overlap written
+    //     straight into the law's batch;
     //  2. the kinematics of the touching ones (relative velocity, lever arms, spin), then the law
     //     on the whole batch (HertzMindlin::evaluate) and the contact forces and moments, the
     //     arithmetic again two contacts at a time in loops without a choice (SSE2 lanes);
