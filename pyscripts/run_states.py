@@ -209,3 +209,5 @@ def main(argv=None):
 
 if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing
     cli.guarded(main, resumable=True)
+else:  # loaded, not run (mpi4py.futures' workers load the script): no start-up guard left behind
+    cli.release_start_guard()

@@ -12,11 +12,13 @@ import math
 import os
 import signal
 import sys
+import threading
 
 from . import param_table
 from .refusal import InputError, Refusal
 
-__all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "in_yade", "description"]
+__all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "release_start_guard", "in_yade",
+           "description"]
 
 
 def fail(message, status=2):
@@ -270,6 +272,17 @@ class Terminated(BaseException):
 
 def _terminate(number, frame):
     raise Terminated()
+
+
+def release_start_guard():
+    """Give SIGINT and SIGTERM back to Python's own handling in a script that was loaded, not run:
+    mpi4py.futures' workers load run_states.py to find its functions, and kept the start-up guard
+    of its first lines, so a worker ended by mpiexec (SIGTERM) printed 'interrupted while starting;
+    nothing was done' beside the master's line that the job resumes. Only the main thread may set
+    handlers; elsewhere there is nothing to give back."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def guarded(main, resumable=False):

@@ -121,7 +121,8 @@ def test_killed_mpi_job_resumes_to_the_same_values(serial, specimen_100, tmp_pat
 
 def test_ctrl_c_on_mpiexec_says_the_job_resumes(specimen_100, tmp_path):
     """Ctrl-C on mpiexec: mpiexec sends its ranks SIGTERM, which ended the master with no word
-    (exit 1, nothing on stderr) before cli.guarded turned SIGTERM into the resume line. Thirteen
+    (exit 1, nothing on stderr) before cli.guarded turned SIGTERM into the resume line; the workers
+    must stay silent (cli.release_start_guard). Thirteen
     states, so that the job is still running when mpiexec acts, about 1 s after the signal."""
     out = tmp_path / "study"
     cmd = mpi_cmd(specimen_100, out, ranks=3)
@@ -137,6 +138,9 @@ def test_ctrl_c_on_mpiexec_says_the_job_resumes(specimen_100, tmp_path):
     assert p.returncode != 0, "the job ended before the signal: give it more states"
     assert len(values(out)) < 13, "every row was written: the signal interrupted nothing"
     assert "error: interrupted; the same command resumes from the last checkpoint" in err, err[-3000:]
+    # The workers load the script without running it; they kept its start-up guard and each said
+    # 'interrupted while starting; nothing was done' beside the master's line (an outside try found it).
+    assert "nothing was done" not in err, err[-3000:]
 
 
 def test_mpi_without_workers_is_refused(specimen_100, tmp_path):
