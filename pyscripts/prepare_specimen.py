@@ -25,8 +25,12 @@ for _signal in (signal.SIGINT, signal.SIGTERM):
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import (clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance, psd,  # noqa: E402
-                       resources, specimen, specimen_file, study_dir)
+try:
+    from trueaniso import (clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance, psd,
+                           resources, specimen, specimen_file, study_dir)
+except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
+    sys.stderr.write("error: %s\n" % exc)
+    os._exit(2)
 
 ASSEMBLIES = ("sphere", "clump1", "clump2")
 ALIASES = {"spheres": "sphere"}

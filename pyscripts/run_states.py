@@ -27,7 +27,11 @@ for _signal in (signal.SIGINT, signal.SIGTERM):
                                               os._exit(128 + number)))
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
-from trueaniso import cli, progress, resources, specimen_file, study, triaxial  # noqa: E402
+try:
+    from trueaniso import cli, progress, resources, specimen_file, study, triaxial
+except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
+    sys.stderr.write("error: %s\n" % exc)
+    os._exit(2)
 
 
 def parser():

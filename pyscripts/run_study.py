@@ -29,9 +29,13 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
-from analysis import figures, report, zeta_contrast  # noqa: E402
-from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, resources,  # noqa: E402
-                       specimen, statics, specimen_file, study, study_dir, triaxial)
+try:
+    from analysis import figures, report, zeta_contrast
+    from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, resources,
+                           specimen, statics, specimen_file, study, study_dir, triaxial)
+except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
+    sys.stderr.write("error: %s\n" % exc)
+    os._exit(2)
 
 DEFAULT_IDS = "1,5,9,13,17,21,25,35,39"
 ASSEMBLIES = ("sphere", "clump1", "clump2")

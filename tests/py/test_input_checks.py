@@ -185,6 +185,19 @@ def test_memory_estimate_bounds_the_measured_peak():
     assert resources.INTERPRETER_BYTES["yade"] > 252e6 > resources.INTERPRETER_BYTES["python3"]
 
 
+@pytest.mark.parametrize("name", ["prepare_specimen.py", "run_states.py", "run_study.py"])
+def test_unbuilt_module_is_one_line(tmp_path, name):
+    """A checkout whose engines are not built yet: the scripts printed a traceback around the
+    ImportError's message (an outside try found it). The Python parts alone, beside no build/
+    and without TRUEANISO_BUILD, stand for that checkout."""
+    for part in ("pyscripts", "analysis"):
+        shutil.copytree(os.path.join(REPO, part), tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
+    env = {k: v for k, v in os.environ.items() if k != "TRUEANISO_BUILD"}
+    proc = subprocess.run([sys.executable, str(tmp_path / "pyscripts" / name), "--help"], capture_output=True,
+                          text=True, timeout=120, cwd=tmp_path, env=env)
+    one_line_error(proc, "compiled module _trueaniso was not found", "build it first")
+
+
 @pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
 @pytest.mark.parametrize("name", ["prepare_specimen.py", "run_states.py", "run_study.py"])
 def test_ctrl_c_while_starting_is_one_line(tmp_path, name, sig):
