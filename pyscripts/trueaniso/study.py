@@ -159,6 +159,8 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                         damping=damping, **(probe_options or {})),
                    dict(damping=damping, **(state_options or {})), keep=checkpoints)
         ordered = [path for _, path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
+        if not any(run.needs(sid) for path in ordered for sid, _, _ in path):  # before, a rerun said nothing of it
+            log("%s: the rows of every state asked for are already there; nothing to do" % out)
         # A state the specimen cannot reach (near its strength, the servo holds it without settling)
         # ends its own path only: the other paths go on, and the run fails at the end naming every
         # such state. Before, the first one stopped the whole study.

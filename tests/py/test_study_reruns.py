@@ -135,6 +135,7 @@ def test_rerun_of_a_finished_study_does_nothing(base, specimen_100, tmp_path):
     proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
     assert proc.returncode == 0, proc.stderr
     assert "probe" not in proc.stdout and (out / "probes.csv").read_bytes() == before
+    assert "nothing to do" in proc.stdout, proc.stdout  # it used to say only that it continued the study
 
 
 @pytest.mark.parametrize("args,field", [
