@@ -367,7 +367,9 @@ class _Run:
                        probe_wall_time=r["wall_time"], state_steps=p["steps"], state_wall_time=p["wall_time"],
                        state_from=p["start"])
             row.update(extra)
-            self.sink(row, self.columns or COLUMNS + list(extra))
+            # The fabric's own Zm is the row's Zm (the same value): one column, not two (pandas read the
+            # second as 'Zm.1').
+            self.sink(row, self.columns or COLUMNS + [k for k in extra if k not in COLUMNS])
             self.done.add((str(sid), name))
             if nus:
                 self.log("state %s: probe %s  E = %.1f MPa  %s = %.4f  %s = %.4f  (%d steps, %.1f s)"

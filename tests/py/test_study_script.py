@@ -46,6 +46,9 @@ def test_one_row_per_state_and_probe(finished):
     r = rows(finished)
     assert sorted((x["state"], x["probe"]) for x in r) == [("1", "x"), ("1", "z"), ("2", "x"), ("2", "z")]
     assert list(r[0].keys())[:len(study.COLUMNS)] == study.COLUMNS
+    with open(finished / "probes.csv", newline="") as f:
+        header = next(csv.reader(f))
+    assert len(header) == len(set(header)), "a column written twice (Zm was: the row's and the fabric's)"
     for name in ("Zm", "R_xx", "H_zz", "NcV_count", "mic_E_z"):  # fabric columns are always there
         assert name in r[0], name
     for x in r:
