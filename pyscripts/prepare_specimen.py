@@ -131,6 +131,7 @@ def validate(o):
 def main():
     o = options()
     dist = validate(o)
+    cli.saves_work_in(lambda: os.path.exists(prep_checkpoint.path_for(o.out)))
     directory, name = os.path.split(os.path.abspath(o.out))
     # One preparation per output at a time; under the lock, the temporary files of an
     # interrupted preparation of this output are removed.

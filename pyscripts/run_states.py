@@ -28,7 +28,7 @@ for _signal in (signal.SIGINT, signal.SIGTERM):
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
 try:
-    from trueaniso import cli, progress, resources, specimen_file, study, triaxial
+    from trueaniso import cli, progress, resources, specimen_file, study, study_dir, triaxial
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
     sys.stderr.write("error: %s\n" % exc)
     os._exit(2)
@@ -193,6 +193,7 @@ def mpi_executor(o):
 def main(argv=None):
     o = cli.parse(parser(), argv)
     states = validate(o)
+    cli.saves_work_in(lambda: study_dir.has_saved_work(o.out))
     executor = mpi_executor(o)
     if o.threads:
         from trueaniso import engines

@@ -170,6 +170,9 @@ def prepare(o, log):
 def main(argv=None):
     o = cli.parse(parser(), argv)
     states = validate(o)
+    specimen_path = os.path.join(o.out, SPECIMEN)
+    cli.saves_work_in(lambda: study_dir.has_saved_work(o.out) or os.path.exists(specimen_path)
+                      or os.path.exists(prep_checkpoint.path_for(specimen_path)))
     if o.threads:
         engines.set_threads(o.threads)
 

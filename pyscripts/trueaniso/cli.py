@@ -22,9 +22,12 @@ __all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "relea
 
 
 def fail(message, status=2):
-    sys.stdout.flush()
-    sys.stderr.write("error: %s\n" % message)
-    sys.stderr.flush()
+    try:
+        sys.stdout.flush()
+        sys.stderr.write("error: %s\n" % message)
+        sys.stderr.flush()
+    except OSError:  # a closed pipe: the status still says it
+        pass
     # Inside yade-double, sys.exit in a script would drop into YADE's handler; os._exit is final.
     os._exit(status)
 
@@ -285,11 +288,34 @@ def release_start_guard():
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+_saved_work = None  # set by a resumable script once it knows where its work goes (saves_work_in)
+
+
+def saves_work_in(check):
+    """Tell guarded() how to see whether an interrupted run has anything to resume from: check()
+    is True when a checkpoint or a finished row of this command's work is on disk. Without it, an
+    interruption before the first checkpoint promised a resume, and the rerun started over."""
+    global _saved_work
+    _saved_work = check
+
+
+def _interrupted_line(what="interrupted"):
+    if _saved_work is None:  # stopped before the script knew its output: nothing was saved
+        return what + " before the first checkpoint; the same command starts over"
+    try:
+        saved = _saved_work()
+    except OSError:  # cannot look: the promise that holds whenever a checkpoint was written
+        return what + "; the same command resumes from the last checkpoint, if one was written"
+    return what + ("; the same command resumes from the last checkpoint" if saved
+                   else " before the first checkpoint; the same command starts over")
+
+
 def guarded(main, resumable=False):
     """Run main(); refusals and ValueError become one line and exit 2. A resumable script (its
     work continues from checkpoints: studies, preparations) says so when interrupted, by Ctrl-C or
     by SIGTERM: what a scheduler sends at the time limit, `kill` by default, and what mpiexec sends
-    its ranks when it is interrupted itself (without this, such a run ended with no word)."""
+    its ranks when it is interrupted itself (without this, such a run ended with no word). It
+    promises a resume only when something was saved (saves_work_in)."""
     # The scripts exit at once on Ctrl-C while they start (their first lines); from here on it
     # raises KeyboardInterrupt again, as under yade-double, so that the line below says what to do.
     signal.signal(signal.SIGINT, signal.default_int_handler)
@@ -302,4 +328,11 @@ def guarded(main, resumable=False):
         fail(str(exc))
     except (KeyboardInterrupt, Terminated) as exc:
         status = 128 + (signal.SIGTERM if isinstance(exc, Terminated) else signal.SIGINT)
-        fail("interrupted; the same command resumes from the last checkpoint" if resumable else "interrupted", status)
+        fail(_interrupted_line() if resumable else "interrupted", status)
+    except BrokenPipeError:
+        # The reader of the output went away (`| head`, a closed terminal): a Unix tool ends
+        # quietly on SIGPIPE; this ended in a traceback. Output to nowhere from here on, then the
+        # line that says what was kept (on stderr, if it is still open).
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        what = "output closed (broken pipe)"
+        fail(_interrupted_line(what) if resumable else what, 128 + signal.SIGPIPE)

@@ -32,7 +32,7 @@ COLUMNS = ["path", "state", "b", "sigma_z_goal", "sigma_x", "sigma_y", "sigma_z"
            "gamma", "Zm", "void_ratio", "rotations", "detection", "damping",
            "probe_steps", "probe_wall_time", "state_steps", "state_wall_time", "state_from"]
 WALL_TIME_COLUMNS = ("probe_wall_time", "state_wall_time")  # the only columns a rerun does not reproduce
-CSV_NAME = "probes.csv"
+CSV_NAME = study_dir.CSV_NAME
 
 
 def read_rows(path):

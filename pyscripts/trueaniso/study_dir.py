@@ -23,6 +23,7 @@ from .refusal import Refusal
 METADATA = "metadata.json"
 SUPERSEDED = "superseded"
 LAYOUT = 2  # of metadata.json; 1 (before fingerprints) cannot prove what its rows were made with
+CSV_NAME = "probes.csv"  # one row per state and probe direction (trueaniso/study.py)
 WAY_OUT = "use a new --out, or --force-new to move the old study aside into %s/"
 
 
@@ -53,6 +54,18 @@ def clean_strays(out, log=print, subdirs=("", "states", "figures")):
     if gone:
         log("%s: removed %d temporary file(s) of an interrupted run: %s" % (out, len(gone), ", ".join(gone)))
     return gone
+
+
+def has_saved_work(out):
+    """True when the study in `out` has something a rerun continues from: a row in probes.csv or
+    a state's checkpoint (states/ID.npz)."""
+    csv = os.path.join(out, CSV_NAME)
+    if os.path.isfile(csv):
+        with open(csv) as f:
+            if sum(1 for line in f if line.strip()) > 1:  # the header and a row
+                return True
+    states = os.path.join(out, "states")
+    return os.path.isdir(states) and any(n.endswith(".npz") and not n.startswith(".") for n in os.listdir(states))
 
 
 def supersede(out, log=print):
@@ -162,7 +175,7 @@ def check(out, fingerprint, states):
     raises StudyMismatch naming the first difference."""
     meta = read_metadata(out)
     if meta is None:
-        others = [n for n in os.listdir(out) if n in ("probes.csv", "states")]
+        others = [n for n in os.listdir(out) if n in (CSV_NAME, "states")]
         if others:
             raise StudyMismatch("%s holds results (%s) but no %s: nothing proves which study they belong to; %s"
                                 % (out, ", ".join(others), METADATA, _way_out(out)))

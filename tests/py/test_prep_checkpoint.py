@@ -224,3 +224,49 @@ def test_force_resumes_a_checkpoint_of_its_own_settings_and_adopts_its_interval(
     assert again.returncode == 0, again.stderr
     assert "resuming the preparation from" in again.stdout and not os.path.exists(ck)
     assert specimen_file.read(str(out))[1]["parameters"]["checkpoint_every"] == 20000
+
+
+def _running(out, every, *extra):
+    """prepare_specimen.py (300 spheres, 10-50 s) started in the background, handed back once it
+    printed its first progress line (the start-up guard is gone by then)."""
+    cmd = [sys.executable, os.path.join(SCRIPTS, "prepare_specimen.py"), "--n", "300", "--seed", "9", "--threads", "1",
+           "--checkpoint-every", str(every), "--progress-every", "0.2", "--out", str(out), *extra]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, OMP_NUM_THREADS="1"))
+    while "preparation: step" not in proc.stdout.readline():
+        assert proc.poll() is None, proc.stderr.read()
+    return proc
+
+
+def test_sigterm_promises_a_resume_only_when_a_checkpoint_was_written(tmp_path):
+    """Before: 'the same command resumes from the last checkpoint' also when none was written (the
+    rerun then started over, found by an outside try)."""
+    out = tmp_path / "none.npz"
+    proc = _running(out, 0)  # --checkpoint-every 0: no checkpoint, ever
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    assert err.splitlines()[-1] == "error: interrupted before the first checkpoint; the same command starts over", err
+
+    out = tmp_path / "some.npz"
+    ck = prep_checkpoint.path_for(str(out))
+    proc = _running(out, 2000)
+    deadline = time.time() + 300
+    while not os.path.exists(ck) and proc.poll() is None and time.time() < deadline:
+        proc.stdout.readline()
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    assert err.splitlines()[-1] == "error: interrupted; the same command resumes from the last checkpoint", err
+
+
+def test_closed_output_is_one_line_not_a_traceback(tmp_path):
+    """`prepare_specimen.py ... | head -2`: before, the first progress line after head had gone
+    ended the run in a BrokenPipeError traceback. Now one line on stderr says what was kept, and
+    the status is SIGPIPE's (141)."""
+    proc = _running(tmp_path / "s.npz", 0)
+    proc.stdout.close()  # the reader goes away
+    err = proc.stderr.read()
+    proc.wait(timeout=120)
+    assert proc.returncode == 141, err
+    assert err == "error: output closed (broken pipe) before the first checkpoint; the same command starts over\n", err

@@ -16,7 +16,7 @@ import time
 import pytest
 from conftest import SCRIPTS, one_line_error, run_script
 
-from trueaniso import specimen_file
+from trueaniso import specimen_file, study_dir
 
 WALL = {"probe_wall_time", "state_wall_time"}  # study.WALL_TIME_COLUMNS: the only columns a rerun may change
 
@@ -320,3 +320,18 @@ def test_differences_are_named_one_way_for_studies_checkpoints_and_specimens():
     assert [k for k, _, _ in study_dir.differences(there, here)] == ["d50", "law.rolling", "seed"]
     assert study_dir.said(study_dir.differences(dict(a="clump1"), dict(a="clump2"), rel_tol=0.5)) == [
         'a: "clump1" there, "clump2" here']
+
+
+def test_saved_work_is_a_row_or_a_state_checkpoint(tmp_path):
+    """What decides whether an interrupted study promises a resume (cli.saves_work_in)."""
+    out = tmp_path / "study"
+    assert not study_dir.has_saved_work(str(out))  # not there yet
+    (out / "states").mkdir(parents=True)
+    (out / "states" / ".tmp-abc-1.npz").write_text("half")  # a torn write is nothing to resume from
+    (out / "probes.csv").write_text("state,probe\n")  # a header alone neither
+    assert not study_dir.has_saved_work(str(out))
+    (out / "probes.csv").write_text("state,probe\n1,z\n")
+    assert study_dir.has_saved_work(str(out))
+    (out / "probes.csv").unlink()
+    (out / "states" / "1.npz").write_text("x")
+    assert study_dir.has_saved_work(str(out))
