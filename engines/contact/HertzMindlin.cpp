@@ -24,14 +24,14 @@ void HertzMindlin::evaluate(Batch& q, int m) const {
     q.fy[k] = fy;
     q.fz[k] = fz;
     q.N[k] = N;
-    q.sliding[k] = f2 > cap * cap * kCapSlack ? 1.0 : 0.0;
+    q.sliding[k] = beyondCap(f2, cap) ? 1.0 : 0.0;
   }
   // Apart, because its square root and division, computed for every contact, cost the loop
   // above 8 % of the force loop's time (perf) for the 1-2 % of contacts that slide.
   for (int k = 0; k < m; ++k) {
     if (q.sliding[k] == 0) continue;
     const Real cap = mu_ * q.N[k];
-    const Real scale = cap / std::sqrt(q.fx[k] * q.fx[k] + q.fy[k] * q.fy[k] + q.fz[k] * q.fz[k]);
+    const Real scale = capScale(q.fx[k] * q.fx[k] + q.fy[k] * q.fy[k] + q.fz[k] * q.fz[k], cap);
     q.fx[k] *= scale;
     q.fy[k] *= scale;
     q.fz[k] *= scale;

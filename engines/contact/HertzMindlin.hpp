@@ -156,14 +156,15 @@ class HertzMindlin {
   // 8 ulps of its squared norm): re-evaluating a contact without increment must not rescale it
   // by 1 - 1e-16 each time.
   static constexpr Real kCapSlack = 1.0 + 8.0 * std::numeric_limits<Real>::epsilon();
-  // The Coulomb cap |Fs| <= mu N of evaluate, with the same slack, for the rolling moment.
+  // The one rule of a cap (Coulomb's |Fs| <= mu N in evaluate, the rolling moment's): a vector of
+  // squared magnitude v2 beyond the cap, with the slack, is scaled by capScale onto it.
+  static bool beyondCap(Real v2, Real cap) { return v2 > cap * cap * kCapSlack; }
+  static Real capScale(Real v2, Real cap) { return cap / std::sqrt(v2); }
   static bool capMagnitude(Vec3& v, Real cap) {
     const Real v2 = v.squaredNorm();
-    if (v2 > cap * cap * kCapSlack) {
-      v *= cap / std::sqrt(v2);
-      return true;
-    }
-    return false;
+    if (!beyondCap(v2, cap)) return false;
+    v *= capScale(v2, cap);
+    return true;
   }
 
  private:
