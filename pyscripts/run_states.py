@@ -88,6 +88,9 @@ def parser():
 
 def validate(o):
     """Every check that needs no work; returns the states."""
+    problem = cli.output_problem(o.out)  # first: the thread count below is read from what --out holds
+    if problem:
+        raise cli.InputError(problem)
     cli.resolve_threads(o)
     if o.path == "cross-anisotropic":
         if o.states is not None or o.table_c1 or o.ids is not None:
@@ -116,9 +119,6 @@ def validate(o):
         raise cli.InputError(str(exc)) from None
     o.probe_axes = probe_axes(o.probes, o.path)
     check_probe_options(o)
-    problem = cli.output_problem(o.out)
-    if problem:
-        raise cli.InputError(problem)
     try:
         _, meta = specimen_file.read(o.specimen)
     except specimen_file.SpecimenFileError as exc:

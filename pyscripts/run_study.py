@@ -63,6 +63,9 @@ def parser():
 
 
 def validate(o):
+    problem = cli.output_problem(o.out)  # first: the thread count below is read from what --out holds
+    if problem:
+        raise cli.InputError(problem)
     # A study, or a preparation for one killed before the study began, goes on at its own count.
     cli.resolve_threads(o, preparation=prep_checkpoint.path_for(os.path.join(o.out, SPECIMEN)))
     if o.n < 100:
@@ -82,9 +85,6 @@ def validate(o):
     if not o.mu > 0:
         raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
     resources.check_threads(o.threads)
-    problem = cli.output_problem(o.out)
-    if problem:
-        raise cli.InputError(problem)
     spheres = o.n * members(o.assembly)
     prep, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
     # The static solve's memory goes with the bodies' degrees of freedom and the contacts (members).

@@ -145,6 +145,8 @@ def output_problem(path, directory=True, option="--out"):
     created, in a place where this user can create files. Checked by creating and removing a
     file, so read-only mounts and permissions count as they really are (root included)."""
     import tempfile
+    if not path:  # '' is no place (abspath would make it the working directory)
+        return "%s must name a %s" % (option, "directory" if directory else "file")
     full = os.path.abspath(path)
     if os.path.isdir(full) != directory and os.path.exists(full):
         return "%s %s is a %s, not a %s" % (option, path, "directory" if directory is False else "file",

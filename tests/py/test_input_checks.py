@@ -74,8 +74,16 @@ def test_run_states_refuses_before_work(specimen_100, tmp_path, args, words):
 def test_run_states_out_must_be_a_writable_directory(specimen_100, blocker):
     """Before: a traceback."""
     for out, words in ((blocker, ["is a file"]), (blocker / "sub", ["is a file, not a directory"]),
-                       ("/sys/trueaniso-out", ["cannot create files in /sys"])):
+                       ("/sys/trueaniso-out", ["cannot create files in /sys"]), ("", ["--out must name a directory"])):
         one_line_error(run_script("run_states.py", "--specimen", specimen_100, "--ids", "1", "--out", out), *words)
+
+
+def test_run_study_out_must_be_a_writable_directory(blocker):
+    """Before: a file as --out, or a place inside a file, was read as a study's preparation checkpoint
+    first (NotADirectoryError traceback); '' gave FileNotFoundError (found by an outside try)."""
+    for out, words in ((blocker, ["is a file"]), (blocker / "sub", ["is a file, not a directory"]),
+                       ("", ["--out must name a directory"])):
+        one_line_error(run_script("run_study.py", "--n", "100", "--out", out), *words)
 
 
 @pytest.mark.parametrize("args,words", [
