@@ -144,6 +144,15 @@ def test_figures_on_missing_or_truncated_tables(tmp_path):
     proc = figures(tmp_path / "partial.csv")
     assert proc.returncode == 0 and "cut short" in proc.stderr and (tmp_path / "f" / "E_vs_sigma.png").exists()
 
+    # A shear probe's row has G and no E: valid, and not what the figures plot. Before, its empty E
+    # refused the table (found by an outside try on a --path cross-anisotropic study).
+    shear = row.replace("1,z,3e8", "1,yz,").replace("0.1,0.1,nu_zx,nu_zy", ",,,")
+    (tmp_path / "shear.csv").write_text(header + row + shear)
+    proc = figures(tmp_path / "shear.csv")
+    assert proc.returncode == 0, proc.stderr
+    (tmp_path / "only-shear.csv").write_text(header + shear)
+    one_line_error(figures(tmp_path / "only-shear.csv"), "no rows of normal probes")
+
 
 def test_fabric_of_a_scene_without_contacts_is_refused():
     """Before: Zm = NaN, quietly."""
