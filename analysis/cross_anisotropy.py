@@ -11,7 +11,6 @@ with G_vv = G a_v^4 that ratio would be (a_h^2 / a_v^2)^2, so it is read as G_hh
 fabric columns (Eqs. 35-37 with the row's zeta, then Eq. 25).
 """
 import argparse
-import json
 import math
 import os
 import sys
@@ -88,7 +87,10 @@ def figure(rows, path):
     ax.set_title("Do G, E and nu show one anisotropy? (Fig. 16)", fontsize=11)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)  # as --out's JSON (trueaniso.atomic)
+    tmp = path + ".tmp.png"  # atomic, as analysis.figures writes its figures
+    fig.savefig(tmp, dpi=120)
+    os.replace(tmp, path)
     plt.close(fig)
 
 
@@ -98,7 +100,13 @@ def main(argv=None):
     p.add_argument("--out", help="JSON file for the per-state measures")
     p.add_argument("--figure", help="PNG of the ratios against sigma_v / sigma_h")
     o = p.parse_args(argv)
+    from trueaniso import atomic, cli
     try:
+        # Where the outputs go, before any work: before, a missing directory was a traceback at the end.
+        for option, path in (("--out", o.out), ("--figure", o.figure)):
+            problem = path is not None and cli.output_problem(path, directory=False, option=option)
+            if problem:
+                raise ResultsError(problem)
         rows = states(o.probes)
     except ResultsError as exc:
         print("error: %s" % exc, file=sys.stderr)
@@ -108,8 +116,7 @@ def main(argv=None):
               % (m["state"], m["sigma_v"] / 1e3, m["G_vh"] / 1e6, m["G_hh"] / 1e6, m["G_ratio"], m["E_ratio_root"],
                  m["G_vh_split"]))
     if o.out:
-        with open(o.out, "w") as f:
-            json.dump(rows, f, indent=1)
+        atomic.write_json(o.out, rows)
     if o.figure:
         figure(rows, o.figure)
     return 0

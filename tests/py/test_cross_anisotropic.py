@@ -5,10 +5,12 @@ import csv
 import json
 import math
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
-from conftest import one_line_error, run_script
+from conftest import REPO, one_line_error, run_script
 
 from analysis import cross_anisotropy
 from trueaniso import triaxial
@@ -117,3 +119,20 @@ def test_path_state_checks():
     with pytest.raises(ValueError, match="unknown path"):
         triaxial.path_mean_stress("orthotropic", 0.0, 80e3)
     assert [i for i, _, _ in triaxial.cross_anisotropic_states([60e3, 112.5e3])] == ["sv60", "sv112.5"]
+
+
+def test_outputs_go_where_asked_or_are_refused_first(tmp_path):
+    """Before: --out in a directory that did not exist was a FileNotFoundError traceback after the
+    work (found by an outside try). Now missing directories are made, as for every other output,
+    and a place that cannot be written is one line before any work."""
+    table = os.path.join(REPO, "docs", "data", "fig16-spheres-4000-s1", "probes.csv")
+    out, fig = tmp_path / "new" / "ca.json", tmp_path / "other" / "ca.png"
+    assert cross_anisotropy.main([table, "--out", str(out), "--figure", str(fig)]) == 0
+    assert {m["state"] for m in json.loads(out.read_text())} >= {"sv100", "sv200"} and fig.stat().st_size > 0
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    for option in ("--out", "--figure"):
+        proc = subprocess.run([sys.executable, "-m", "analysis.cross_anisotropy", table, option, str(blocker / "x")],
+                              capture_output=True, text=True, cwd=REPO, timeout=120)
+        assert proc.returncode == 2 and proc.stdout == "", proc.stderr
+        assert proc.stderr.startswith("error: %s" % option) and len(proc.stderr.splitlines()) == 1, proc.stderr
