@@ -59,7 +59,7 @@ def scalar_moduli_vs_zm(rows, path):
             z.append(st["Zm"])
             K.append(m["K"] / 1e6)
             G.append(m["G"] / 1e6)
-    if len(z) < 3:
+    if not hyperelastic.quadratic_fittable(z):
         return None
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
     out = {}

@@ -48,9 +48,18 @@ def predicted(K, G, a2):
     return E, nu, Gij
 
 
+def quadratic_fittable(x):
+    """A quadratic in Zm needs three distinct Zm: states of one contact network share Zm exactly
+    (a short cross-anisotropic path of 300 spheres gave two such of three), and a fit through two
+    abscissae is any parabola through two points (numpy warns, R^2 means nothing)."""
+    return len(np.unique(np.asarray(x, float))) >= 3
+
+
 def quadratic_fit(x, y):
     """K or G = c1 Zm^2 + c2 Zm + c3 (section 4.1, Table 2): coefficients and R^2."""
     x, y = np.asarray(x, float), np.asarray(y, float)
+    if not quadratic_fittable(x):
+        raise ValueError("a quadratic fit against Zm needs 3 distinct Zm, not %d" % len(np.unique(x)))
     c = np.polyfit(x, y, 2)
     r2 = 1 - np.sum((np.polyval(c, x) - y) ** 2) / np.sum((y - y.mean()) ** 2)
     return c, float(r2)

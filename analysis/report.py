@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from . import chain, figures, zeta_contrast
+from . import chain, figures, hyperelastic, zeta_contrast
 from .results import ResultsError, read_metadata, read_probes
 
 AXES = "xyz"
@@ -338,6 +338,10 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
         lines += ["## Probes with rotations %s: %d complete states" % (rot, n), ""]
         if n < 3:
             lines += ["Fewer than 3 complete states: no fits.", ""]
+            continue
+        if not hyperelastic.quadratic_fittable(tab["Zm"]):
+            lines += ["Fewer than 3 distinct Zm among the %d states (states of one contact network share Zm): "
+                      "no fits." % n, ""]
             continue
         tag = "" if rot == "free" else "-" + rot
         ref = tab["state"].index("1") if "1" in tab["state"] else int(np.argmin(np.abs(tab["sigma"] - tab["sigma"].mean(1, keepdims=True)).sum(1)))
