@@ -56,6 +56,12 @@ def test_first_run_writes_everything_and_reports_progress(first):
     np.testing.assert_allclose([st["sigma_1"], st["sigma_2"], st["sigma_3"]], principal, rtol=1e-12)
     np.testing.assert_allclose(principal, 100e3, atol=500.0)
     assert st["tau_max"] == np.abs([st["sigma_yz"], st["sigma_xz"], st["sigma_xy"]]).max() < 500.0
+    # The contrast zeta of two states is weakly fixed: its line gives the standard errors, and says
+    # when the search stopped at a bound. Before, 0.000 (the bound) read as a calibration.
+    contrast = json.loads((out / "summary.json").read_text())["zeta_contrast"]
+    line = next(x for x in proc.stdout.splitlines() if x.startswith("zeta calibrated"))
+    assert "zeta_h = %.3f +/- %.3f" % (contrast["zeta_h"], contrast["se_h"]) in line, line
+    assert ("at a bound of the search" in line) == contrast["at_bound"], line
 
 
 def test_rerun_in_a_row_does_nothing_new(first, tmp_path):
