@@ -152,8 +152,6 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
             raise study_dir.StudyMismatch("%s has rows of states %s that metadata.json does not define; %s"
                                           % (csv_path, ", ".join(strange),
                                              study_dir.WAY_OUT % os.path.join(out, study_dir.SUPERSEDED)))
-        study_dir.write_metadata(out, fp, states, axes, record, previous)
-        os.makedirs(os.path.join(out, "states"), exist_ok=True)
         run = _Run(specimen_path, spec_meta, out, fp, axes, csv_path, table, log, progress_every, path,
                    dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
                         damping=damping, **(probe_options or {})),
@@ -161,6 +159,9 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         ordered = [path for _, path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
         if not any(run.needs(sid) for path in ordered for sid, _, _ in path):  # before, a rerun said nothing of it
             log("%s: the rows of every state asked for are already there; nothing to do" % out)
+        else:  # a run that does nothing leaves metadata.json as it was (before, it added itself to the runs)
+            study_dir.write_metadata(out, fp, states, axes, record, previous)
+            os.makedirs(os.path.join(out, "states"), exist_ok=True)
         # A state the specimen cannot reach (near its strength, the servo holds it without settling)
         # ends its own path only: the other paths go on, and the run fails at the end naming every
         # such state. Before, the first one stopped the whole study.
