@@ -250,9 +250,9 @@ def parse(parser, argv=None):
                                         "yade-batch passes it in YADE_BATCH instead")
     parser.add_argument("--line", type=int, help="line of --table, numbered as a text editor shows it (as yade-batch does)")
     argv = script_args() if argv is None else list(argv)
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--table")
-    pre.add_argument("--line", type=int)
+    pre = Parser(add_help=False)  # its refusals are one line too (argparse's own printed usage first)
+    pre.add_argument("--table", help="the table")
+    pre.add_argument("--line", type=int, help="its line")
     try:
         known, _ = pre.parse_known_args(argv)
         source = _table_source(known)

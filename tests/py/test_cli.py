@@ -56,3 +56,6 @@ def test_table_line_supplies_parameters(tmp_path):
     assert proc.returncode == 2 and "--phi-cell 0.9" in proc.stderr  # the table's value was used
     proc = run("--table", str(table), "--line", "1", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and "no data on line 1" in proc.stderr
+    # A --line that is no number: one line too (before, argparse's usage line came first).
+    proc = run("--table", str(table), "--line", "abc", "--out", str(tmp_path / "s.npz"))
+    assert proc.returncode == 2 and proc.stderr == "error: argument --line: invalid int value: 'abc'\n", proc.stderr
