@@ -61,7 +61,8 @@ def options(argv=None):
     p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
                    help="cap of the expansion/compression rate as an inertial number")
     p.add_argument("--unbalanced", type=cli.finite, default=1e-3, help="unbalanced force of the final state")
-    cli.add_threads_option(p, study=True)
+    cli.add_threads_option(p, study=True, continues="the interrupted preparation of --out (its checkpoint; "
+                                                    "the packing's last bits depend on the count)")
     p.add_argument("--checkpoint-every", type=cli.count, default=None,
                    help="steps between checkpoints of the preparation, from which an interrupted run resumes; "
                         "default %d, or an interrupted preparation's own (0: none; the specimen is then bit for "

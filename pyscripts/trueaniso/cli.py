@@ -59,15 +59,16 @@ class Parser(argparse.ArgumentParser):
         fail(message)
 
 
-def add_threads_option(parser, study=False):
-    """--threads, as every script that runs the engines offers it (0: all cores). A study script
-    (study=True) leaves it None when not given, for resolve_threads."""
+def add_threads_option(parser, study=False, continues="the study --out holds (a study continues at its own count, "
+                                                    "which its last bits depend on)"):
+    """--threads, as every script that runs the engines offers it (0: all cores). A script that
+    continues work (study=True) leaves it None when not given, for resolve_threads; `continues`
+    names the work whose count it then takes."""
     from . import resources
     parser.add_argument("--threads", type=count, default=None if study else 0,
                         help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)%s"
                              % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE,
-                                "; when not given: the count of the study --out holds (a study continues "
-                                "at its own count, which its last bits depend on), else all cores" if study else ""))
+                                "; when not given: the count of %s, else all cores" % continues if study else ""))
 
 
 def resolve_threads(o, study=True, preparation=None):
