@@ -126,8 +126,20 @@ def save(path, scene, seed=None, parameters=None, summary=None):
 
 def read(path):
     """(arrays, meta) after every check; raises SpecimenFileError."""
+    if os.path.isdir(path):
+        raise SpecimenFileError("%s is a directory, not a specimen file (.npz)" % path)
     if not os.path.isfile(path):
         raise SpecimenFileError("specimen file not found: %s" % path)
+    # An .npz is a zip archive; np.load reads anything else as a pickle it then refuses ("Cannot
+    # load file containing pickled data"), which named the wrong problem.
+    try:
+        with open(path, "rb") as f:
+            magic = f.read(4)
+    except OSError as exc:
+        raise SpecimenFileError("cannot read specimen file %s (%s)" % (path, exc.strerror)) from None
+    if magic != b"PK\x03\x04":
+        raise SpecimenFileError("%s is not a specimen file (.npz, a zip archive)%s"
+                                % (path, ": it is empty" if not magic else ""))
     try:
         with np.load(path, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}

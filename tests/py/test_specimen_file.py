@@ -1,6 +1,7 @@
 """Specimen files that must be refused: corrupt, wrong version, not a specimen."""
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -79,6 +80,17 @@ def test_other_npz_is_refused(tmp_path):
 def test_missing_file_is_refused(tmp_path):
     with pytest.raises(specimen_file.SpecimenFileError, match="not found"):
         specimen_file.load(str(tmp_path / "none.npz"))
+
+
+def test_what_is_not_a_specimen_file_is_named(tmp_path):
+    """Before: a directory was 'not found', and an empty or text file 'Cannot load file containing
+    pickled data when allow_pickle=False' (numpy reads what is no zip as a pickle; an outside try)."""
+    (tmp_path / "empty.npz").write_bytes(b"")
+    (tmp_path / "text.npz").write_text("positions 1 2 3\n")
+    for name, message in (("", "is a directory, not a specimen file"), ("empty.npz", "(.npz, a zip archive): it is empty"),
+                          ("text.npz", "is not a specimen file (.npz, a zip archive)")):
+        with pytest.raises(specimen_file.SpecimenFileError, match=re.escape(message)):
+            specimen_file.read(str(tmp_path / name))
 
 
 def test_save_replaces_atomically(saved, tmp_path):
