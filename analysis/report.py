@@ -174,6 +174,22 @@ def _study_line(results):
                summ.get("Zm", float("nan")), fp.get("path", "true-triaxial"), law))
 
 
+def _missing_states_line(results, rows):
+    """The states the study defines (metadata.json) that have no row in the table: not reached (a
+    specimen near its strength creeps; docs/runs.md) or not run yet. Before, the report counted the
+    states it had and said nothing of the others. None when there are none, or no metadata."""
+    meta = read_metadata(results)
+    if meta is None:
+        return None
+    have = {r["state"] for r in rows}
+    missing = [sid for sid in meta.get("states", {}) if sid not in have]
+    if not missing:
+        return None
+    missing.sort(key=lambda sid: (0, int(sid), "") if sid.isdigit() else (1, 0, sid))
+    return ("States of this study without a row in its table: %s (not reached, or not run yet: the run that "
+            "asked for them ended with the reason; docs/runs.md)." % ", ".join(missing))
+
+
 def paper_figures(rows, out, tag, assembly):
     """Figs 5, 6, 8, 9, 10 and 12 from the rows of one rotations setting, each with the paper's
     statement beside our numbers."""
@@ -326,9 +342,9 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
              "Made by `analysis/report.py` from `%s` on %s. Material: G = %.4g Pa, nu = %.3g (%s; checked "
              "against the table's micromechanical moduli). Each table gives the paper's number beside ours."
              % (csv_path, time.strftime("%Y-%m-%d"), material["shear_modulus"], material["poisson"], where), ""]
-    study_line = _study_line(results)
-    if study_line:
-        lines += [study_line, ""]
+    for line in (_study_line(results), _missing_states_line(results, rows)):
+        if line:
+            lines += [line, ""]
     os.makedirs(out, exist_ok=True)
     numbers = {}
     for rot in sorted({r["rotations"] for r in rows}):

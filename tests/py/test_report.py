@@ -4,6 +4,7 @@
 import csv
 import json
 import os
+import shutil
 import subprocess
 import sys
 import warnings
@@ -327,3 +328,19 @@ def test_no_quadratic_through_two_distinct_zm(small_table, tmp_path):
     assert "table2" not in numbers.get("free", {})
     with pytest.raises(ValueError, match="3 distinct Zm"):
         hyperelastic.quadratic_fit([5.9, 5.8, 5.8], [1.0, 2.0, 3.0])
+
+
+def test_states_without_rows_are_named(small_table, tmp_path):
+    """Before: a study whose run stopped at states it could not reach got a report that counted the
+    states it had and said nothing of the others (found by an outside try)."""
+    study = tmp_path / "study"
+    study.mkdir()
+    shutil.copy(small_table, study / "probes.csv")
+    defined = {sid: dict(b=0.0, sigma_z=1e5) for sid in STATES + ("30", "sv50")}
+    (study / "metadata.json").write_text(json.dumps(dict(states=defined)))
+    path, _ = report.build(str(study), str(tmp_path / "rep"), log=lambda m: None)
+    assert "States of this study without a row in its table: 30, sv50 (not reached" in open(path).read()
+    del defined["30"], defined["sv50"]
+    (study / "metadata.json").write_text(json.dumps(dict(states=defined)))
+    path, _ = report.build(str(study), str(tmp_path / "rep2"), log=lambda m: None)
+    assert "without a row" not in open(path).read()
