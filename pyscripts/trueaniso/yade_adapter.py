@@ -31,6 +31,7 @@ class CellAdapter:
         self.O = O
         self.ref_inverse = np.linalg.inv(_matrix(O.cell.hSize))
         self.calls = 0
+        self.was_done = controller.done
 
     def measure(self):
         from yade import utils
@@ -50,8 +51,12 @@ class CellAdapter:
         L = engines.velocity_gradient(rates)
         self.O.cell.velGrad = Matrix3(*[float(v) for v in L.ravel()])
         self.calls += 1
-        if self.controller.done:
+        # Pause once, when the controller gets done: that is how run_until_done's O.run returns.
+        # Pausing at every call after it made any later O.run(N) of the scene stop after one step,
+        # without a word, while the finished controller stayed attached (an outside try).
+        if self.controller.done and not self.was_done:
             self.O.pause()
+        self.was_done = self.controller.done
 
 
 def attach(controller, stiffness, O=None, label="trueanisoController"):

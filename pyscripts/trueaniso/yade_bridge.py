@@ -51,17 +51,77 @@ def _yade_matrix(m):
 
 
 def scene_from_yade(O=None, import_contacts=True):
-    """Our Scene from YADE's spheres, periodic cell, material and (optionally) contact history.
+    """Our Scene from YADE's spheres (or clumps), periodic cell, material and (optionally) contact
+    history, with its contacts evaluated by our law at YADE's positions (dem.refresh): before,
+    the scene came back unevaluated, and its stress, unbalanced force and stiffness read exactly
+    zero until the caller refreshed it (a servo given that stiffness never converged).
 
     Returns (scene, ids): ids[k] is the YADE body id of our body k.
     """
     O = O or _yade()
-    from yade import Sphere
-    h = _cell(O)
     bodies = [b for b in O.bodies if b is not None]
+    _check_free(bodies)
     if any(b.isClump or b.isClumpMember for b in bodies):
         from . import yade_clumps
-        return yade_clumps.scene_from_yade_clumps(O, import_contacts)
+        s, ids = yade_clumps.scene_from_yade_clumps(O, import_contacts)
+    else:
+        s, ids = _spheres_from_yade(O, bodies, import_contacts)
+    from . import dem
+    dem.refresh(s)
+    return s, ids
+
+
+def _check_free(bodies):
+    """Our stepper moves every body: a YADE body with blocked DOFs, or not dynamic (a fixed
+    sphere), would silently become free. Refused instead."""
+    for b in bodies:
+        if b.isClumpMember:
+            continue  # its clump carries its state
+        if not b.dynamic or b.state.blockedDOFs:
+            raise BridgeError("body #%d is not free (dynamic %s, blockedDOFs %r); trueaniso moves every body: free "
+                              "it, or erase it, before the import" % (b.id, b.dynamic, b.state.blockedDOFs))
+
+
+def _reference_cell(O, h):
+    """The cell at zero strain: YADE's motion trsf undone, trsf^-1 hSize. YADE's refHSize is not it
+    after a flipCell (hSize changes, refHSize and trsf do not), which read as a shear that never
+    happened (gamma_xy 0.997 on a cell only compressed); our Cell remaps the reference on a flip
+    so that strains are the motion's alone (core/Cell.hpp), and YADE's strains are trsf's."""
+    trsf = _matrix(O.cell.trsf)
+    if not np.all(np.isfinite(trsf)) or abs(np.linalg.det(trsf)) < 1e-12:
+        return h  # no usable motion: strains count from now
+    return np.linalg.solve(trsf, h)
+
+
+def _write_cell(O, cell, cell_ref):
+    """hSize, and the strain with it: setting hSize resets YADE's refHSize to it (leaving trsf),
+    which lost our strain on the way out. refHSize and trsf = hSize refHSize^-1 are set after it."""
+    O.cell.hSize = _yade_matrix(cell)
+    O.cell.refHSize = _yade_matrix(cell_ref)
+    O.cell.trsf = _yade_matrix(np.asarray(cell) @ np.linalg.inv(cell_ref))
+
+
+def _contact_rows(O, index):
+    """(member1, member2, cellDist, normal, |N|, shear force) of YADE's real interactions, indices
+    mapped by `index`. Their forces are the history of YADE's Hertz-Mindlin law only: another law's
+    (a linear FrictPhys, ViscEl) would be carried on as if they were ours, so those are refused."""
+    rows = []
+    for I in O.interactions:
+        if not I.isReal:
+            continue
+        if type(I.phys).__name__ != "MindlinPhys":
+            raise BridgeError("interaction %d-%d has %s: its forces come from another contact law than Hertz-Mindlin "
+                              "(Ip2_FrictMat_FrictMat_MindlinPhys); import the positions only "
+                              "(import_contacts=False) to evaluate them with ours" % (I.id1, I.id2, type(I.phys).__name__))
+        n = I.geom.normal
+        rows.append((index[I.id1], index[I.id2], [I.cellDist[k] for k in range(3)], [n[k] for k in range(3)],
+                     I.phys.normalForce.norm(), [I.phys.shearForce[k] for k in range(3)]))
+    return rows
+
+
+def _spheres_from_yade(O, bodies, import_contacts):
+    from yade import Sphere
+    h = _cell(O)
     spheres = [b for b in bodies if isinstance(b.shape, Sphere) and not b.isClumpMember and not b.isClump]
     if len(spheres) != len(bodies):
         raise BridgeError("the bridge imports free spheres only; this scene has %d other bodies"
@@ -78,9 +138,8 @@ def scene_from_yade(O=None, import_contacts=True):
         s.cell = h  # a singular or inverted hSize is refused here, with the engines' message
     except ValueError as exc:
         raise BridgeError("the YADE cell cannot be imported: %s" % exc) from None
-    ref = _matrix(O.cell.refHSize)
     try:
-        s.cell_ref = ref
+        s.cell_ref = _reference_cell(O, h)
     except ValueError:
         s.cell_ref = h  # no usable reference: strains count from now
     pos = np.array([[b.state.pos[k] for k in range(3)] for b in spheres])
@@ -94,15 +153,7 @@ def scene_from_yade(O=None, import_contacts=True):
     s.dt = O.dt
     ids = [b.id for b in spheres]
     if import_contacts:
-        index = {i: k for k, i in enumerate(ids)}
-        rows = []
-        for I in O.interactions:
-            if not I.isReal:
-                continue
-            n = I.geom.normal
-            rows.append((index[I.id1], index[I.id2], [I.cellDist[k] for k in range(3)],
-                         [n[k] for k in range(3)], I.phys.normalForce.norm(),
-                         [I.phys.shearForce[k] for k in range(3)]))
+        rows = _contact_rows(O, {i: k for k, i in enumerate(ids)})
         if rows:
             m1, m2, sh, nrm, fn, fs = zip(*rows)
             s.set_contact_history(np.array(m1), np.array(m2), np.array(sh, dtype=np.int32),
@@ -122,11 +173,12 @@ def _shared_material(spheres):
     values = set()
     for b in spheres:
         m = b.material
-        try:
-            values.add(tuple(float(getattr(m, k)) for k in MATERIAL_FIELDS))
-        except AttributeError:
-            raise BridgeError("body %d has a %s material; the bridge needs FrictMat's young, poisson, density "
-                              "and frictionAngle" % (b.id, type(m).__name__)) from None
+        # FrictMat itself: its subclasses (ViscElMat, CohFrictMat, ...) carry the same fields for
+        # other laws, and were converted without a word (ViscEl's 50 kPa read 226 kPa here).
+        if type(m).__name__ != "FrictMat":
+            raise BridgeError("body %d has a %s material; the bridge converts FrictMat (young, poisson, density, "
+                              "frictionAngle) to the paper's Hertz-Mindlin law only" % (b.id, type(m).__name__))
+        values.add(tuple(float(getattr(m, k)) for k in MATERIAL_FIELDS))
     if len(values) != 1:
         raise BridgeError("all spheres must share one material (young, poisson, density, frictionAngle); "
                           "this scene has %d different ones" % len(values))
@@ -173,7 +225,7 @@ def write_to_yade(scene, O=None, ids=None):
     h = scene.cell
     if O.periodic:
         _remap_cell_dist(O, _cell(O), h)
-    O.cell.hSize = _yade_matrix(h)
+    _write_cell(O, h, scene.cell_ref)
     O.cell.velGrad = _yade_matrix(scene.velocity_gradient)
     pos, vel, ang, rad = scene.positions, scene.velocities, scene.angular_velocities, scene.radii
     total = vel + pos @ current.T
@@ -218,7 +270,7 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
         return yade_clumps.yade_clump_scene_from(scene, O, damping, import_contacts, mindlin_ratcheting)[0]
     O.reset()
     O.periodic = True
-    O.cell.hSize = _yade_matrix(scene.cell)
+    _write_cell(O, scene.cell, scene.cell_ref)
     G, nu = scene.shear_modulus, scene.poisson
     mat = O.materials.append(FrictMat(young=2.0 * G * (1.0 + nu), poisson=nu, density=scene.density,
                                       frictionAngle=math.atan(scene.friction)))
@@ -239,7 +291,10 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     ]
     O.dt = scene.dt if scene.dt > 0 else 1e-8
     if import_contacts:
-        _copy_contacts_to_yade(scene, O, ids)
+        _copy_contacts_to_yade(scene, O, ids)  # steps YADE once at rest: before the strain rate is set
+    # Our strain rate, scheduled for YADE's next step (as write_to_yade; before, it was dropped). The
+    # velocities written are fluctuations, the total ones while YADE's current field is zero.
+    O.cell.velGrad = _yade_matrix(scene.velocity_gradient)
     return ids
 
 

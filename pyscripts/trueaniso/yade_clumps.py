@@ -35,12 +35,9 @@ def _quat_wxyz(q):
 
 
 def _material(bodies):
-    """(G, nu, density, mu) shared by all spheres (compared by value: YADE hands out a new Python
-    wrapper of a material at each access)."""
-    vals = {(b.material.young, b.material.poisson, b.material.density, b.material.frictionAngle) for b in bodies}
-    if len(vals) != 1:
-        raise _bridge_error("all spheres must share one material (found %d)" % len(vals))
-    young, nu, rho, phi = next(iter(vals))
+    """(G, nu, density, mu) shared by all spheres: yade_bridge's one rule (FrictMat, compared by value)."""
+    from .yade_bridge import _shared_material
+    young, nu, rho, phi = _shared_material(bodies)
     return young / (2.0 * (1.0 + nu)), nu, rho, math.tan(phi)
 
 
@@ -81,8 +78,8 @@ def check_clumps(O):
 def scene_from_yade_clumps(O, import_contacts=True):
     """Our Scene from YADE's clumps and free spheres, periodic cell, material and contact history.
     Returns (scene, ids): ids[k] is the YADE id of our body k (a clump's id for a clump)."""
-    from .yade_bridge import (BridgeError, _cell, _check_homo_deform, _current_velocity_gradient, _matrix,
-                              _scheduled_velocity_gradient)
+    from .yade_bridge import (BridgeError, _cell, _check_homo_deform, _contact_rows, _current_velocity_gradient,
+                              _reference_cell, _scheduled_velocity_gradient)
     h = _cell(O)  # the full cell matrix, sheared or not (yade_bridge.scene_from_yade)
     clumps, spheres = check_clumps(O)
     member_bodies = [O.bodies[mid] for c in clumps for mid in c.shape.members]
@@ -94,7 +91,7 @@ def scene_from_yade_clumps(O, import_contacts=True):
     except ValueError as exc:
         raise BridgeError("the YADE cell cannot be imported: %s" % exc) from None
     try:
-        s.cell_ref = _matrix(O.cell.refHSize)
+        s.cell_ref = _reference_cell(O, h)
     except ValueError:
         s.cell_ref = h  # no usable reference: strains count from now
     _check_homo_deform(O)
@@ -121,13 +118,7 @@ def scene_from_yade_clumps(O, import_contacts=True):
     s.velocity_gradient = _scheduled_velocity_gradient(O)
     s.dt = O.dt
     if import_contacts:
-        rows = []
-        for I in O.interactions:
-            if not I.isReal:
-                continue
-            n = I.geom.normal
-            rows.append((member_index[I.id1], member_index[I.id2], [I.cellDist[k] for k in range(3)],
-                         [n[k] for k in range(3)], I.phys.normalForce.norm(), [I.phys.shearForce[k] for k in range(3)]))
+        rows = _contact_rows(O, member_index)
         if rows:
             m1, m2, sh, nrm, fn, fs = zip(*rows)
             s.set_contact_history(np.array(m1), np.array(m2), np.array(sh, dtype=np.int32), np.array(nrm),
@@ -146,9 +137,10 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
                       InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin, Matrix3,
                       NewtonIntegrator, Vector3, utils)
+    from .yade_bridge import _write_cell
     O.reset()
     O.periodic = True
-    O.cell.hSize = Matrix3(*[float(v) for v in np.asarray(scene.cell, dtype=float).ravel()])
+    _write_cell(O, scene.cell, scene.cell_ref)
     G, nu = scene.shear_modulus, scene.poisson
     mat = O.materials.append(FrictMat(young=2.0 * G * (1.0 + nu), poisson=nu, density=scene.density,
                                       frictionAngle=math.atan(scene.friction)))
@@ -187,7 +179,8 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     ]
     O.dt = scene.dt if scene.dt > 0 else 1e-8
     if import_contacts:
-        _copy_member_contacts(scene, O, ids, members)
+        _copy_member_contacts(scene, O, ids, members)  # one step at rest: before the strain rate is set
+    O.cell.velGrad = Matrix3(*[float(v) for v in np.asarray(scene.velocity_gradient, dtype=float).ravel()])
     return ids, members, dict(max_centre_offset=offset, max_inertia_offdiagonal=offdiag)
 
 
@@ -224,11 +217,11 @@ def write_clumps_to_yade(scene, O, ids):
     member positions, so O shows the state before YADE's next step moves them. Velocities and
     strain rate follow yade_bridge.write_to_yade's rule."""
     from yade import Matrix3, Quaternion, Vector3
-    from .yade_bridge import BridgeError, _current_velocity_gradient
+    from .yade_bridge import BridgeError, _current_velocity_gradient, _write_cell
     if ids is None or len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
     current = _current_velocity_gradient(O)
-    O.cell.hSize = Matrix3(*[float(v) for v in np.asarray(scene.cell, dtype=float).ravel()])
+    _write_cell(O, scene.cell, scene.cell_ref)
     O.cell.velGrad = Matrix3(*[float(v) for v in np.asarray(scene.velocity_gradient, dtype=float).ravel()])
     pos, q, vel, ang = scene.positions, scene.orientations, scene.velocities, scene.angular_velocities
     begin, mpos = scene.member_begin, scene.member_positions

@@ -120,6 +120,7 @@ def test_adapter_probe_workflow_restores_with_yade_tools(yade_json, specimen_pat
         assert r["pos_diff_" + axis] == 0 and r["cell_diff_" + axis] == 0
         assert r["mu_after_" + axis] == pytest.approx(0.5, rel=1e-12)
         assert r["adapter"][axis] == pytest.approx(r["ours"][axis], rel=1e-3)
+        assert r["steps_after_done_" + axis] == 20  # 1 before: a finished controller paused every O.run
 
 
 def test_scene_saved_by_yade_and_o_loaded_imports(yade_json, tmp_path):
@@ -136,6 +137,7 @@ def test_scene_saved_by_yade_and_o_loaded_imports(yade_json, tmp_path):
     assert r["friction"] == pytest.approx(0.5, rel=1e-12)  # tan(frictionAngle) read by value
     # same forces on the same configuration: the issue's 1e-6 of 100 kPa (2e-8 measured)
     assert r["stress_error"] < 1e-6 * 100e3
+    assert r["unbalanced"] > 0 and min(r["stiffness"][:3]) > 0  # exactly 0 before the import evaluated the scene
     # our probe on the import against YADE's own probe on the loaded scene: within 0.5 %
     # (0.14 % measured; YADE's PeriTriaxController stops at its 1e-5 relative stress tolerance)
     assert r["yade"]["E"] == pytest.approx(r["ours"]["E"], rel=5e-3)
@@ -152,3 +154,20 @@ def test_rolling_resistance_matches_yade_include_moment(yade_json):
     assert r["R_yade"] == pytest.approx(0.9e-4, rel=1e-12)  # YADE's cap lever: eta times the mean radius
     assert r["max_rel_moment"] < 1e-12
     assert r["capped_steps_yade"] == r["capped_steps_ours"] > 300
+
+
+def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json, specimen_100):
+    """Found by an outside try: yade_scene_from dropped our strain and strain rate (setting hSize
+    resets YADE's refHSize); a cell YADE flipped imported with a shear it never underwent; a
+    ViscElMat scene and a linear law's interactions were converted without a word (ViscEl's
+    50 kPa read 226 kPa); blocked and fixed bodies became free."""
+    r = yade_json("bridge_checks", specimen_100)
+    assert max(abs(v) for v in r["strain"][:3]) > 5e-3
+    np.testing.assert_allclose(r["strain_back"], r["strain"], rtol=0, atol=1e-12)
+    assert r["velocity_gradient_back"] == 0
+    assert r["flipped"] and r["flip_motion_error"] < 1e-12
+    refusals = r["refusals"]
+    assert "ViscElMat material" in refusals["viscel"]
+    assert "FrictPhys" in refusals["linear"] and "import_contacts=False" in refusals["linear"]
+    assert "blockedDOFs 'xyz'" in refusals["blocked"] and "dynamic False" in refusals["fixed"]
+    assert r["linear_positions_only"] is True

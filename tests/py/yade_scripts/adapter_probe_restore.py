@@ -31,6 +31,10 @@ for axis in (2, 0):
     yade_adapter.attach(probe, engines.cell_stiffness(scene))
     yade_adapter.run_until_done(probe, O)
     res["adapter"]["xyz"[axis]] = float(probe.young_modulus)
+    # A plain O.run with the finished probe still attached runs its steps (it stopped after one).
+    start = O.iter
+    O.run(20, True)
+    res["steps_after_done_" + "xyz"[axis]] = O.iter - start
     yade_adapter.detach(O)
     O.loadTmp("held")
     res["pos_diff_" + "xyz"[axis]] = float(np.abs(np.array([list(b.state.pos) for b in O.bodies]) - pos0).max())

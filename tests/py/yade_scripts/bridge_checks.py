@@ -1,0 +1,90 @@
+"""What the bridge refuses and what strain it carries, as an outside try found them wrong:
+ - the strain (refHSize, trsf) and strain rate of our scene survive yade_scene_from and come back;
+ - a cell YADE flipped imports with the strain of YADE's motion (trsf), not a shear that never was;
+ - another material (ViscElMat), another law's interactions (FrictPhys) and bodies that are not
+   free (blocked DOFs, not dynamic) are refused in one BridgeError each.
+Usage: yade-double -n -x bridge_checks.py SPECIMEN.npz OUT.json
+"""
+import json
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
+sys.path[:0] = [HERE, os.path.join(HERE, "..", "..", "..", "pyscripts")]
+import numpy as np  # noqa: E402
+from yade import (O, Matrix3, FrictMat, ViscElMat, ForceResetter, InsertionSortCollider, Bo1_Sphere_Aabb,  # noqa: E402
+                  InteractionLoop, Ig2_Sphere_Sphere_ScGeom, Ip2_FrictMat_FrictMat_FrictPhys,
+                  Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator)
+
+from trueaniso import specimen_file, yade_bridge  # noqa: E402
+
+path, out = sys.argv[1], sys.argv[-1]
+res = {}
+ours, _ = specimen_file.load(path)
+# A strained cell and a strain rate: our reference 1 % longer in x, 1 % shorter in z.
+ours.cell_ref = ours.cell @ np.diag([1.01, 1.0, 0.99])
+ours.velocity_gradient = np.diag([-0.1, 0.05, 0.05])
+ids = yade_bridge.yade_scene_from(ours, O)
+back, _ = yade_bridge.scene_from_yade(O)
+res["strain"] = [float(v) for v in ours.strain]
+res["strain_back"] = [float(v) for v in back.strain]
+res["velocity_gradient_back"] = float(np.abs(back.velocity_gradient - ours.velocity_gradient).max())
+
+# YADE flips a sheared cell (hSize -> hSize M, trsf kept): the import's strain is the motion's.
+h0 = np.array(ours.cell)
+shear = np.array([[1.0, 0.8, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+O.cell.trsf = Matrix3(*shear.ravel())
+O.cell.hSize = Matrix3(*(shear @ h0).ravel())
+O.cell.refHSize = Matrix3(*h0.ravel())
+before = np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)])
+O.cell.flipCell()
+after = np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)])
+res["flipped"] = bool(np.abs(after - before).max() > 1e-3 * np.abs(h0).max())
+flipped, _ = yade_bridge.scene_from_yade(O, import_contacts=False)
+res["flip_motion_error"] = float(np.abs(flipped.cell @ np.linalg.inv(flipped.cell_ref) - shear).max())
+
+
+def refusal(edit):
+    """Rebuild O from our scene, apply `edit`, import: the BridgeError's message, or None."""
+    yade_bridge.yade_scene_from(ours, O, import_contacts=False)
+    edit()
+    try:
+        yade_bridge.scene_from_yade(O)
+    except yade_bridge.BridgeError as exc:
+        return str(exc)
+    return None
+
+
+def viscel():
+    m = O.materials.append(ViscElMat(young=1e8, poisson=0.3, frictionAngle=0.5, density=2500))
+    for b in O.bodies:
+        b.material = O.materials[m]
+
+
+def linear():
+    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
+                 InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
+                                 [Law2_ScGeom_FrictPhys_CundallStrack()]), NewtonIntegrator()]
+    O.step()
+
+
+def blocked():
+    O.bodies[3].state.blockedDOFs = "xyz"
+
+
+def fixed():
+    O.bodies[5].dynamic = False
+
+
+res["refusals"] = {name: refusal(edit) for name, edit in
+                   (("viscel", viscel), ("linear", linear), ("blocked", blocked), ("fixed", fixed))}
+res["linear_positions_only"] = None
+linear_ok = yade_bridge.yade_scene_from(ours, O, import_contacts=False)
+linear()
+try:
+    yade_bridge.scene_from_yade(O, import_contacts=False)  # the way out the refusal names
+    res["linear_positions_only"] = True
+except yade_bridge.BridgeError as exc:
+    res["linear_positions_only"] = str(exc)
+with open(out, "w") as f:
+    json.dump(res, f, indent=1)
