@@ -59,14 +59,18 @@ def columns_and_values(path):
     return head, values
 
 
-def parameter_columns(head):
+def parameter_columns(head, path="the parameter table"):
     """{column as written: parameter name}: '!'-prefixed columns and 'description' are not
-    parameters; a trailing '!' only marks a description column."""
+    parameters; a trailing '!' only marks a description column. A parameter named twice is
+    refused: before, the last column won without a word (an outside try's `out out`)."""
     out = {}
     for h in head:
         if h.startswith("!") or h == "description":
             continue
-        out[h] = h[:-1] if h.endswith("!") else h
+        name = h[:-1] if h.endswith("!") else h
+        if name in out.values():
+            raise InputError("%s names the parameter %r in two columns" % (path, name))
+        out[h] = name
     return out
 
 
@@ -85,7 +89,7 @@ def read_line(path, line):
     if line not in values:
         raise InputError("parameter table %s has no data on line %d (data lines: %s)"
                          % (path, line, ", ".join(str(k) for k in sorted(values)) or "none"))
-    names = parameter_columns(head)
+    names = parameter_columns(head, path)
     out = {}
     for h, text in zip(head, values[line]):
         if h in names and text != KEEP_DEFAULT:
@@ -100,7 +104,7 @@ def read_line_in_yade(path, line, defaults):
     if line not in values:
         raise InputError("parameter table %s has no data on line %d (data lines: %s)"
                          % (path, line, ", ".join(str(k) for k in sorted(values)) or "none"))
-    names = parameter_columns(head)
+    names = parameter_columns(head, path)
     for h, text in zip(head, values[line]):
         if h in names and text != KEEP_DEFAULT:
             evaluate(text, "parameter table %s line %d column %s" % (path, line, h))

@@ -56,6 +56,11 @@ def test_table_line_supplies_parameters(tmp_path):
     assert proc.returncode == 2 and "--phi-cell 0.9" in proc.stderr  # the table's value was used
     proc = run("--table", str(table), "--line", "1", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and "no data on line 1" in proc.stderr
+    # A parameter in two columns: refused (before, the last one won without a word).
+    dup = tmp_path / "dup.table"
+    dup.write_text("n seed n\n100 3 200\n")
+    proc = run("--table", str(dup), "--line", "2", "--out", str(tmp_path / "s.npz"))
+    assert proc.returncode == 2 and "names the parameter 'n' in two columns" in proc.stderr, proc.stderr
     # A --line that is no number: one line too (before, argparse's usage line came first).
     proc = run("--table", str(table), "--line", "abc", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and proc.stderr == "error: argument --line: invalid int value: 'abc'\n", proc.stderr
