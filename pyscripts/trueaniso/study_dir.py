@@ -194,9 +194,10 @@ def check(out, fingerprint, states):
     have = meta.get("states", {})
     for sid, d in states_table(states).items():
         if sid in have and have[sid] != d:
-            raise StudyMismatch("%s holds another study: state %s is b = %g, sigma_z = %g Pa there, b = %g, sigma_z = "
-                                "%g Pa in this run; %s" % (out, sid, have[sid]["b"], have[sid]["sigma_z"], d["b"],
-                                                           d["sigma_z"], _way_out(out)))
+            # %.12g: %g printed 100050 for both 100050 and 100049.99 (an outside try)
+            raise StudyMismatch("%s holds another study: state %s is b = %.12g, sigma_z = %.12g Pa there, b = %.12g, "
+                                "sigma_z = %.12g Pa in this run; %s" % (out, sid, have[sid]["b"], have[sid]["sigma_z"],
+                                                                         d["b"], d["sigma_z"], _way_out(out)))
     return meta
 
 

@@ -348,5 +348,7 @@ def cross_anisotropic_states(sigma_v=CROSS_ANISOTROPIC_SIGMA_V):
     ids = [i for i, _, _ in out]
     twice = sorted({i for i in ids if ids.count(i) > 1})
     if twice:
-        raise ValueError("sigma_v of state %s is given twice" % ", ".join(twice))
+        # The values too: two sigma_v 0.01 Pa apart share a name (ids keep 0.1 Pa) and read as one.
+        raise ValueError("sigma_v of state %s is given twice (%s Pa; state names keep sigma_v to 0.1 Pa)"
+                         % (", ".join(twice), ", ".join("%.12g" % sv for i, _, sv in out if i in twice)))
     return out
