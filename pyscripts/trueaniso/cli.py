@@ -91,7 +91,9 @@ def resolve_threads(o, study=True, preparation=None):
             continued = "its interrupted preparation" if o.threads else None
     o.threads = o.threads or 0
     if continued:
-        print("%s: continuing %s at its %d engine thread%s (--threads)"
+        # Said as a fact about the work, not as "continuing": a check after it may still refuse the
+        # run (another --mu, say), and "continuing ..." then read as the opposite (an outside try).
+        print("%s: --threads not given: %s ran at %d engine thread%s, so this run does too"
               % (o.out, continued, o.threads, "" if o.threads == 1 else "s"), flush=True)
     return o.threads
 

@@ -167,7 +167,7 @@ def test_a_rerun_without_threads_continues_at_the_study_s_count(base, specimen_1
     before = (out / "probes.csv").read_bytes()
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", env=dict(OMP_NUM_THREADS="2"))
     assert proc.returncode == 0, proc.stderr
-    assert "continuing its study at its 1 engine thread" in proc.stdout and "state 4: probe x" in proc.stdout
+    assert "its study ran at 1 engine thread, so this run does too" in proc.stdout and "state 4: probe x" in proc.stdout
     assert (out / "probes.csv").read_bytes().startswith(before)
     assert json.loads((out / "metadata.json").read_text())["fingerprint"]["threads"] == 1
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", "--threads", "2")
@@ -239,7 +239,7 @@ def test_wait_queues_behind_the_holder(base, specimen_100, tmp_path):
                               "--out", str(out), "--ids", "1,2,3,6", "--probes", "zx", "--wait"], env=env,
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         first = p.stdout.readline()  # the waiting run says so, then blocks
-        if "continuing its study at its 1 engine thread" in first:  # it took the study's thread count
+        if "its study ran at 1 engine thread, so this run does too" in first:  # it took the study's thread count
             first = p.stdout.readline()
         assert first.startswith("waiting for the run that holds"), first
         assert p.poll() is None and (out / "probes.csv").read_bytes() == before
