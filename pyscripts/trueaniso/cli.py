@@ -309,7 +309,7 @@ def _interrupted_line(what="interrupted"):
         return what + " before the first checkpoint; the same command starts over"
     try:
         saved = _saved_work()
-    except OSError:  # cannot look: the promise that holds whenever a checkpoint was written
+    except Exception:  # cannot look (unreadable, undecodable): the promise that holds whenever one was written
         return what + "; the same command resumes from the last checkpoint, if one was written"
     return what + ("; the same command resumes from the last checkpoint" if saved
                    else " before the first checkpoint; the same command starts over")
