@@ -88,8 +88,11 @@ def _reference_cell(O, h):
     happened (gamma_xy 0.997 on a cell only compressed); our Cell remaps the reference on a flip
     so that strains are the motion's alone (core/Cell.hpp), and YADE's strains are trsf's."""
     trsf = _matrix(O.cell.trsf)
-    if not np.all(np.isfinite(trsf)) or abs(np.linalg.det(trsf)) < 1e-12:
-        return h  # no usable motion: strains count from now
+    det = np.linalg.det(trsf) if np.all(np.isfinite(trsf)) else float("nan")
+    if not det > 1e-6:  # NaN, singular, a reflection or a volume shrunk a millionfold: no motion of a cell
+        # Before, strains then counted from now without a word (an outside try set trsf by hand).
+        raise BridgeError("YADE's cell.trsf (determinant %g) is no motion of the cell, so its strain is undefined; "
+                          "set O.cell.trsf (the identity counts strains from now)" % det)
     return np.linalg.solve(trsf, h)
 
 
@@ -113,6 +116,14 @@ def _contact_rows(O, index):
             raise BridgeError("interaction %d-%d has %s: its forces come from another contact law than Hertz-Mindlin "
                               "(Ip2_FrictMat_FrictMat_MindlinPhys); import the positions only "
                               "(import_contacts=False) to evaluate them with ours" % (I.id1, I.id2, type(I.phys).__name__))
+        # MindlinPhys also carries the Mindlin variants the paper's law has not: viscous damping
+        # (betan, betas), adhesion (gamma), rolling and twisting moments (krot, ktwist). Their forces
+        # passed the class check (adhesion: 4.8 kPa in YADE read 97 kPa here; an outside try).
+        extras = [a for a in ("betan", "betas", "adhesionForce", "kr", "ktw") if float(getattr(I.phys, a, 0.0)) != 0.0]
+        if extras:
+            raise BridgeError("interaction %d-%d has YADE's Mindlin law with %s != 0 (damping, adhesion or moments the "
+                              "paper's law has not); import the positions only (import_contacts=False) to evaluate "
+                              "them with ours" % (I.id1, I.id2, ", ".join(extras)))
         n = I.geom.normal
         rows.append((index[I.id1], index[I.id2], [I.cellDist[k] for k in range(3)], [n[k] for k in range(3)],
                      I.phys.normalForce.norm(), [I.phys.shearForce[k] for k in range(3)]))
@@ -138,8 +149,9 @@ def _spheres_from_yade(O, bodies, import_contacts):
         s.cell = h  # a singular or inverted hSize is refused here, with the engines' message
     except ValueError as exc:
         raise BridgeError("the YADE cell cannot be imported: %s" % exc) from None
+    ref = _reference_cell(O, h)  # a refusal of YADE's trsf stays one (BridgeError is a ValueError)
     try:
-        s.cell_ref = _reference_cell(O, h)
+        s.cell_ref = ref
     except ValueError:
         s.cell_ref = h  # no usable reference: strains count from now
     pos = np.array([[b.state.pos[k] for k in range(3)] for b in spheres])
@@ -222,10 +234,8 @@ def write_to_yade(scene, O=None, ids=None):
     if len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
     current = _current_velocity_gradient(O)
-    h = scene.cell
-    if O.periodic:
-        _remap_cell_dist(O, _cell(O), h)
-    _write_cell(O, h, scene.cell_ref)
+    before = _interaction_images(O)
+    _write_cell(O, scene.cell, scene.cell_ref)
     O.cell.velGrad = _yade_matrix(scene.velocity_gradient)
     pos, vel, ang, rad = scene.positions, scene.velocities, scene.angular_velocities, scene.radii
     total = vel + pos @ current.T
@@ -235,21 +245,43 @@ def write_to_yade(scene, O=None, ids=None):
         b.state.vel = Vector3(*total[k])
         b.state.angVel = Vector3(*ang[k])
         b.shape.radius = float(rad[k])
+    _keep_interaction_images(O, before)
 
 
-def _remap_cell_dist(O, old, new):
-    """Our detection may have flipped the cell (new = old M, M an integer matrix of determinant 1:
-    the same periodic medium, core/Cell.hpp). YADE's interactions then keep their identity with
-    cellDist -> M^-1 cellDist, the same image offset; any other change of cell leaves them alone."""
-    M = np.linalg.solve(old, new)
-    Mi = np.rint(M)
-    if np.allclose(Mi, np.eye(3)) or not np.allclose(M, Mi, atol=1e-9) or round(np.linalg.det(Mi)) != 1:
+def _interaction_images(O):
+    """Every YADE interaction's branch, pos2 + hSize cellDist - pos1, before our state is written."""
+    if not O.periodic:
+        return []
+    h = _cell(O)
+    out = []
+    for I in O.interactions:
+        if O.bodies[I.id1] is None or O.bodies[I.id2] is None:
+            continue
+        p1, p2 = O.bodies[I.id1].state.pos, O.bodies[I.id2].state.pos
+        cd = np.array([I.cellDist[k] for k in range(3)])
+        out.append((I, cd, np.array([p2[k] - p1[k] for k in range(3)]) + h @ cd))
+    return out
+
+
+def _keep_interaction_images(O, before):
+    """After our positions and cell are written, each YADE interaction gets the cellDist that keeps
+    its branch: cellDist = round(hSize^-1 (branch - (pos2 - pos1))). Our detection wraps bodies
+    into the cell and may flip it (hSize M, the same periodic medium, core/Cell.hpp), where YADE
+    leaves bodies wherever they moved; before, only a flip was remapped, and positions written one
+    cell vector away from YADE's left their interactions pointing at the old images (an outside
+    try: 313 contacts became 251 on a scene imported and written straight back). Our motion since
+    (far below half a cell) does not change the rounding."""
+    if not before:
         return
     from yade import Vector3i
-    inverse = np.rint(np.linalg.inv(Mi)).astype(int)
-    for I in O.interactions:
-        d = inverse @ np.array([I.cellDist[k] for k in range(3)])
-        I.cellDist = Vector3i(*[int(v) for v in d])
+    inverse = np.linalg.inv(_cell(O))
+    for I, cd, branch in before:
+        if O.bodies[I.id1] is None or O.bodies[I.id2] is None:
+            continue
+        p1, p2 = O.bodies[I.id1].state.pos, O.bodies[I.id2].state.pos
+        new = np.rint(inverse @ (branch - np.array([p2[k] - p1[k] for k in range(3)]))).astype(int)
+        if np.any(new != cd):
+            I.cellDist = Vector3i(*[int(v) for v in new])
 
 
 def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False):
@@ -325,5 +357,8 @@ def _copy_contacts_to_yade(scene, O, ids):
         fs = sign * c["shear_force"][k]
         I.phys.shearForce = Vector3(*fs)
         I.phys.shearElastic = Vector3(*fs)
+    # A second step at rest puts those shear forces into O.forces: before, YADE's unbalanced force
+    # read the forces of the first step, without them, until its next step (0.086 against 1.7e-5).
+    O.step()
     for b, (v, w, dofs) in zip(O.bodies, saved):
         b.state.vel, b.state.angVel, b.state.blockedDOFs = v, w, dofs

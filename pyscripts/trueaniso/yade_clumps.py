@@ -90,8 +90,9 @@ def scene_from_yade_clumps(O, import_contacts=True):
         s.cell = h
     except ValueError as exc:
         raise BridgeError("the YADE cell cannot be imported: %s" % exc) from None
+    ref = _reference_cell(O, h)  # a refusal of YADE's trsf stays one (BridgeError is a ValueError)
     try:
-        s.cell_ref = _reference_cell(O, h)
+        s.cell_ref = ref
     except ValueError:
         s.cell_ref = h  # no usable reference: strains count from now
     _check_homo_deform(O)
@@ -206,6 +207,7 @@ def _copy_member_contacts(scene, O, ids, members):
         fs = (1.0 if I.id1 == i1 else -1.0) * c["shear_force"][k]
         I.phys.shearForce = Vector3(*fs)
         I.phys.shearElastic = Vector3(*fs)
+    O.step()  # at rest again: the shear forces into O.forces (yade_bridge._copy_contacts_to_yade)
     for i, (v, w, dofs) in zip(ids, saved):
         st = O.bodies[i].state
         st.vel, st.angVel, st.blockedDOFs = v, w, dofs
@@ -217,10 +219,12 @@ def write_clumps_to_yade(scene, O, ids):
     member positions, so O shows the state before YADE's next step moves them. Velocities and
     strain rate follow yade_bridge.write_to_yade's rule."""
     from yade import Matrix3, Quaternion, Vector3
-    from .yade_bridge import BridgeError, _current_velocity_gradient, _write_cell
+    from .yade_bridge import (BridgeError, _current_velocity_gradient, _interaction_images, _keep_interaction_images,
+                              _write_cell)
     if ids is None or len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
     current = _current_velocity_gradient(O)
+    before = _interaction_images(O)
     _write_cell(O, scene.cell, scene.cell_ref)
     O.cell.velGrad = Matrix3(*[float(v) for v in np.asarray(scene.velocity_gradient, dtype=float).ravel()])
     pos, q, vel, ang = scene.positions, scene.orientations, scene.velocities, scene.angular_velocities
@@ -243,3 +247,4 @@ def write_clumps_to_yade(scene, O, ids):
                 m.state.ori = b.state.ori * b.shape.members[mid][1]
         else:
             b.state.pos = Vector3(*pos[k])
+    _keep_interaction_images(O, before)  # the members' interactions keep their branches (yade_bridge)
