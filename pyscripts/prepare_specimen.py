@@ -198,6 +198,9 @@ def prepare(o, dist):
     # while a preparation of an hour runs cannot make its save refuse (a 16,000-sphere run was lost
     # so), and a module built from other sources is refused before any work.
     provenance.versions()
+    stale = checkpoints.differences()
+    if stale and not o.force:  # refused before the estimate line, which read as the start of the work
+        checkpoints.refuse_other()
     bar = progress.Progress("  preparation", lambda m: print(m, flush=True), o.progress_every)
     if not o.quiet:
         members = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
@@ -206,7 +209,6 @@ def prepare(o, dist):
               % (o.n, o.assembly, o.seed, o.d50, o.cu, o.pressure / 1e3, resources.human_bytes(memory),
                  resources.human_seconds(seconds)), flush=True)
     t0 = time.time()
-    stale = checkpoints.differences()
     if stale and o.force:  # (one of these settings resumes; another one is refused before any work)
         checkpoints.remove()
         print("removed the checkpoint of an earlier preparation of %s with other settings (%s) (--force)"

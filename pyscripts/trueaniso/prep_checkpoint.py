@@ -98,16 +98,20 @@ class Checkpoints:
             return None
         return study_dir.said(study_dir.differences(saved, self.recipe))
 
-    def resume(self):
-        """(scene, place) of the checkpoint on disk, or None. Refuses one of another recipe."""
+    def refuse_other(self):
+        """Refuses a checkpoint on disk of another recipe (CheckpointMismatch); differences() else."""
         diff = self.differences()
-        if diff is None:
-            return None
         if diff:
             raise CheckpointMismatch(
                 "the preparation checkpoint %s was made with other settings (%s); this run cannot go on "
                 "from it. Use the same options (and code) to resume, or %s to prepare from the start"
                 % (self.path, "; ".join(diff), self.way_out))
+        return diff
+
+    def resume(self):
+        """(scene, place) of the checkpoint on disk, or None. Refuses one of another recipe."""
+        if self.refuse_other() is None:
+            return None
         scene, meta = specimen_file.load(self.path)
         place = meta["parameters"]["checkpoint"]["place"]
         self.log("resuming the preparation from %s (%s, %d steps done)"

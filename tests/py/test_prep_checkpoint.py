@@ -179,6 +179,7 @@ def test_script_refuses_other_options_on_a_checkpoint_and_force_starts_over(tmp_
                                  checkpoints=prep_checkpoint.Checkpoints(ck, dict(seed=9), 20_000))
     proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--out", out)
     one_line_error(proc, "other settings", "--force")
+    assert "preparing" not in proc.stdout  # refused before the estimate line (an outside try read it as a start)
     assert os.path.exists(ck) and not out.exists()  # nothing lost by the refusal
     forced = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 0,
                         "--force", "--out", out)
