@@ -56,6 +56,9 @@ class Parser(argparse.ArgumentParser):
         return super().add_argument(*args, **kw)
 
     def error(self, message):  # argparse would print usage + message; we want one line
+        if message.endswith("expected one argument"):
+            # argparse reads a value that starts with '-' (--states -0.1:1e5) as the next option
+            message += " (a value that starts with '-' goes as --option=VALUE)"
         fail(message)
 
 

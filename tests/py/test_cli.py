@@ -61,6 +61,9 @@ def test_table_line_supplies_parameters(tmp_path):
     dup.write_text("n seed n\n100 3 200\n")
     proc = run("--table", str(dup), "--line", "2", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and "names the parameter 'n' in two columns" in proc.stderr, proc.stderr
+    # A value that starts with '-' (argparse takes it for an option): the message says how to give it
+    proc = run("--pressure", "-1e5", "--out", str(tmp_path / "s.npz"))
+    assert proc.returncode == 2 and "goes as --option=VALUE" in proc.stderr, proc.stderr
     # A --line that is no number: one line too (before, argparse's usage line came first).
     proc = run("--table", str(table), "--line", "abc", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and proc.stderr == "error: argument --line: invalid int value: 'abc'\n", proc.stderr
