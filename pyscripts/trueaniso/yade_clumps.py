@@ -220,15 +220,17 @@ def write_clumps_to_yade(scene, O, ids):
     strain rate follow yade_bridge.write_to_yade's rule."""
     from yade import Matrix3, Quaternion, Vector3
     from .yade_bridge import (BridgeError, _current_velocity_gradient, _interaction_images, _keep_interaction_images,
-                              _write_cell)
+                              _write_cell, nearest_image_shifts, write_shear_history)
     if ids is None or len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
     current = _current_velocity_gradient(O)
     before = _interaction_images(O)
-    _write_cell(O, scene.cell, scene.cell_ref)
+    shift = nearest_image_shifts(O, ids, scene.positions, scene.cell)  # as yade_bridge.write_to_yade, a clump's
+    _write_cell(O, scene.cell, scene.cell_ref)                          # members with it
     O.cell.velGrad = Matrix3(*[float(v) for v in np.asarray(scene.velocity_gradient, dtype=float).ravel()])
-    pos, q, vel, ang = scene.positions, scene.orientations, scene.velocities, scene.angular_velocities
-    begin, mpos = scene.member_begin, scene.member_positions
+    pos, q, vel, ang = scene.positions + shift, scene.orientations, scene.velocities, scene.angular_velocities
+    begin = scene.member_begin
+    mpos = scene.member_positions + np.repeat(shift, np.diff(begin), axis=0)
     total = vel + pos @ current.T
     for k, i in enumerate(ids):
         b = O.bodies[i]
@@ -248,3 +250,8 @@ def write_clumps_to_yade(scene, O, ids):
         else:
             b.state.pos = Vector3(*pos[k])
     _keep_interaction_images(O, before)  # the members' interactions keep their branches (yade_bridge)
+    yade_of_member = np.empty(int(begin[-1]), dtype=int)
+    for k, i in enumerate(ids):
+        b = O.bodies[i]
+        yade_of_member[begin[k]:begin[k + 1]] = sorted(b.shape.members) if b.isClump else [i]
+    write_shear_history(scene, O, yade_of_member)
