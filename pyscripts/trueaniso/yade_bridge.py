@@ -265,16 +265,20 @@ def nearest_image_shifts(O, ids, positions, cell):
     return n @ np.asarray(cell).T
 
 
-def write_shear_history(scene, O, yade_of_member):
+def write_shear_history(scene, O, yade_of_member, every=False):
     """Our contacts' shear forces onto YADE's real interactions of the same member pairs
-    (yade_of_member[m]: YADE id of our member sphere m), signed for YADE's id1 -> id2."""
+    (yade_of_member[m]: YADE id of our member sphere m), signed for YADE's id1 -> id2. With
+    `every`, each of our contacts must have one (a scene just built from ours); without, one YADE
+    has not made yet is left to its collider's next step."""
     from yade import Vector3
     c = scene.contact_arrays()
     for k in np.nonzero(c["normal_force"] > 0)[0]:
         i1, i2 = int(yade_of_member[c["member1"][k]]), int(yade_of_member[c["member2"][k]])
         I = O.interactions[i1, i2]
         if I is None or not I.isReal:
-            continue  # YADE's collider makes it at its next step
+            if every:
+                raise BridgeError("contact of #%d-#%d not found by YADE's collider" % (i1, i2))
+            continue
         fs = (1.0 if I.id1 == i1 else -1.0) * c["shear_force"][k]
         I.phys.shearForce = Vector3(*fs)
         I.phys.shearElastic = Vector3(*fs)
@@ -297,12 +301,12 @@ def _interaction_images(O):
 
 def _keep_interaction_images(O, before):
     """After our positions and cell are written, each YADE interaction gets the cellDist that keeps
-    its branch: cellDist = round(hSize^-1 (branch - (pos2 - pos1))). Our detection wraps bodies
-    into the cell and may flip it (hSize M, the same periodic medium, core/Cell.hpp), where YADE
-    leaves bodies wherever they moved; before, only a flip was remapped, and positions written one
-    cell vector away from YADE's left their interactions pointing at the old images (an outside
-    try: 313 contacts became 251 on a scene imported and written straight back). Our motion since
-    (far below half a cell) does not change the rounding."""
+    its branch: cellDist = round(hSize^-1 (branch - (pos2 - pos1))). Bodies are written at the
+    images nearest YADE's (nearest_image_shifts), so this changes cellDist where our detection
+    flipped the cell (hSize M, the same periodic medium, core/Cell.hpp) and where a body crossed
+    the cell in our run. Before, bodies were written wrapped and only a flip was remapped: 313
+    contacts became 251 on a scene imported and written straight back (an outside try). Our motion
+    since (far below half a cell) does not change the rounding."""
     if not before:
         return
     from yade import Vector3i
@@ -380,15 +384,7 @@ def _copy_contacts_to_yade(scene, O, ids):
         b.state.angVel = Vector3(0, 0, 0)
         b.state.blockedDOFs = "xyzXYZ"
     O.step()
-    for k in active:
-        i1, i2 = ids[c["body1"][k]], ids[c["body2"][k]]
-        I = O.interactions[i1, i2]
-        if I is None or not I.isReal:
-            raise BridgeError("contact %d-%d not found by YADE's collider" % (i1, i2))
-        sign = 1.0 if I.id1 == i1 else -1.0
-        fs = sign * c["shear_force"][k]
-        I.phys.shearForce = Vector3(*fs)
-        I.phys.shearElastic = Vector3(*fs)
+    write_shear_history(scene, O, ids, every=True)  # a sphere scene's members are its bodies
     # A second step at rest puts those shear forces into O.forces: before, YADE's unbalanced force
     # read the forces of the first step, without them, until its next step (0.086 against 1.7e-5).
     O.step()

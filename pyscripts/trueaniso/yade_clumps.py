@@ -199,14 +199,8 @@ def _copy_member_contacts(scene, O, ids, members):
         st = O.bodies[i].state
         st.vel, st.angVel, st.blockedDOFs = Vector3(0, 0, 0), Vector3(0, 0, 0), "xyzXYZ"
     O.step()
-    for k in active:
-        i1, i2 = members[c["member1"][k]], members[c["member2"][k]]
-        I = O.interactions[i1, i2]
-        if I is None or not I.isReal:
-            raise _bridge_error("contact of members #%d-#%d not found by YADE's collider" % (i1, i2))
-        fs = (1.0 if I.id1 == i1 else -1.0) * c["shear_force"][k]
-        I.phys.shearForce = Vector3(*fs)
-        I.phys.shearElastic = Vector3(*fs)
+    from .yade_bridge import write_shear_history
+    write_shear_history(scene, O, members, every=True)
     O.step()  # at rest again: the shear forces into O.forces (yade_bridge._copy_contacts_to_yade)
     for i, (v, w, dofs) in zip(ids, saved):
         st = O.bodies[i].state
