@@ -359,34 +359,34 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     ]
     O.dt = scene.dt if scene.dt > 0 else 1e-8
     if import_contacts:
-        _copy_contacts_to_yade(scene, O, ids)  # steps YADE once at rest: before the strain rate is set
+        contacts_made_at_rest(scene, O, ids, ids)  # steps YADE at rest: before the strain rate is set
     # Our strain rate, scheduled for YADE's next step (as write_to_yade; before, it was dropped). The
     # velocities written are fluctuations, the total ones while YADE's current field is zero.
     O.cell.velGrad = _yade_matrix(scene.velocity_gradient)
     return ids
 
 
-def _copy_contacts_to_yade(scene, O, ids):
-    """Create YADE interactions for our contacts and give them our tangential forces."""
+def contacts_made_at_rest(scene, O, bodies, yade_of_member):
+    """YADE's interactions for our contacts, made by its own collider and law in a step at rest,
+    then our shear forces on them (write_shear_history) and a second step at rest that puts those
+    forces into O.forces (before it, YADE's unbalanced force read 0.086 against our 1.7e-5).
+    `bodies`: YADE ids of our bodies (held still meanwhile); `yade_of_member`: of our members.
+
+    At rest: every body's DOFs blocked and its velocity zero, the integrator running. (A step with
+    the integrator switched off instead leaves that step's forces unsynced in O.forces, and YADE's
+    next step adds them to its own: the first velocity increment came out doubled.)"""
     from yade import Vector3
-    c = scene.contact_arrays()
-    active = np.nonzero(c["normal_force"] > 0)[0]
-    if active.size == 0:
+    if not np.any(scene.contact_arrays()["normal_force"] > 0):
         return
-    # One step without motion creates the interactions (geometry and physics) at rest: every
-    # body's DOFs blocked and its velocity zero, the integrator running. (A step with the
-    # integrator switched off instead leaves that step's forces unsynced in O.forces, and YADE's
-    # next step adds them to its own: the first velocity increment came out doubled.)
     # Copies: YADE hands out references to the state's vectors, which the zeroing would clear.
-    saved = [(Vector3(b.state.vel), Vector3(b.state.angVel), b.state.blockedDOFs) for b in O.bodies]
-    for b in O.bodies:
-        b.state.vel = Vector3(0, 0, 0)
-        b.state.angVel = Vector3(0, 0, 0)
-        b.state.blockedDOFs = "xyzXYZ"
+    saved = [(Vector3(O.bodies[i].state.vel), Vector3(O.bodies[i].state.angVel), O.bodies[i].state.blockedDOFs)
+             for i in bodies]
+    for i in bodies:
+        st = O.bodies[i].state
+        st.vel, st.angVel, st.blockedDOFs = Vector3(0, 0, 0), Vector3(0, 0, 0), "xyzXYZ"
     O.step()
-    write_shear_history(scene, O, ids, every=True)  # a sphere scene's members are its bodies
-    # A second step at rest puts those shear forces into O.forces: before, YADE's unbalanced force
-    # read the forces of the first step, without them, until its next step (0.086 against 1.7e-5).
+    write_shear_history(scene, O, yade_of_member, every=True)
     O.step()
-    for b, (v, w, dofs) in zip(O.bodies, saved):
-        b.state.vel, b.state.angVel, b.state.blockedDOFs = v, w, dofs
+    for i, (v, w, dofs) in zip(bodies, saved):
+        st = O.bodies[i].state
+        st.vel, st.angVel, st.blockedDOFs = v, w, dofs

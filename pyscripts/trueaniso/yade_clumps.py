@@ -138,7 +138,7 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
                       InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin, Matrix3,
                       NewtonIntegrator, Vector3, utils)
-    from .yade_bridge import _write_cell
+    from .yade_bridge import _write_cell, contacts_made_at_rest
     O.reset()
     O.periodic = True
     _write_cell(O, scene.cell, scene.cell_ref)
@@ -180,31 +180,9 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     ]
     O.dt = scene.dt if scene.dt > 0 else 1e-8
     if import_contacts:
-        _copy_member_contacts(scene, O, ids, members)  # one step at rest: before the strain rate is set
+        contacts_made_at_rest(scene, O, ids, members)  # steps at rest: before the strain rate is set
     O.cell.velGrad = Matrix3(*[float(v) for v in np.asarray(scene.velocity_gradient, dtype=float).ravel()])
     return ids, members, dict(max_centre_offset=offset, max_inertia_offdiagonal=offdiag)
-
-
-def _copy_member_contacts(scene, O, ids, members):
-    """YADE interactions for our contacts (between member spheres) with our tangential forces: one
-    motionless step creates them (as yade_bridge._copy_contacts_to_yade, for members)."""
-    from yade import Vector3
-    c = scene.contact_arrays()
-    active = np.nonzero(c["normal_force"] > 0)[0]
-    if active.size == 0:
-        return
-    saved = [(Vector3(O.bodies[i].state.vel), Vector3(O.bodies[i].state.angVel), O.bodies[i].state.blockedDOFs)
-             for i in ids]
-    for i in ids:
-        st = O.bodies[i].state
-        st.vel, st.angVel, st.blockedDOFs = Vector3(0, 0, 0), Vector3(0, 0, 0), "xyzXYZ"
-    O.step()
-    from .yade_bridge import write_shear_history
-    write_shear_history(scene, O, members, every=True)
-    O.step()  # at rest again: the shear forces into O.forces (yade_bridge._copy_contacts_to_yade)
-    for i, (v, w, dofs) in zip(ids, saved):
-        st = O.bodies[i].state
-        st.vel, st.angVel, st.blockedDOFs = v, w, dofs
 
 
 def write_clumps_to_yade(scene, O, ids):
