@@ -315,7 +315,17 @@ def clumps_section(entries, source):
                     ""], ratios
 
 
-def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=None, log=print, fig16=None,
+def study_assembly(results):
+    """The paper's assembly a study is of (its metadata's fingerprint: sphere -> spheres), or None
+    for a bare table or a study without metadata."""
+    meta = read_metadata(results)
+    if meta is None:
+        return None
+    name = (meta.get("fingerprint") or {}).get("assembly", "sphere")
+    return "spheres" if name == "sphere" else name
+
+
+def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, log=print, fig16=None,
           clumps=None, statics=False):
     """Write report.md and its PNGs; returns the report's path and the numbers it shows. `fig16`:
     a cross-anisotropic study (or its JSON) for the Fig. 16 section; `clumps`: the JSON of
@@ -323,6 +333,13 @@ def build(results, out=None, assembly="spheres", shear_modulus=None, poisson=Non
     study's checkpoints first (solve_statics)."""
     csv_path = os.path.join(results, "probes.csv") if os.path.isdir(results) else results
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
+    # The study's own assembly unless told: before, every report compared with the paper's spheres,
+    # also run_study.py's on clump1 (its sphere fit read 36,627 MPa at clump1's Zm 10.3; an outside try).
+    own = study_assembly(results)
+    if assembly is None:
+        assembly = own or "spheres"
+    elif own is not None and own != assembly:
+        raise ResultsError("%s is a study of %s, not %s (--assembly)" % (results, own, assembly))
     if assembly not in chain.PAPER:
         raise ResultsError("assembly must be one of %s" % ", ".join(chain.PAPER))
     # Inputs of the optional sections are read and checked before anything is written.
@@ -528,7 +545,9 @@ def main(argv=None):
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("results", help="a results directory (with probes.csv) or a probe table")
     p.add_argument("--out", help="directory for report.md and its figures (default: RESULTS/report, or beside the table)")
-    p.add_argument("--assembly", default="spheres", choices=sorted(chain.PAPER), help="the paper's assembly to compare with")
+    p.add_argument("--assembly", default=None, choices=sorted(chain.PAPER),
+                   help="the paper's assembly to compare with (default: the study's own, from its metadata.json; "
+                        "spheres for a bare table)")
     p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
     p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
     p.add_argument("--fig16", help="a cross-anisotropic study (run_states.py --path cross-anisotropic: its directory "
