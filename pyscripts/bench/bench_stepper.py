@@ -32,15 +32,13 @@ def load(o):
     """The specimen, tiled --tile times along each axis (_bench.tiled) if asked. A cell with shear
     terms (the six-component servo leaves ~1e-6 of the edge) is squared by the same function, for
     every code alike: lammps_peer writes an orthorhombic box."""
-    import numpy as np
     from trueaniso import dem, specimen_file
     s, _ = specimen_file.load(o.specimen)
-    h = np.array(s.cell)
-    if o.tile > 1 or np.any(h != np.diag(np.diag(h))):
-        s = _bench.tiled(s, o.tile)
-        if o.tile > 1:
-            s.order_in_space()  # local in memory, as a prepared specimen is (Morton: within 10 % of its grid rows)
-        dem.refresh(s)
+    if o.tile == 1:
+        return _bench.orthorhombic(s)
+    s = _bench.tiled(s, o.tile)
+    s.order_in_space()  # local in memory, as a prepared specimen is (Morton: within 10 % of its grid rows)
+    dem.refresh(s)
     return s
 
 

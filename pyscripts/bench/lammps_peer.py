@@ -98,7 +98,15 @@ def main():
     if o.steps < 1 or o.procs < 1 or o.dt < 0:
         cli.fail("--steps and --procs must be >= 1 and --dt >= 0")
     from trueaniso import engines, specimen_file
+    import _bench
+    # Squared as bench_stepper squares it: a prepared specimen's cell keeps ~1e-8 of shear, and
+    # every one was refused here as sheared (an outside try).
     s, _ = specimen_file.load(o.specimen)
+    squared = _bench.orthorhombic(s)
+    if squared is not s:
+        print("the cell's shear terms (largest %.2g of its edge) dropped: LAMMPS is given an orthorhombic box"
+              % float(np.abs(s.cell - np.diag(np.diag(s.cell))).max() / np.abs(np.diag(s.cell)).min()))
+    s = squared
     dt = o.dt or 0.5 * engines.TimeStepper.stiffness_bound(s)
     write_inputs(s, o.out, o.style, dt, o.steps)
     print("wrote %s (data.lmp, in.lmp: %d steps of %g s, pair style %s)" % (o.out, o.steps, dt, o.style))

@@ -29,3 +29,16 @@ def test_block_is_replaced_in_place_and_appended_when_missing(tmp_path):
 def test_machine_names_cpu_and_cores():
     line = _bench.machine()
     assert "%d cores" % os.cpu_count() in line
+
+
+def test_lammps_peer_takes_a_prepared_specimen(specimen_100, tmp_path):
+    """Before: every prepared specimen (its cell keeps ~1e-8 of shear) was refused as sheared by the
+    stand-alone lammps_peer.py; bench_stepper.py squared it first (found by an outside try). Both
+    now square it the same way (_bench.orthorhombic)."""
+    from conftest import run_script
+    proc = run_script(os.path.join("bench", "lammps_peer.py"), "--specimen", specimen_100, "--out", tmp_path / "l",
+                      "--steps", 10)
+    assert proc.returncode == 0, proc.stderr
+    assert "shear terms" in proc.stdout and "orthorhombic box" in proc.stdout
+    data = (tmp_path / "l" / "data.lmp").read_text()
+    assert "100 atoms" in data and "xy xz yz" not in data  # an orthorhombic box, every sphere
