@@ -112,6 +112,24 @@ def options():
             cli.fail("--codes: %r is not one of %s" % (c, ", ".join(CODES)))
     if "ours" not in o.codes:
         cli.fail("--codes must include ours (every ratio is against it)")
+    # Before any work (an outside try: --dt -1 was printed as the table's time step, --threads 99 was
+    # timed, --repeats 0 failed after the runs, --dt nan and --steps -1 inside the engine).
+    import math
+    from trueaniso import resources
+    if not (math.isfinite(o.dt) and o.dt >= 0):
+        cli.fail("--dt must be a time step > 0 in s, or 0 for half the stiffness bound; not %r" % o.dt)
+    if o.steps < 0 or o.yade_steps < 0 or o.repeats < 1:
+        cli.fail("--steps and --yade-steps must be >= 0 (0: their defaults) and --repeats >= 1")
+    try:
+        o.thread_counts = [int(t) for t in o.threads.split(",")]
+        for t in o.thread_counts:
+            if t < 1:
+                raise ValueError
+            resources.check_threads(t)
+    except cli.InputError as exc:  # (a ValueError too: first)
+        cli.fail(str(exc))
+    except ValueError:
+        cli.fail("--threads: thread counts >= 1, comma separated, not %r" % o.threads)
     return o
 
 
@@ -133,7 +151,7 @@ def main():
     _, meta = specimen_file.load(o.specimen)
     s = load(o)
     dt = o.dt or 0.5 * engines.TimeStepper.stiffness_bound(s)
-    threads = [int(t) for t in o.threads.split(",")]
+    threads = o.thread_counts
     rows = []
     for th in threads:
         res = {c: [] for c in o.codes}

@@ -42,3 +42,15 @@ def test_lammps_peer_takes_a_prepared_specimen(specimen_100, tmp_path):
     assert "shear terms" in proc.stdout and "orthorhombic box" in proc.stdout
     data = (tmp_path / "l" / "data.lmp").read_text()
     assert "100 atoms" in data and "xy xz yz" not in data  # an orthorhombic box, every sphere
+
+
+def test_bench_stepper_refuses_bad_input_before_any_run(specimen_100):
+    """Before: --dt -1 was printed as the table's time step, --threads 99 and 0 were timed as rows,
+    --repeats 0 failed after the runs, --dt nan and --steps -1 failed inside the engine (an outside
+    try). Each is one line and exit 2 now, at once."""
+    from conftest import one_line_error, run_script
+    for args, words in ((["--dt", "-1"], "--dt must be"), (["--dt", "nan"], "--dt must be"),
+                        (["--threads", "99"], "at most"), (["--threads", "0"], "thread counts >= 1"),
+                        (["--repeats", "0"], "--repeats >= 1"), (["--steps", "-1"], "--steps")):
+        one_line_error(run_script(os.path.join("bench", "bench_stepper.py"), "--specimen", specimen_100, *args,
+                                  timeout=60), words)
