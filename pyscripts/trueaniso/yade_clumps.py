@@ -136,9 +136,9 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     and our inertia tensor's largest off-diagonal term in YADE's frame over its largest term
     (0 when YADE's clump frame is ours)."""
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
-                      InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin, Matrix3,
+                      InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin,
                       NewtonIntegrator, Vector3, utils)
-    from .yade_bridge import _write_cell, contacts_made_at_rest
+    from .yade_bridge import _write_cell, _yade_matrix, contacts_made_at_rest
     O.reset()
     O.periodic = True
     _write_cell(O, scene.cell, scene.cell_ref)
@@ -181,7 +181,7 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     O.dt = scene.dt if scene.dt > 0 else 1e-8
     if import_contacts:
         contacts_made_at_rest(scene, O, ids, members)  # steps at rest: before the strain rate is set
-    O.cell.velGrad = Matrix3(*[float(v) for v in np.asarray(scene.velocity_gradient, dtype=float).ravel()])
+    O.cell.velGrad = _yade_matrix(scene.velocity_gradient)
     return ids, members, dict(max_centre_offset=offset, max_inertia_offdiagonal=offdiag)
 
 
@@ -190,16 +190,16 @@ def write_clumps_to_yade(scene, O, ids):
     by `ids` (YADE ids of our bodies, as yade_clump_scene_from returned them); members placed at our
     member positions, so O shows the state before YADE's next step moves them. Velocities and
     strain rate follow yade_bridge.write_to_yade's rule."""
-    from yade import Matrix3, Quaternion, Vector3
+    from yade import Quaternion, Vector3
     from .yade_bridge import (BridgeError, _current_velocity_gradient, _interaction_images, _keep_interaction_images,
-                              _write_cell, nearest_image_shifts, write_shear_history)
+                              _write_cell, _yade_matrix, nearest_image_shifts, write_shear_history)
     if ids is None or len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
     current = _current_velocity_gradient(O)
     before = _interaction_images(O)
     shift = nearest_image_shifts(O, ids, scene.positions, scene.cell)  # as yade_bridge.write_to_yade, a clump's
     _write_cell(O, scene.cell, scene.cell_ref)                          # members with it
-    O.cell.velGrad = Matrix3(*[float(v) for v in np.asarray(scene.velocity_gradient, dtype=float).ravel()])
+    O.cell.velGrad = _yade_matrix(scene.velocity_gradient)
     pos, q, vel, ang = scene.positions + shift, scene.orientations, scene.velocities, scene.angular_velocities
     begin = scene.member_begin
     mpos = scene.member_positions + np.repeat(shift, np.diff(begin), axis=0)
