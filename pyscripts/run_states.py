@@ -172,12 +172,21 @@ def mpi_executor(o):
         return None
     try:
         from mpi4py import MPI
-        from mpi4py.futures import MPIPoolExecutor
+        from mpi4py.futures import MPIPoolExecutor, _lib
     except ImportError:
         raise cli.InputError("--mpi needs mpi4py (Debian: python3-mpi4py openmpi-bin)") from None
+    start = ("start as mpiexec -n K /usr/bin/python3 -m mpi4py.futures pyscripts/run_states.py --mpi ... with K >= 2 "
+             "(K-1 workers)")
     if MPI.COMM_WORLD.Get_size() < 2:
-        raise cli.InputError("--mpi: no MPI workers; start as mpiexec -n K /usr/bin/python3 -m mpi4py.futures "
-                             "pyscripts/run_states.py --mpi ... with K >= 2 (K-1 workers)")
+        raise cli.InputError("--mpi: no MPI workers; " + start)
+    if getattr(_lib, "SharedPool", None) is None:
+        # mpiexec ran the script itself on every rank: each would be a master with its own pool
+        # and write the study (the pool of `-m mpi4py.futures` is the one this script expects).
+        # Rank 0 says so; the others leave quietly, so the line is printed once.
+        if MPI.COMM_WORLD.Get_rank() != 0:
+            raise SystemExit(2)
+        raise cli.InputError("--mpi: mpiexec started this script on all %d ranks, without mpi4py.futures; "
+                             % MPI.COMM_WORLD.Get_size() + start)
     if not o.threads:
         o.threads = 1  # workers x threads within the cores; a thread count is part of the study
     workers = MPI.COMM_WORLD.Get_size() - 1

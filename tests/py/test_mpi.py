@@ -148,3 +148,16 @@ def test_mpi_without_workers_is_refused(specimen_100, tmp_path):
                       "--ids", "1")
     one_line_error(proc, "--mpi", "mpiexec -n K")
     assert not (tmp_path / "x").exists()
+
+
+def test_mpiexec_without_mpi4py_futures_is_refused(specimen_100, tmp_path):
+    """`mpiexec -n 2 python3 run_states.py --mpi` (no `-m mpi4py.futures`) ran the script on both
+    ranks, each a master with its own pool: both wrote the study and left a metadata.json. Now rank
+    0 says how to start it, once, and nothing is written."""
+    cmd = mpi_cmd(specimen_100, tmp_path / "x")
+    del cmd[cmd.index("-m"):cmd.index("-m") + 2]
+    proc = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=300)
+    assert proc.returncode != 0
+    assert proc.stderr.count("without mpi4py.futures") == 1, proc.stderr
+    assert "-m mpi4py.futures pyscripts/run_states.py --mpi" in proc.stderr
+    assert not (tmp_path / "x").exists()
