@@ -90,6 +90,9 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
         raise InputError("each probe axis may be given once")
     axes = [AXES[a] for a in probes]
     _, spec_meta = specimen_file.read(specimen_path)
+    if "checkpoint" in (spec_meta.get("parameters") or {}):  # prep_checkpoint's: mid-preparation, not at rest
+        raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
+                         "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
     if spec_meta["block_rotations"] and not restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)
@@ -136,6 +139,10 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                   specimen=dict(path=os.path.abspath(specimen_path), sha256=spec_meta["sha256"],
                                 seed=spec_meta["seed"], summary=spec_meta.get("summary"),
                                 material=spec_meta.get("material")))
+    made_as = (spec_meta.get("parameters") or {}).get("state")
+    if made_as is not None:  # allowed (a study may start from a state), but said: its states start stressed
+        log("note: %s is the checkpoint of state %s of a study, not a specimen at its preparation pressure; "
+            "this study's states are reached from that state" % (specimen_path, made_as))
     csv_path = os.path.join(out, CSV_NAME)
     with lock.held(out, wait=wait, log=log):
         if force_new:
@@ -415,13 +422,15 @@ def parse_states(text):
 
 
 def parse_ids(text):
-    """'1,5,21' -> [1, 5, 21]; an empty list, a non-number or a state given twice is refused
+    """'1,5,21' -> [1, 5, 21]; an empty list or item, a non-number or a state given twice is refused
     (never "all states", never a silent de-duplication). The caller names the option."""
     items = [t.strip() for t in text.split(",")]
     if not any(items):
         raise ValueError("no state named (give Table C1 numbers 1-39, e.g. 1,5,21)")
+    if not all(items):  # "1," or "1,,5": a number left out, perhaps the one meant
+        raise ValueError("%r has an empty item: give Table C1 numbers 1-39 separated by commas, e.g. 1,5,21" % text)
     try:
-        ids = [int(t) for t in items if t]
+        ids = [int(t) for t in items]
     except ValueError:
         raise ValueError("%r: Table C1 states are numbers 1-39, e.g. 1,5,21" % text) from None
     twice = sorted({i for i in ids if ids.count(i) > 1})

@@ -53,6 +53,7 @@ def blocker(tmp_path):
     (["--ids", ""], ["--ids: no state named"]),  # before: ran all 39 states
     (["--ids", " , "], ["--ids: no state named"]),
     (["--ids", "1,5,1"], ["--ids: state 1 is given twice"]),  # before: de-duplicated without a word
+    (["--ids", "1,"], ["--ids: '1,' has an empty item"]),  # before: ran state 1 alone
     (["--ids", "1", "--gamma", "1"], ["--gamma 1 is outside"]),  # before: 2,000,000 steps, then exit 1
     (["--ids", "1", "--gamma", "1e-12"], ["--gamma 1e-12 is outside"]),
     (["--ids", "1", "--gamma", "nan"], ["--gamma", "finite"]),
@@ -69,6 +70,23 @@ def test_run_states_refuses_before_work(specimen_100, tmp_path, args, words):
     proc = run_script("run_states.py", "--specimen", specimen_100, "--out", out, *args, timeout=120)
     one_line_error(proc, *words)
     assert not out.exists()
+
+
+def test_checkpoints_given_as_specimen(specimen_100, tmp_path):
+    """A preparation checkpoint (a specimen half made, mid-expansion) given as --specimen is refused;
+    a state's checkpoint is taken, with a note that the states start from that state (before, both
+    were taken without a word)."""
+    from trueaniso import specimen_file
+    scene, meta = specimen_file.load(str(specimen_100))
+    prep, state = tmp_path / "prep.npz", tmp_path / "state5.npz"
+    specimen_file.save(str(prep), scene, parameters=dict(checkpoint=dict(recipe={}, place={})))
+    specimen_file.save(str(state), scene, seed=meta["seed"], parameters=dict(state="5", b=0.0, sigma_z=140e3))
+    one_line_error(run_script("run_states.py", "--specimen", prep, "--out", tmp_path / "a", "--ids", "1"),
+                   "is a preparation checkpoint", "finish it")
+    assert not (tmp_path / "a").exists()
+    proc = run_script("run_states.py", "--specimen", state, "--out", tmp_path / "b", "--ids", "1", "--probes", "z")
+    assert proc.returncode == 0, proc.stderr
+    assert "note: %s is the checkpoint of state 5 of a study" % state in proc.stdout
 
 
 def test_run_states_out_must_be_a_writable_directory(specimen_100, blocker):
