@@ -42,10 +42,13 @@ int Scene::addClump(const Vec3& pos, const Quat& orientation, const ClumpTemplat
 }
 
 int Scene::addClump(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,
-                    const std::vector<Real>& radii, Real mass, const Vec3& inertia) {
+                    const std::vector<Real>& radii, Real mass, const Vec3& inertia, Real volume) {
   require(std::isfinite(mass) && mass > 0 && inertia.allFinite() && (inertia.array() > 0).all(),
           "clump mass and inertia must be finite and > 0");
-  return addBody(pos, orientation, offsets, radii, mass, inertia, cachedClumpVolume(offsets, radii));
+  require(std::isfinite(volume) && volume >= 0, "clump volume must be finite and > 0 (or 0: the members' union)");
+  if (volume > 0) validateClumpMembers(offsets, radii);
+  else volume = cachedClumpVolume(offsets, radii);
+  return addBody(pos, orientation, offsets, radii, mass, inertia, volume);
 }
 
 int Scene::addBody(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,

@@ -34,10 +34,12 @@ struct Scene {
   // mass and inertia from the union's volume and moments and the material's density.
   int addClump(const Vec3& pos, const Quat& orientation, const ClumpTemplate& shape, Real scale = 1.0);
   // A rigid clump with given member offsets (body frame, about the centre of mass), mass and
-  // principal inertia (a saved scene, YADE's clumps). Its solid volume is the union's, from CGAL
-  // (cached per shape, cachedClumpVolume). Members are validated as for a template.
+  // principal inertia (a saved scene, YADE's clumps). Its solid volume is `volume` when given
+  // (> 0: a saved scene's own, so that every process that loads it gets the same bits), else
+  // the union's, from CGAL (cached per shape, cachedClumpVolume, whose last bits depend on which
+  // clump of the shape the process met first). Members are validated as for a template.
   int addClump(const Vec3& pos, const Quat& orientation, const std::vector<Vec3>& offsets,
-               const std::vector<Real>& radii, Real mass, const Vec3& inertia);
+               const std::vector<Real>& radii, Real mass, const Vec3& inertia, Real volume = 0);
   // Single spheres only: change the radius and the mass and inertia that follow from it.
   void setSphereRadius(int body, Real radius);
   // The material's density, with every body's mass and inertia scaled to it (they are

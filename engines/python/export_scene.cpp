@@ -23,11 +23,11 @@ void addSpheres(Scene& s, const bp::object& pos, const bp::object& radii) {
 }
 
 int addClump(Scene& s, const bp::object& pos, const bp::object& quat, const bp::object& offsets,
-             const bp::object& radii, Real mass, const bp::object& inertia) {
+             const bp::object& radii, Real mass, const bp::object& inertia, Real volume) {
   const std::vector<Real> q = toRealList(quat, "orientation (w, x, y, z)");
   require(q.size() == 4, "orientation must be a quaternion (w, x, y, z)");
   return s.addClump(toVec3(pos, "position"), Quat(q[0], q[1], q[2], q[3]), toVec3List(offsets, "offsets"),
-                    toRealList(radii, "radii"), mass, toVec3(inertia, "inertia"));
+                    toRealList(radii, "radii"), mass, toVec3(inertia, "inertia"), volume);
 }
 
 np::ndarray orderInSpace(Scene& s) {
@@ -224,7 +224,8 @@ void exportScene() {
       .def("add_sphere", +[](Scene& s, const bp::object& p, Real r) { return s.addSphere(toVec3(p, "position"), r); })
       .def("add_clump", &addClump,
            (bp::arg("position"), bp::arg("orientation"), bp::arg("offsets"), bp::arg("radii"), bp::arg("mass"),
-            bp::arg("inertia")))
+            bp::arg("inertia"), bp::arg("volume") = 0.0),
+           "A rigid clump; its solid volume is `volume` when > 0 (a saved scene's), else the members' union (CGAL).")
       .def("copy", &copyScene, "Deep copy (state snapshot).")
       .def("assign", &assignScene, "Overwrite this scene with another's state.")
       .def("order_in_space", &orderInSpace,

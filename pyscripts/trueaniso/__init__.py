@@ -37,4 +37,4 @@ def _find_extension():
 
 engines = _find_extension()
 __version__ = "0.1.0"
-FORMAT_VERSION = 3  # specimen files; 2: the checksum covers the metadata; 3: the full cell matrix (docs/specimens.md)
+FORMAT_VERSION = 4  # specimen files; 2: the checksum covers the metadata; 3: the full cell matrix; 4: the bodies' volumes (docs/specimens.md)

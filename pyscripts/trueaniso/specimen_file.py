@@ -1,6 +1,6 @@
 """Versioned specimen files: one .npz holding the whole mechanical state and its provenance.
 
-Layout (format "trueaniso-specimen", version 3): arrays for bodies, member spheres, cell (the
+Layout (format "trueaniso-specimen", version 4): arrays for bodies, member spheres, cell (the
 3x3 matrix hSize whose columns are the cell vectors, its reference and the velocity gradient) and
 contact history (the tangential forces matter: a probe starts from them), plus a JSON string
 ``meta`` with material, time step, rotation blocking, seed, preparation parameters, the state
@@ -9,9 +9,14 @@ summary and software versions. ``meta["sha256"]`` is a SHA-256 of the whole cont
 ``block_rotations`` fails the check just as an edited radius does.
 
 A clump is a body with several members: ``member_offsets`` (its principal frame) and ``radii`` are
-its template scaled to its size, ``masses`` and ``inertia`` its mass and principal moments; its
-solid volume (void ratio) is recomputed from the members (the union, by CGAL, once per shape).
-A clump whose members do not overlap into one body is refused like any other invalid field.
+its template scaled to its size, ``masses`` and ``inertia`` its mass and principal moments, and
+``volumes`` its solid volume (the void ratio's), stored since version 4 so that every process that
+loads the file gets the same bits: recomputed from the members (the union, by CGAL, cached once per
+shape), its last bits depended on which clump of the shape the process had met first, and a
+resumed study's void ratios differed from the uninterrupted run's. A stored volume is checked
+against the union (1e-9) and a sphere's against 4/3 pi r^3; a sphere's is recomputed from its
+radius, as before. A version-3 file (no volumes) is read with the union's volumes. A clump whose
+members do not overlap into one body is refused like any other invalid field.
 
 Loading checks format, version, checksum, then every field (``meta_problem``, ``contents_problem``,
 and after the scene is built ``contacts_problem``) before anything is simulated, and refuses a
@@ -37,17 +42,19 @@ from . import FORMAT_VERSION, atomic, engines
 from .provenance import versions
 
 FORMAT = "trueaniso-specimen"
-_ARRAYS = ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia",
-           "member_begin", "member_body", "member_offsets", "radii", "cell", "cell_ref",
-           "velocity_gradient", "c_member1", "c_member2", "c_shift", "c_normal", "c_normal_force",
-           "c_shear_force")
+_ARRAYS_V3 = ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia",
+              "member_begin", "member_body", "member_offsets", "radii", "cell", "cell_ref",
+              "velocity_gradient", "c_member1", "c_member2", "c_shift", "c_normal", "c_normal_force",
+              "c_shear_force")
+_ARRAYS = _ARRAYS_V3 + ("volumes",)  # version 4: each body's solid volume (module doc)
+_VOLUME_TOLERANCE = 1e-9  # stored against recomputed volume: rounding is 1e-15, a wrong file 1e-3 and more
 # Version 2 stored an orthorhombic cell: its edge lengths, reference lengths and diagonal strain
 # rates. Such a file is still read (its checksum over these names), as the diagonal matrices.
 # Rolling resistance (docs/rolling.md): a scene with it on also stores its rolling moments, and
 # its material names beta and eta_r; a scene without it is written exactly as before.
 _ROLLING = "c_rolling_moment"
 _ARRAYS_V2 = tuple({"cell": "cell_size", "cell_ref": "cell_ref_size", "velocity_gradient": "strain_rate"}.get(k, k)
-                   for k in _ARRAYS)
+                   for k in _ARRAYS_V3)
 
 
 class SpecimenFileError(ValueError):
@@ -81,7 +88,7 @@ def _rolling(material):
 
 def _names(meta):
     """The arrays a file of this metadata holds (and its checksum covers)."""
-    names = _ARRAYS_V2 if meta.get("format_version") == 2 else _ARRAYS
+    names = {2: _ARRAYS_V2, 3: _ARRAYS_V3}.get(meta.get("format_version"), _ARRAYS)
     m = meta.get("material")
     return names + (_ROLLING,) if isinstance(m, dict) and _number(m.get("rolling_stiffness", 0.0), 0) and \
         _rolling(m) else names
@@ -94,7 +101,7 @@ def scene_arrays(scene):
     return dict(**rolling,
         positions=scene.positions, velocities=scene.velocities,
         angular_velocities=scene.angular_velocities, orientations=scene.orientations,
-        masses=scene.masses, inertia=scene.inertia, member_begin=scene.member_begin,
+        masses=scene.masses, inertia=scene.inertia, volumes=scene.volumes, member_begin=scene.member_begin,
         member_body=scene.member_body, member_offsets=scene.member_offsets, radii=scene.radii,
         cell=scene.cell, cell_ref=scene.cell_ref, velocity_gradient=scene.velocity_gradient,
         c_member1=c["member1"][active], c_member2=c["member2"][active], c_shift=c["shift"][active],
@@ -159,8 +166,8 @@ def read(path):
         raise SpecimenFileError("%s is a version-1 specimen file, whose checksum leaves its metadata (material, "
                                 "time step, rotation blocking) unchecked; prepare the specimen again with this "
                                 "trueaniso (prepare_specimen.py --force)" % path)
-    if meta.get("format_version") not in (2, FORMAT_VERSION):
-        raise SpecimenFileError("%s has specimen format version %r; this trueaniso reads versions 2 and %d"
+    if meta.get("format_version") not in (2, 3, FORMAT_VERSION):
+        raise SpecimenFileError("%s has specimen format version %r; this trueaniso reads versions 2 to %d"
                                 % (path, meta.get("format_version"), FORMAT_VERSION))
     names = _names(meta)
     missing = [k for k in names if k not in data]
@@ -169,6 +176,9 @@ def read(path):
     if _ROLLING in data and _ROLLING not in names:  # not covered by the checksum: never trusted
         raise SpecimenFileError("corrupt specimen file %s (rolling moments stored, but its material has no rolling "
                                 "resistance)" % path)
+    if "volumes" in data and "volumes" not in names:  # likewise: a version-3 file holds none
+        raise SpecimenFileError("corrupt specimen file %s (volumes stored in a version-%s file, which has none)"
+                                % (path, meta.get("format_version")))
     if not isinstance(meta.get("sha256"), str) or _checksum(data, meta, names) != meta["sha256"]:
         raise SpecimenFileError("corrupt specimen file %s (checksum mismatch: arrays or metadata were changed "
                                 "after it was written)" % path)
@@ -247,7 +257,7 @@ def contents_problem(a):
     if not np.array_equal(a["member_body"], np.repeat(np.arange(nb), np.diff(mb))):
         return "inconsistent body/member arrays (member_body does not follow member_begin)"
     shapes = dict(velocities=(nb, 3), angular_velocities=(nb, 3), orientations=(nb, 4), masses=(nb,),
-                  inertia=(nb, 3))
+                  inertia=(nb, 3), **({"volumes": (nb,)} if "volumes" in a else {}))
     for name, shape in shapes.items():
         if a[name].shape != shape:
             return "%s has shape %s, not %s" % (name, a[name].shape, shape)
@@ -256,7 +266,7 @@ def contents_problem(a):
         return problem
     for name in ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia", "radii",
                  "member_offsets", "c_normal", "c_normal_force", "c_shear_force",
-                 *((_ROLLING,) if _ROLLING in a else ())):
+                 *((_ROLLING,) if _ROLLING in a else ()), *(("volumes",) if "volumes" in a else ())):
         if not np.issubdtype(a[name].dtype, np.floating) or not np.all(np.isfinite(a[name])):
             return "non-finite values in %s" % name
     if np.any(a["radii"] <= 0):
@@ -265,6 +275,14 @@ def contents_problem(a):
         return "mass <= 0"
     if np.any(a["inertia"] <= 0):
         return "moment of inertia <= 0"
+    if "volumes" in a:
+        v = a["volumes"]
+        if np.any(v <= 0):
+            return "volume <= 0"
+        single = np.diff(mb) == 1
+        r = a["radii"][mb[:-1][single]]
+        if np.any(np.abs(v[single] / (4.0 / 3.0 * np.pi * r ** 3) - 1) > _VOLUME_TOLERANCE):
+            return "a sphere's volume disagrees with its radius"
     if np.any(np.abs(np.linalg.norm(a["orientations"], axis=1) - 1) > 1e-6):
         return "orientations are not unit quaternions"
     problem = clump_members_problem(a["member_begin"], a["member_offsets"], a["radii"])
@@ -382,13 +400,18 @@ def load(path):
     if np.all(np.diff(mb) == 1):
         s.add_spheres(a["positions"], a["radii"])
     else:
-        # Clumps carry their members (offsets in the body's principal frame, radii), mass and
-        # principal inertia; the solid volume is the union's, from CGAL once per shape.
+        # Clumps carry their members (offsets in the body's principal frame, radii), mass,
+        # principal inertia and (version 4) solid volume, checked against the union's (CGAL, once
+        # per shape); a version-3 file takes the union's.
+        volumes = a.get("volumes")
         for b in range(nb):
             k = slice(mb[b], mb[b + 1])
             try:
+                union = engines.clump_volume(a["member_offsets"][k], a["radii"][k])
+                if volumes is not None and abs(volumes[b] / union - 1) > _VOLUME_TOLERANCE:
+                    raise ValueError("its volume %.17g disagrees with its members' union %.17g" % (volumes[b], union))
                 s.add_clump(a["positions"][b], a["orientations"][b], a["member_offsets"][k], a["radii"][k],
-                            float(a["masses"][b]), a["inertia"][b])
+                            float(a["masses"][b]), a["inertia"][b], float(union if volumes is None else volumes[b]))
             except (ValueError, RuntimeError) as exc:
                 raise SpecimenFileError("invalid specimen file %s (body %d: %s)" % (path, b, exc)) from None
     s.orientations = a["orientations"]

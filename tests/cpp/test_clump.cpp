@@ -180,6 +180,20 @@ TEST(ClumpTemplate, VoidRatioUsesUnionVolume) {
   // The file/YADE path (offsets, mass, inertia given) gets the same volume from the cache.
   s.addClump(Vec3::Constant(2 * r), Quat::Identity(), t.offsets, t.radii, 1e-9, Vec3::Constant(1e-17));
   EXPECT_NEAR(s.bodies.volume[1] / s.bodies.volume[0], 1.0, 2e-5);
+  // A saved scene's own volume is taken as given, bit for bit (the cache's last bits depend on the
+  // clump it met first); a negative or NaN one is refused, and the members are still checked.
+  const Real saved = std::nextafter(s.bodies.volume[0], 1.0);
+  s.addClump(Vec3::Constant(8 * r), Quat::Identity(), t.offsets, t.radii, 1e-9, Vec3::Constant(1e-17), saved);
+  EXPECT_EQ(s.bodies.volume[2], saved);
+  EXPECT_THROW(s.addClump(Vec3::Zero(), Quat::Identity(), t.offsets, t.radii, 1e-9, Vec3::Constant(1e-17), -saved),
+               InputError);
+  EXPECT_THROW(s.addClump(Vec3::Zero(), Quat::Identity(), t.offsets, t.radii, 1e-9, Vec3::Constant(1e-17),
+                          std::nan("")),
+               InputError);
+  EXPECT_THROW(s.addClump(Vec3::Zero(), Quat::Identity(), {Vec3::Zero(), Vec3(3 * r, 0, 0)}, {r, r}, 1e-9,
+                          Vec3::Constant(1e-17), saved),
+               InputError);
+  EXPECT_EQ(s.bodies.size(), 3);
 }
 
 // Torque-free rotation of an asymmetric clump (damping off): the angular momentum in the world

@@ -1,6 +1,10 @@
 """Clump assemblies (issue 13): templates from Python, bad input, clump growth, specimen files,
 the static solve against the +/- probe mean, YADE's clumps side by side and through the bridge."""
+import json
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -121,15 +125,92 @@ def test_specimen_file_round_trips_clumps(tmp_path):
     for name in ("positions", "orientations", "member_positions", "masses", "inertia", "velocities",
                  "angular_velocities", "radii", "member_offsets"):
         np.testing.assert_array_equal(getattr(back, name), getattr(s, name), err_msg=name)
-    # volumes come from the shape cache (CGAL) on load: the same shape, the same volume
-    np.testing.assert_allclose(back.volumes, s.volumes, rtol=1e-12)
-    assert engines.void_ratio(back) == pytest.approx(engines.void_ratio(s), rel=1e-12)
+    # volumes are stored (version 4): the scene saved and the scene loaded are the same bits
+    np.testing.assert_array_equal(back.volumes, s.volumes)
+    assert engines.void_ratio(back) == engines.void_ratio(s)
     dem.refresh(s)
     a, b = s.contact_arrays(), back.contact_arrays()
     on = a["normal_force"] > 0
     assert on.sum() > 100
     np.testing.assert_allclose(engines.stress(back), engines.stress(s), rtol=1e-12, atol=1e-12 * np.abs(engines.stress(s)).max())
     np.testing.assert_array_equal(b["shear_force"][b["normal_force"] > 0], a["shear_force"][on])
+
+
+_LOAD_VOLUMES = """
+import sys
+from trueaniso import specimen_file
+for path in sys.argv[1:]:
+    scene, _ = specimen_file.load(path)
+print(scene.volumes.tobytes().hex())
+"""
+
+
+def test_clump_volumes_load_to_the_same_bits_in_every_process(tmp_path):
+    """A process that loads a clump specimen gets the volumes saved, whatever it loaded before.
+    Computed on load (version 3), a clump's volume came from a per-process cache of each shape's
+    volume, filled by the first clump of that shape the process met, at that clump's size: a
+    process that had first loaded the same shapes at another size (a preparation checkpoint
+    mid-expansion) got other last bits, and a resumed clump2 study wrote other void ratios than the
+    uninterrupted run (docs/runs.md). Each load runs in a fresh interpreter, whose cache is empty."""
+    s = _clump_gas(60, 8)
+    specimen_file.save(str(tmp_path / "a.npz"), s, seed=8)
+    other = s.copy()
+    other.rescale(1.37)  # the same shapes, every size other
+    specimen_file.save(str(tmp_path / "other.npz"), other, seed=8)
+
+    def volumes(*files):
+        out = subprocess.run([sys.executable, "-c", _LOAD_VOLUMES, *map(str, files)], capture_output=True, text=True,
+                             env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)), timeout=120)
+        assert out.returncode == 0, out.stderr
+        return out.stdout.strip()
+
+    alone, after_other = volumes(tmp_path / "a.npz"), volumes(tmp_path / "other.npz", tmp_path / "a.npz")
+    assert alone == after_other == s.volumes.tobytes().hex()
+
+
+def test_stored_volumes_are_checked_and_version_3_files_still_load(tmp_path):
+    """A stored volume that disagrees with its members (resealed: another tool wrote it) is refused,
+    for a clump against the union (CGAL) and for a sphere against 4/3 pi r^3; a version-3 file,
+    which stores none, loads with the union's volumes, within rounding of the saved ones."""
+    from test_specimen_file import _rewrite
+    s = _clump_gas(20, 9)
+    path = str(tmp_path / "c.npz")
+    specimen_file.save(path, s, seed=9)
+
+    def bigger(a):
+        a["volumes"] = a["volumes"].copy()
+        a["volumes"][3] *= 1.001
+
+    _rewrite(path, str(tmp_path / "bad.npz"), edit_arrays=bigger, reseal=True)
+    with pytest.raises(specimen_file.SpecimenFileError, match="body 3: its volume .* disagrees with its members' union"):
+        specimen_file.load(str(tmp_path / "bad.npz"))
+
+    spheres = engines.Scene()
+    spheres.cell_size = spheres.cell_ref_size = [1e-2] * 3
+    spheres.add_spheres([[1e-3, 1e-3, 1e-3], [5e-3, 5e-3, 5e-3]], [1e-3, 1.2e-3])
+    specimen_file.save(str(tmp_path / "s.npz"), spheres)
+    _rewrite(str(tmp_path / "s.npz"), str(tmp_path / "bad-s.npz"),
+             edit_arrays=lambda a: a.update(volumes=a["volumes"] * [1.0, 1.001]), reseal=True)
+    with pytest.raises(specimen_file.SpecimenFileError, match="a sphere's volume disagrees with its radius"):
+        specimen_file.read(str(tmp_path / "bad-s.npz"))
+
+    def version_3(meta, arrays):
+        meta["format_version"] = 3
+        del arrays["volumes"]
+        meta["sha256"] = specimen_file._checksum(arrays, meta, specimen_file._ARRAYS_V3)
+
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays.pop("meta")))
+    version_3(meta, arrays)
+    np.savez(str(tmp_path / "v3.npz"), meta=np.array(json.dumps(meta)), **arrays)
+    back, m = specimen_file.load(str(tmp_path / "v3.npz"))
+    assert m["format_version"] == 3
+    np.testing.assert_allclose(back.volumes, s.volumes, rtol=1e-14)
+    arrays["volumes"] = s.volumes  # a version-3 file with volumes the checksum does not cover
+    np.savez(str(tmp_path / "v3-extra.npz"), meta=np.array(json.dumps(meta)), **arrays)
+    with pytest.raises(specimen_file.SpecimenFileError, match="volumes stored in a version-3 file"):
+        specimen_file.read(str(tmp_path / "v3-extra.npz"))
 
 
 def _spread_members(a):

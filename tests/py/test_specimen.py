@@ -57,7 +57,7 @@ def test_file_round_trip(small, tmp_path):
     path = tmp_path / "s.npz"
     specimen_file.save(str(path), scene, seed=4, parameters=log)
     loaded, meta = specimen_file.load(str(path))
-    assert meta["seed"] == 4 and meta["format_version"] == 3
+    assert meta["seed"] == 4 and meta["format_version"] == 4
     for name in ("positions", "radii", "masses", "cell", "cell_ref", "velocity_gradient", "velocities"):
         np.testing.assert_array_equal(getattr(loaded, name), getattr(scene, name))
     # The contact history comes back: evaluating forces without motion gives the same stress.
