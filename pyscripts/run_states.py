@@ -65,6 +65,10 @@ def parser():
     p.add_argument("--mu", type=cli.finite, default=0.5,
                    help="friction coefficient while states are reached (the paper's 0.5; probes always suppress "
                         "sliding)")
+    p.add_argument("--path-rate", type=cli.positive_or_inf, default=2.0,
+                   help=("servo's path rate while states are reached, in Pa per step (default 2, as every committed study; 20 "
+                        "reaches a state in about 2.2 times fewer steps, with moduli within the probe's own error at "
+                        "4000 spheres but not at 1000; inf: the whole load at once; docs/state-speed.md)"))
     p.add_argument("--rolling-stiffness", type=cli.non_negative, default=0.0,
                    help="rolling resistance (not in the paper; docs/rolling.md): beta of the rolling stiffness "
                         "k_r = beta k_s rbar^2, from the specimen on through states and probes; 0 = off. Give "
@@ -210,7 +214,8 @@ def main(argv=None):
     try:
         study.run_states(o.specimen, states, o.out, probes=o.probe_axes, gamma=o.gamma, path=o.path,
                          restrain_rotations=o.rotations == "restrained", skip_detection=o.skip_detection,
-                         damping=o.damping, state_options=dict(friction=o.mu, rolling_stiffness=o.rolling_stiffness,
+                         damping=o.damping, state_options=dict(friction=o.mu, path_rate=o.path_rate,
+                                                                rolling_stiffness=o.rolling_stiffness,
                                                                 rolling_friction=o.rolling_friction), wait=o.wait,
                          force_new=o.force_new, progress_every=o.progress_every,
                          log=lambda m: print(m, flush=True), executor=executor)

@@ -51,6 +51,10 @@ def parser():
     p.add_argument("--mu", type=cli.finite, default=0.5,
                    help="friction coefficient while states are reached (the paper's 0.5; the specimen is "
                         "consolidated with 0.5, and probes always suppress sliding)")
+    p.add_argument("--path-rate", type=cli.positive_or_inf, default=2.0,
+                   help=("servo's path rate while states are reached, in Pa per step (default 2, as every committed study; 20 "
+                        "reaches a state in about 2.2 times fewer steps, with moduli within the probe's own error at "
+                        "4000 spheres but not at 1000; inf: the whole load at once; docs/state-speed.md)"))
     cli.add_threads_option(p, study=True)
     p.add_argument("--out", default="results/default", help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
@@ -183,7 +187,7 @@ def main(argv=None):
         if o.force_new:
             study_dir.supersede(o.out, log)
         path = os.path.join(o.out, SPECIMEN)
-        options = dict(state_options=dict(friction=o.mu), recipe=recipe(o))
+        options = dict(state_options=dict(friction=o.mu, path_rate=o.path_rate), recipe=recipe(o))
         scene = check_recipe(o, log)  # a refusal changes nothing
         if scene is not None:
             study.check(path, states, o.out, **options)  # the whole fingerprint, before anything is written

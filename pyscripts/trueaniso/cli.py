@@ -128,6 +128,17 @@ def positive(text):
     return x
 
 
+def positive_or_inf(text):
+    """A number > 0, or inf (e.g. a rate with no limit); nan is refused."""
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError("%r is not a number" % text) from None
+    if not x > 0:  # nan and -inf fail too
+        raise argparse.ArgumentTypeError("%r is not > 0 (or inf)" % text)
+    return x
+
+
 def non_negative(text):
     x = finite(text)
     if not x >= 0:

@@ -109,6 +109,7 @@ def test_run_study_out_must_be_a_writable_directory(blocker):
     (["--n", "1000000000"], ["memory", "this machine allows"]),
     (["--ids", ""], ["--ids: no state named"]),
     (["--ids", "1,1"], ["--ids: state 1 is given twice"]),
+    (["--path-rate", "-2"], ["--path-rate", "not > 0"]),
     (["--threads", "1000"], ["--threads", "at most"]),
     (["--out", "/sys/trueaniso-study"], ["cannot create files in /sys"]),
 ])
