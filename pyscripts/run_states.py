@@ -197,9 +197,14 @@ def mpi_executor(o):
     if workers * o.threads > resources.cores():
         # Not refused (a cluster node may count cores otherwise), but said: OpenMP teams on shared
         # cores wait at every barrier for a time slice (docs/benchmarks.md, "Stepper changes").
-        print("warning: %d workers x %d engine threads exceed this machine's %d cores; each team waits for the "
-              "others at every barrier (a study continued at its own thread count keeps it: start a new one "
-              "with --threads 1 to use one thread a worker)" % (workers, o.threads, resources.cores()), flush=True)
+        if o.threads == 1:  # one-thread workers only take turns: no barrier waits, nothing to gain either
+            print("warning: %d workers take turns on this machine's %d cores; %d workers (mpiexec -n %d) would "
+                  "finish about as soon, with less memory" % (workers, resources.cores(), resources.cores(),
+                                                              resources.cores() + 1), flush=True)
+        else:
+            print("warning: %d workers x %d engine threads exceed this machine's %d cores; each team waits for the "
+                  "others at every barrier (a study continued at its own thread count keeps it: start a new one "
+                  "with --threads 1 to use one thread a worker)" % (workers, o.threads, resources.cores()), flush=True)
     return MPIPoolExecutor()
 
 

@@ -67,6 +67,19 @@ def test_more_threads_than_cores_is_said_before_work(specimen_100, tmp_path):
     assert first.startswith("warning: 2 workers x %d engine threads exceed" % threads), first
 
 
+def test_more_one_thread_workers_than_cores_is_said_with_advice_that_applies(specimen_100, tmp_path):
+    """Before: one-thread workers beyond the cores were told to use --threads 1, which they did."""
+    from trueaniso import resources
+    cmd = mpi_cmd(specimen_100, tmp_path / "study", ranks=resources.cores() + 2)
+    cmd[cmd.index("--ids") + 1], cmd[cmd.index("--probes") + 1] = "1", "z"
+    proc = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    first = proc.stdout.splitlines()[0]
+    assert first.startswith("warning: %d workers take turns on this machine's %d cores; %d workers (mpiexec -n %d)"
+                            % (resources.cores() + 1, resources.cores(), resources.cores(), resources.cores() + 1)), first
+    assert "--threads 1" not in first
+
+
 def job_tree(pid):
     """mpiexec and every process below it (its ranks sit in process groups of their own)."""
     children = {}
