@@ -27,7 +27,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
 try:
     from trueaniso import (clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance, psd,
-                           resources, specimen, specimen_file, study_dir)
+                           resources, specimen, specimen_file, study_dir, triaxial)
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
     sys.stderr.write("error: %s\n" % exc)
     os._exit(2)
@@ -97,6 +97,10 @@ def validate(o):
         raise cli.InputError("--d50 must be > 0 (a radius <= 0 is not a particle)")
     if o.pressure <= 0:
         raise cli.InputError("--pressure must be > 0")
+    material = engines.Scene()  # the paper's material, which every specimen is made of
+    problem = triaxial.hertz_range_problem(o.pressure, material.shear_modulus, material.poisson, what="--pressure")
+    if problem:
+        raise cli.InputError(problem)
     if o.mu_prep < 0 or o.mu < 0:
         raise cli.InputError("friction coefficients must be >= 0")
     if not 0.3 < o.phi_cell < 0.74:

@@ -6,6 +6,7 @@
 #include "measure/Fabric.hpp"
 #include "measure/FabricRecorder.hpp"
 #include "python/Numpy.hpp"
+#include "theory/HertzRange.hpp"
 #include "theory/Micromechanics.hpp"
 
 namespace trueaniso::py {
@@ -143,6 +144,18 @@ void reserveHistory(FabricRecorder& r, int rows) {
 
 void exportFabric() {
   bp::scope().attr("ZETA_RANGE") = bp::make_tuple(ZetaRange::lo, ZetaRange::hi);
+  bp::scope().attr("MAX_OVERLAP_RATIO") = kMaxOverlapRatio;
+  bp::def(
+      "hertz_overlap_ratio",
+      +[](Real shearModulus, Real poisson, Real pressure, Real solidFraction, Real coordination) {
+        Material m;
+        m.shearModulus = shearModulus;
+        m.poisson = poisson;
+        return hertzOverlapRatio(m, pressure, solidFraction, coordination);
+      },
+      (bp::arg("shear_modulus"), bp::arg("poisson"), bp::arg("pressure"), bp::arg("solid_fraction"),
+       bp::arg("coordination")),
+      "Mean overlap over the radius, delta/R, of equal Hertz spheres at mean stress `pressure` (theory/HertzRange.hpp).");
   bp::def("fabric", &fabricOf,
           "Zm (Eq. 14), R (15), H (16), B (33), M (34, shape 3x3x3x3), NcV_eq36 (36), NcV_count, e, mean_N, "
           "Nc, Np, Np0, Np1 of the last force evaluation.");

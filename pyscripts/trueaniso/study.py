@@ -93,6 +93,15 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     if "checkpoint" in (spec_meta.get("parameters") or {}):  # prep_checkpoint's: mid-preparation, not at rest
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
+    m, summary = spec_meta["material"], spec_meta.get("summary") or {}
+    packing = dict(solid_fraction=1.0 / (1.0 + summary["void_ratio"]), coordination=summary["Zm"]) \
+        if summary.get("void_ratio", 0) > 0 and summary.get("Zm", 0) > 0 else triaxial.DENSE_PACKING
+    for i, b, sz in states:  # the largest principal stress of each state, in the specimen's own packing
+        problem = triaxial.hertz_range_problem(max(triaxial.path_stresses(path, b, sz)), m["shear_modulus"],
+                                               m["poisson"], what="state %s: its largest principal stress" % i,
+                                               **packing)
+        if problem:
+            raise InputError(problem)
     if spec_meta["block_rotations"] and not restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)

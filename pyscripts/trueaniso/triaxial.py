@@ -69,6 +69,26 @@ def validate_state(b, sigma_z, p=100e3):
     return engines.true_triaxial_stresses(b, sigma_z, p)
 
 
+# What a specimen made as docs/specimens.md describes has (e 0.58, Zm 5.97): the packing the
+# overlap estimate assumes when no specimen is known yet (a looser one overlaps more).
+DENSE_PACKING = dict(solid_fraction=0.63, coordination=6.0)
+
+
+def hertz_range_problem(stress, shear_modulus, poisson, solid_fraction=DENSE_PACKING["solid_fraction"],
+                        coordination=DENSE_PACKING["coordination"], what="the stress"):
+    """Why `stress` (Pa) is beyond Hertz's law for this material, or None: the mean overlap of
+    equal spheres at that stress (engines.hertz_overlap_ratio, theory/HertzRange.hpp) beyond
+    engines.MAX_OVERLAP_RATIO of a radius. (A stress of 1e9 Pa gave a "specimen" of e 0.08 whose
+    contacts overlapped by about 30 % of a radius.)"""
+    ratio = engines.hertz_overlap_ratio(shear_modulus, poisson, stress, solid_fraction, coordination)
+    if ratio <= engines.MAX_OVERLAP_RATIO:
+        return None
+    limit = stress * (engines.MAX_OVERLAP_RATIO / ratio) ** 1.5  # the ratio grows as stress^(2/3)
+    return ("%s of %.6g Pa would press the contacts into each other by about %.0f %% of a radius; Hertz's law "
+            "holds for small overlaps, so stresses above %.0f %% (about %.3g Pa for this material and packing) are "
+            "refused" % (what, stress, 100 * ratio, 100 * engines.MAX_OVERLAP_RATIO, limit))
+
+
 def rolling_problem(stiffness, friction, clumps=False):
     """Why rolling resistance (docs/rolling.md) with beta = stiffness, eta_r = friction cannot be
     run, or None: both must be finite numbers, > 0 together (one zero gives no resistance, or no

@@ -6,9 +6,12 @@
 #include <Eigen/Dense>
 
 #include "FabricScenes.hpp"
+#include "Lattices.hpp"
+#include "dynamics/ContactRefresh.hpp"
 #include "contact/HertzMindlin.hpp"
 #include "measure/Fabric.hpp"
 #include "measure/Stress.hpp"
+#include "theory/HertzRange.hpp"
 #include "theory/Micromechanics.hpp"
 
 using namespace trueaniso;
@@ -248,4 +251,26 @@ TEST(Micromechanics, RefusesZetaOutsideItsRange) {
   EXPECT_THROW(predict(f, s->material, std::nan("")), InputError);
   EXPECT_NO_THROW(predict(f, s->material, 0.0));
   EXPECT_NO_THROW(predict(f, s->material, 1.01));
+}
+
+// The overlap estimate against an FCC lattice, where every contact carries one force: its stress
+// (Love-Weber, from the code's forces) put into the estimate gives back the lattice's overlap.
+// The estimate takes the branch length as 2R, the lattice's is 2R - delta, so its stress is that
+// of the estimate times (1 - delta/2R); with that factor the two agree to rounding.
+TEST(HertzRange, OverlapOfAnFccLatticeFromItsStress) {
+  for (Real delta : {4e-7, 4e-6}) {
+    auto s = fcc(2, delta);
+    refreshContacts(*s);
+    const Real p = loveWeberStress(*s).trace() / 3.0;
+    const Real phi = s->bodies.size() * 4.0 / 3.0 * 3.14159265358979323846 * kR * kR * kR / s->cell.volume();
+    const Real ratio = hertzOverlapRatio(s->material, p / (1.0 - delta / (2 * kR)), phi, 12.0);
+    EXPECT_NEAR(ratio / (delta / kR), 1.0, 1e-10) << "delta " << delta;
+    EXPECT_LT(hertzOverlapRatio(s->material, p, phi, 12.0), ratio);  // without the factor: less
+  }
+  const Material m = paperMaterial();
+  // The scripts' bound for the paper's material in a dense packing: about 67 MPa (docs/runs.md).
+  EXPECT_NEAR(hertzOverlapRatio(m, 67e6, 0.633, 5.97), kMaxOverlapRatio, 0.001);
+  EXPECT_THROW(hertzOverlapRatio(m, -1.0, 0.6, 6.0), InputError);
+  EXPECT_THROW(hertzOverlapRatio(m, 1e5, 1.0, 6.0), InputError);
+  EXPECT_THROW(hertzOverlapRatio(m, 1e5, 0.6, 0.0), InputError);
 }
