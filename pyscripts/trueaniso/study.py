@@ -85,6 +85,15 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     ids = [str(i) for i, _, _ in states]
     if len(set(ids)) != len(ids):
         raise InputError("a state is given twice (ids %s)" % ", ".join(sorted({i for i in ids if ids.count(i) > 1})))
+    # One state under two names: at sigma_z = p every b gives the isotropic state, which was
+    # reached and probed once per name (the same rows twice, and twice the work).
+    named = {}
+    for i, b, sz in states:
+        key = tuple(float("%.12g" % x) for x in triaxial.path_stresses(path, b, sz))
+        if key in named:
+            raise InputError("states %s and %s are one state: both have principal stresses (%s) Pa; give it once"
+                             % (named[key], i, ", ".join("%.12g" % x for x in key)))
+        named[key] = i
     probes = [triaxial.validate_probe(a, gamma) for a in probes]
     if len(set(probes)) != len(probes):
         raise InputError("each probe axis may be given once")
