@@ -74,6 +74,17 @@ def orthorhombic(scene):
     return s
 
 
+def grid_rows(scene):
+    """The order specimen placement gives: bodies sorted by a grid of cells one largest diameter
+    wide, x fastest, then y, then z (rows of the grid)."""
+    import numpy as np
+    h = np.array(scene.cell)
+    reduced = np.linalg.solve(h, np.array(scene.positions).T).T % 1.0
+    cells = np.maximum(1, (np.diag(h) // (2.0 * np.max(scene.radii))).astype(int))
+    key = np.floor(reduced * cells).astype(int)
+    return np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
+
+
 def tiled(scene, k):
     """The specimen's packing repeated k times along each axis of its (nearly orthorhombic) cell:
     reduced coordinates kept, the cell's diagonal times k (its shear terms, ~1e-6 of the edge,

@@ -37,7 +37,10 @@ def load(o):
     if o.tile == 1:
         return _bench.orthorhombic(s)
     s = _bench.tiled(s, o.tile)
-    s.order_in_space()  # local in memory, as a prepared specimen is (Morton: within 10 % of its grid rows)
+    # In the order a prepared specimen of that size has (grid rows, _bench.grid_rows). Until
+    # 2026-11-30 the tiled scene was numbered along the Morton curve, which steps ours 6-10 %
+    # slower than rows (docs/benchmarks.md, "Stepper changes").
+    s.reorder_bodies(_bench.grid_rows(s))
     dem.refresh(s)
     return s
 

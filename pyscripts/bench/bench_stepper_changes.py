@@ -29,17 +29,6 @@ if HERE not in sys.path:
 import _bench  # noqa: E402
 
 
-def grid_rows(scene):
-    """The order placement gave before the Morton order: bodies sorted by a grid of cells one
-    largest diameter wide, x fastest, then y, then z (rows of the grid)."""
-    import numpy as np
-    h = np.array(scene.cell)
-    reduced = np.linalg.solve(h, np.array(scene.positions).T).T % 1.0
-    cells = np.maximum(1, (np.diag(h) // (2.0 * np.max(scene.radii))).astype(int))
-    key = np.floor(reduced * cells).astype(int)
-    return np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
-
-
 def worker(o):
     import numpy as np
     from trueaniso import dem, engines, specimen_file
@@ -49,7 +38,7 @@ def worker(o):
     if o.variant == "random":
         s.reorder_bodies(np.random.default_rng(1).permutation(s.num_bodies))
     elif o.variant == "rows":
-        s.reorder_bodies(grid_rows(s))
+        s.reorder_bodies(_bench.grid_rows(s))
     elif o.variant == "morton":
         s.order_in_space()
     elif o.variant == "team-always":
