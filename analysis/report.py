@@ -336,7 +336,12 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     # The study's own assembly unless told: before, every report compared with the paper's spheres,
     # also run_study.py's on clump1 (its sphere fit read 36,627 MPa at clump1's Zm 10.3; an outside try).
     own = study_assembly(results)
-    if assembly is None:
+    if own == "clumps":  # clumps saved without an assembly: only the user can say which paper's to compare with
+        if assembly is None:
+            raise ResultsError("%s is a study of clumps whose specimen records no assembly (saved outside "
+                               "prepare_specimen.py); give --assembly clump1 or clump2 to compare with the paper's"
+                               % results)
+    elif assembly is None:
         assembly = own or "spheres"
     elif own is not None and own != assembly:
         raise ResultsError("%s is a study of %s, not %s (--assembly)" % (results, own, assembly))

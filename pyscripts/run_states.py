@@ -124,15 +124,21 @@ def validate(o):
     o.probe_axes = probe_axes(o.probes, o.path)
     check_probe_options(o)
     try:
-        _, meta = specimen_file.read(o.specimen)
+        arrays, meta = specimen_file.read(o.specimen)
     except specimen_file.SpecimenFileError as exc:
         raise cli.InputError(str(exc)) from None
-    problem = triaxial.rolling_problem(o.rolling_stiffness, o.rolling_friction, study.assembly_of(meta) != "sphere")
+    try:
+        assembly = study.assembly_of(meta, arrays["member_begin"])
+    except cli.InputError as exc:
+        raise cli.InputError("%s: %s" % (o.specimen, exc)) from None
+    problem = triaxial.rolling_problem(o.rolling_stiffness, o.rolling_friction, assembly != "sphere")
     if problem:
         raise cli.InputError(problem)
-    if o.assembly and study.assembly_of(meta) != o.assembly:
-        raise cli.InputError("%s is a %s specimen, not %s (--assembly)" % (o.specimen, study.assembly_of(meta),
-                                                                         o.assembly))
+    if o.assembly and assembly != o.assembly:
+        what = ("holds clumps but records no assembly (saved outside prepare_specimen.py), so --assembly cannot be "
+                "checked; leave it out" if assembly == study.UNNAMED_CLUMPS else "is a %s specimen, not %s (--assembly)"
+                % (assembly, o.assembly))
+        raise cli.InputError("%s %s" % (o.specimen, what))
     return states
 
 

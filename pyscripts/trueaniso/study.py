@@ -51,17 +51,36 @@ def _effective(function, options):
     return out
 
 
-def assembly_of(specimen_meta):
-    """sphere, clump1 or clump2: what prepare_specimen.py built (files from before clumps: sphere)."""
-    return specimen_meta.get("parameters", {}).get("assembly", "sphere")
+ASSEMBLIES = ("sphere", "clump1", "clump2")  # what prepare_specimen.py builds (the paper's three)
+UNNAMED_CLUMPS = "clumps"  # a clump packing saved without an assembly (the YADE bridge, a script)
 
 
-def fingerprint(specimen_meta, gamma, restrain_rotations, skip_detection, damping, state_options=None,
+def assembly_of(specimen_meta, member_begin):
+    """The assembly of a specimen: the one prepare_specimen.py recorded, checked against the file's
+    bodies (sphere: no clumps; clump1, clump2: clumps), or, when none is recorded, sphere for a
+    file without clumps and UNNAMED_CLUMPS for one with clumps. Before, a clump packing saved
+    without the parameter was taken for spheres, and its report compared with the paper's spheres
+    (an outside try). Raises InputError for a recorded assembly that is unknown or contradicts the
+    bodies."""
+    import numpy as np
+    spheres = bool(np.all(np.diff(np.asarray(member_begin)) == 1))
+    declared = (specimen_meta.get("parameters") or {}).get("assembly")
+    if declared is None:
+        return "sphere" if spheres else UNNAMED_CLUMPS
+    if declared not in ASSEMBLIES:
+        raise InputError("the specimen records assembly %r, which is none of %s" % (declared, ", ".join(ASSEMBLIES)))
+    if (declared == "sphere") != spheres:
+        raise InputError("the specimen records assembly %s but holds %s" % (declared, "no clumps" if spheres
+                                                                               else "clumps"))
+    return declared
+
+
+def fingerprint(specimen_meta, assembly, gamma, restrain_rotations, skip_detection, damping, state_options=None,
                 probe_options=None, recipe=None, path="true-triaxial"):
     """What every row and checkpoint of a study depends on (study_dir compares it on reruns); the
     loading path too, which gives a state definition (b, sigma_z) its mean stress."""
     # The assembly is also behind the specimen's checksum; named here so a refusal can say it.
-    fp = dict(specimen=specimen_meta["sha256"], assembly=assembly_of(specimen_meta),
+    fp = dict(specimen=specimen_meta["sha256"], assembly=assembly,
               code=provenance.code_version(), threads=engines.threads(), path=path,
               state=dict(damping=damping, **_effective(triaxial.reach_state, state_options)),
               probe=dict(gamma=gamma, rotations="restrained" if restrain_rotations else "free",
@@ -98,7 +117,8 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     if len(set(probes)) != len(probes):
         raise InputError("each probe axis may be given once")
     axes = [AXES[a] for a in probes]
-    _, spec_meta = specimen_file.read(specimen_path)
+    arrays, spec_meta = specimen_file.read(specimen_path)
+    assembly = assembly_of(spec_meta, arrays["member_begin"])
     if "checkpoint" in (spec_meta.get("parameters") or {}):  # prep_checkpoint's: mid-preparation, not at rest
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
@@ -114,7 +134,7 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     if spec_meta["block_rotations"] and not restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)
-    fp = fingerprint(spec_meta, gamma, restrain_rotations, skip_detection, damping, state_options,
+    fp = fingerprint(spec_meta, assembly, gamma, restrain_rotations, skip_detection, damping, state_options,
                      probe_options, recipe, path)
     return ids, axes, spec_meta, fp
 

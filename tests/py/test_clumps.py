@@ -382,3 +382,35 @@ def test_bridge_round_trip_with_clumps(yade_json, packing):
     assert r["reread_angular_velocities"] <= 1e-12 * r["angular_velocity_scale"]
     assert r["yade_rigid_members"] < 1e-12 * r["scale"]
     assert "members are missing" in r["missing_member_error"]
+
+
+def test_a_clump_specimen_without_an_assembly_is_not_taken_for_spheres(packing, tmp_path):
+    """A clump packing saved without prepare_specimen.py's `assembly` parameter (the YADE bridge, a
+    script) was taken for spheres: its study said sphere and its report compared it with the
+    paper's spheres (found by an outside try). Now its study records `clumps`, --assembly cannot
+    label it, the report asks which of the paper's clumps to compare with, and a recorded assembly
+    that is unknown or contradicts the bodies is refused."""
+    import json
+    from conftest import one_line_error, run_script
+    from analysis import report
+    from analysis.results import ResultsError
+    scene, meta = specimen_file.load(packing)
+    bare, banana, liar = (str(tmp_path / n) for n in ("bare.npz", "banana.npz", "liar.npz"))
+    specimen_file.save(bare, scene, seed=meta["seed"], summary=meta["summary"])
+    specimen_file.save(banana, scene, seed=meta["seed"], parameters=dict(assembly="banana"))
+    specimen_file.save(liar, scene, seed=meta["seed"], parameters=dict(assembly="sphere"))
+    one_line_error(run_script("run_states.py", "--specimen", banana, "--ids", "1", "--out", tmp_path / "b"),
+                   "records assembly 'banana', which is none of sphere, clump1, clump2")
+    one_line_error(run_script("run_states.py", "--specimen", liar, "--ids", "1", "--out", tmp_path / "l"),
+                   "records assembly sphere but holds clumps")
+    one_line_error(run_script("run_states.py", "--specimen", bare, "--ids", "1", "--assembly", "clump1",
+                              "--out", tmp_path / "a"), "records no assembly", "leave it out")
+    out = tmp_path / "study"
+    proc = run_script("run_states.py", "--specimen", bare, "--ids", "1", "--probes", "z", "--threads", "1",
+                      "--out", out, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert json.loads((out / "metadata.json").read_text())["fingerprint"]["assembly"] == "clumps"
+    with pytest.raises(ResultsError, match="records no assembly .* give --assembly clump1 or clump2"):
+        report.build(str(out), str(tmp_path / "rep"), log=lambda m: None)
+    path, _ = report.build(str(out), str(tmp_path / "rep1"), assembly="clump1", log=lambda m: None)
+    assert open(path).read().startswith("# Report: clump1")
