@@ -186,10 +186,28 @@ def read(path):
         for new, old in (("cell", "cell_size"), ("cell_ref", "cell_ref_size"), ("velocity_gradient", "strain_rate")):
             v = np.asarray(data.pop(old))
             data[new] = np.diag(v) if v.shape == (3,) else v  # a wrong shape is named by contents_problem
-    problem = meta_problem(meta) or contents_problem(data)
+    problem = meta_problem(meta) or contents_problem(data) or volumes_problem(data)
     if problem:
         raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     return data, meta
+
+
+def volumes_problem(a):
+    """A stored clump volume that disagrees with its members' union (CGAL, cached once per shape),
+    or None. Checked when a file is read, so that a study refuses such a specimen before it writes
+    anything (it was checked only when the scene was built, after the study had begun)."""
+    if "volumes" not in a:
+        return None
+    mb = a["member_begin"]
+    for b in np.flatnonzero(np.diff(mb) > 1):
+        k = slice(mb[b], mb[b + 1])
+        try:
+            union = engines.clump_volume(a["member_offsets"][k], a["radii"][k])
+        except (ValueError, RuntimeError) as exc:
+            return "body %d: %s" % (b, exc)
+        if abs(a["volumes"][b] / union - 1) > _VOLUME_TOLERANCE:
+            return "body %d: its volume %.17g disagrees with its members' union %.17g" % (b, a["volumes"][b], union)
+    return None
 
 
 def _number(x, low=-math.inf, high=math.inf, low_open=False, high_open=False):
@@ -401,17 +419,14 @@ def load(path):
         s.add_spheres(a["positions"], a["radii"])
     else:
         # Clumps carry their members (offsets in the body's principal frame, radii), mass,
-        # principal inertia and (version 4) solid volume, checked against the union's (CGAL, once
-        # per shape); a version-3 file takes the union's.
+        # principal inertia and (version 4) solid volume, checked against the union's by read();
+        # a version-3 file takes the union's (volume 0: CGAL, once per shape).
         volumes = a.get("volumes")
         for b in range(nb):
             k = slice(mb[b], mb[b + 1])
             try:
-                union = engines.clump_volume(a["member_offsets"][k], a["radii"][k])
-                if volumes is not None and abs(volumes[b] / union - 1) > _VOLUME_TOLERANCE:
-                    raise ValueError("its volume %.17g disagrees with its members' union %.17g" % (volumes[b], union))
                 s.add_clump(a["positions"][b], a["orientations"][b], a["member_offsets"][k], a["radii"][k],
-                            float(a["masses"][b]), a["inertia"][b], float(union if volumes is None else volumes[b]))
+                            float(a["masses"][b]), a["inertia"][b], 0.0 if volumes is None else float(volumes[b]))
             except (ValueError, RuntimeError) as exc:
                 raise SpecimenFileError("invalid specimen file %s (body %d: %s)" % (path, b, exc)) from None
     s.orientations = a["orientations"]

@@ -350,7 +350,10 @@ class _Run:
         try:
             scene, meta = specimen_file.load(path)
         except specimen_file.SpecimenFileError as exc:
-            raise study_dir.StudyMismatch("%s; remove it and rerun to compute it again" % exc if sid is None
+            # The specimen was read whole before the study began (_study), so it changed since: it
+            # is the user's file, not the study's to compute again (that advice is a checkpoint's).
+            raise study_dir.StudyMismatch("%s; the specimen changed since this study began: restore it, or start a "
+                                          "new study with --force-new" % exc if sid is None
                                           else study_dir.checkpoint_problem(exc, sid)) from None
         p = meta["parameters"]
         if sid is None:

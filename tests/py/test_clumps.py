@@ -414,3 +414,23 @@ def test_a_clump_specimen_without_an_assembly_is_not_taken_for_spheres(packing, 
         report.build(str(out), str(tmp_path / "rep"), log=lambda m: None)
     path, _ = report.build(str(out), str(tmp_path / "rep1"), assembly="clump1", log=lambda m: None)
     assert open(path).read().startswith("# Report: clump1")
+
+
+def test_a_clump_specimen_with_a_wrong_volume_is_refused_before_the_study_begins(packing, tmp_path):
+    """A stored volume that disagrees with the members (checksum resealed) was refused only when the
+    scene was built, after the study had written metadata.json, with the advice to remove the
+    specimen; the directory then refused the right specimen as another study (an outside try).
+    Now read() checks it: refused before anything is written."""
+    from conftest import one_line_error, run_script
+    from test_specimen_file import _rewrite
+
+    def bigger(a):
+        a["volumes"] = a["volumes"].copy()
+        a["volumes"][0] *= 1.001
+
+    bad = str(tmp_path / "bad.npz")
+    _rewrite(packing, bad, edit_arrays=bigger, reseal=True)
+    out = tmp_path / "study"
+    one_line_error(run_script("run_states.py", "--specimen", bad, "--ids", "1", "--out", out),
+                   "body 0: its volume", "disagrees with its members' union")
+    assert not out.exists()
