@@ -14,6 +14,7 @@ uninterrupted run computes, bit for bit: both start every piece of work from the
 Rows already in probes.csv are not run again.
 """
 import inspect
+import math
 import os
 import sys
 import time
@@ -48,7 +49,10 @@ def _effective(function, options):
     out = {k: p.default for k, p in inspect.signature(function).parameters.items()
            if p.default is not inspect.Parameter.empty and k not in skip}
     out.update(options or {})
-    return out
+    # metadata.json stays standard JSON (which has no Infinity or NaN; --path-rate inf wrote
+    # "path_rate": Infinity, which JavaScript's and other strict parsers refuse): a non-finite
+    # number is kept as its text, "inf".
+    return {k: repr(v) if isinstance(v, float) and not math.isfinite(v) else v for k, v in out.items()}
 
 
 ASSEMBLIES = ("sphere", "clump1", "clump2")  # what prepare_specimen.py builds (the paper's three)

@@ -139,3 +139,20 @@ def test_path_rate_is_an_option_of_the_study(finished, small_specimen, tmp_path)
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--path-rate", "20",
                "--out", str(finished))
     assert proc.returncode == 2 and "path_rate" in proc.stderr and "state.path_rate is 2.0 there, 20.0 in this run" in proc.stderr, proc.stderr
+
+
+def test_metadata_stays_standard_json_with_an_infinite_path_rate(small_specimen, tmp_path):
+    """--path-rate inf wrote "path_rate": Infinity, which strict JSON parsers refuse (an outside
+    try); the rate is kept as the text "inf", and a rerun with it is the same study."""
+    out = tmp_path / "s"
+    for _ in range(2):
+        proc = run("--specimen", str(small_specimen), "--ids", "1", "--probes", "z", "--path-rate", "inf",
+                   "--out", str(out))
+        assert proc.returncode == 0, proc.stderr
+
+    def strict(name):
+        raise ValueError("not standard JSON: %s" % name)
+
+    meta = json.loads((out / "metadata.json").read_text(), parse_constant=strict)
+    assert meta["fingerprint"]["state"]["path_rate"] == "inf"
+    assert "nothing to do" in proc.stdout
