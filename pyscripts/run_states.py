@@ -65,10 +65,7 @@ def parser():
     p.add_argument("--mu", type=cli.finite, default=0.5,
                    help="friction coefficient while states are reached (the paper's 0.5; probes always suppress "
                         "sliding)")
-    p.add_argument("--path-rate", type=cli.positive_or_inf, default=2.0,
-                   help=("servo's path rate while states are reached, in Pa per step (default 2, as every committed study; 20 "
-                        "reaches a state in about 2.2 times fewer steps, with moduli within the probe's own error at "
-                        "4000 spheres but not at 1000; inf: the whole load at once; docs/state-speed.md)"))
+    cli.add_path_rate_option(p)
     p.add_argument("--rolling-stiffness", type=cli.non_negative, default=0.0,
                    help="rolling resistance (not in the paper; docs/rolling.md): beta of the rolling stiffness "
                         "k_r = beta k_s rbar^2, from the specimen on through states and probes; 0 = off. Give "
@@ -96,6 +93,7 @@ def validate(o):
     if problem:
         raise cli.InputError(problem)
     cli.resolve_threads(o)
+    cli.resolve_path_rate(o)
     if o.path == "cross-anisotropic":
         if o.states is not None or o.table_c1 or o.ids is not None:
             raise cli.InputError("--path cross-anisotropic takes its states from --sigma-v, not from --states, "

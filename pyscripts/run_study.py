@@ -51,10 +51,7 @@ def parser():
     p.add_argument("--mu", type=cli.finite, default=0.5,
                    help="friction coefficient while states are reached (the paper's 0.5; the specimen is "
                         "consolidated with 0.5, and probes always suppress sliding)")
-    p.add_argument("--path-rate", type=cli.positive_or_inf, default=2.0,
-                   help=("servo's path rate while states are reached, in Pa per step (default 2, as every committed study; 20 "
-                        "reaches a state in about 2.2 times fewer steps, with moduli within the probe's own error at "
-                        "4000 spheres but not at 1000; inf: the whole load at once; docs/state-speed.md)"))
+    cli.add_path_rate_option(p)
     cli.add_threads_option(p, study=True)
     p.add_argument("--out", default="results/default", help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
@@ -72,6 +69,7 @@ def validate(o):
         raise cli.InputError(problem)
     # A study, or a preparation for one killed before the study began, goes on at its own count.
     cli.resolve_threads(o, preparation=prep_checkpoint.path_for(os.path.join(o.out, SPECIMEN)))
+    cli.resolve_path_rate(o)
     if o.n < 100:
         raise cli.InputError("--n must be >= 100 for a study specimen")
     o.assembly = {"spheres": "sphere"}.get(o.assembly, o.assembly)

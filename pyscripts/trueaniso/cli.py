@@ -101,6 +101,30 @@ def resolve_threads(o, study=True, preparation=None):
     return o.threads
 
 
+DEFAULT_PATH_RATE = 2.0  # Pa per step: triaxial.reach_state's default, every committed study's
+
+
+def add_path_rate_option(parser):
+    parser.add_argument("--path-rate", type=positive_or_inf, default=None,
+                        help="servo's path rate while states are reached, in Pa per step (when not given: the rate "
+                             "of the study --out holds, else 2, every committed study's; 20 reaches a state in "
+                             "2.1-2.3 times fewer steps, with moduli within the probe's own error at 4000 spheres "
+                             "but not at 1000; inf: the whole load at once; docs/state-speed.md)")
+
+
+def resolve_path_rate(o):
+    """--path-rate when not given: the rate of the study --out holds (a rerun continues it instead
+    of being refused for a rate the user never chose, as --threads), else the default. Says which."""
+    from . import study_dir
+    if o.path_rate is None:
+        held = None if getattr(o, "force_new", False) else study_dir.path_rate_of(o.out)
+        o.path_rate = DEFAULT_PATH_RATE if held is None else held
+        if held is not None and held != DEFAULT_PATH_RATE:
+            print("%s: --path-rate not given: its study reached its states at %g Pa per step, so this run does too"
+                  % (o.out, held), flush=True)
+    return o.path_rate
+
+
 def description(doc):
     """A script's --help description: the first paragraph of its docstring, whole (not its first
     line, which may stop mid-sentence)."""

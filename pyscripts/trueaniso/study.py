@@ -129,6 +129,17 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     m, summary = spec_meta["material"], spec_meta.get("summary") or {}
     packing = dict(solid_fraction=1.0 / (1.0 + summary["void_ratio"]), coordination=summary["Zm"]) \
         if summary.get("void_ratio", 0) > 0 and summary.get("Zm", 0) > 0 else triaxial.DENSE_PACKING
+    servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
+    rate, limit = float(servo["path_rate"]), servo["max_steps"]
+    start = [summary.get(k) for k in ("sigma_x", "sigma_y", "sigma_z")]
+    for i, b, sz in states:  # a rate too slow to get there: refused now, not after max_steps steps
+        if None in start:
+            break
+        way = max(abs(g - s0) for g, s0 in zip(triaxial.path_stresses(path, b, sz), start))
+        if way / rate > limit:
+            raise InputError("--path-rate %g: state %s is %.6g Pa from the specimen's stress, about %.3g steps at "
+                             "that rate, beyond the servo's %d; give at least %.3g Pa per step"
+                             % (rate, i, way, way / rate, limit, 2 * way / limit))
     for i, b, sz in states:  # the largest principal stress of each state, in the specimen's own packing
         problem = triaxial.hertz_range_problem(max(triaxial.path_stresses(path, b, sz)), m["shear_modulus"],
                                                m["poisson"], what="state %s: its largest principal stress" % i,

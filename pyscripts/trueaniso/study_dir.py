@@ -116,6 +116,19 @@ def threads_of(out):
     return t if isinstance(t, int) and t > 0 else None
 
 
+def path_rate_of(out):
+    """The servo's path rate (Pa per step) of the study `out` holds, or None (no study, none
+    readable, or one from before the rate was an option: the checks that follow say what is wrong)."""
+    try:
+        r = read_metadata(out)["fingerprint"]["state"]["path_rate"]
+    except (StudyMismatch, OSError, TypeError, KeyError):
+        return None
+    try:
+        return float(r)  # "inf" is how metadata.json keeps an infinite rate (study._effective)
+    except (TypeError, ValueError):
+        return None
+
+
 def _normal(x):
     """JSON's view of a value (tuples become lists, numpy scalars numbers): what metadata holds."""
     return json.loads(json.dumps(x, default=atomic._jsonable))

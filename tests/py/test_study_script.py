@@ -114,6 +114,8 @@ def test_resume_adds_only_the_missing_probe(finished, small_specimen, tmp_path):
     (["--ids", "40"], "40"),
     (["--ids", "1", "--path-rate", "0"], "--path-rate"),
     (["--ids", "1", "--path-rate", "nan"], "--path-rate"),
+    # before: 3,000,000 steps (6 min on 200 spheres), then "no equilibrium" (an outside try)
+    (["--ids", "5", "--path-rate", "1e-9"], "--path-rate 1e-09: state 5 is"),
     (["--ids", "1", "--bogus"], "unrecognized"),
 ])
 def test_bad_input_refused_before_any_work(small_specimen, tmp_path, args, message):
@@ -136,6 +138,11 @@ def test_path_rate_is_an_option_of_the_study(finished, small_specimen, tmp_path)
         assert proc.returncode == 0, proc.stderr
         steps[rate] = int(rows(out)[0]["state_steps"])
     assert steps["20"] < 0.7 * steps["2"], steps
+    # a rerun without the option continues the study at its own rate, as --threads does (it was refused)
+    proc = run("--specimen", str(small_specimen), "--ids", "5", "--probes", "z", "--out", str(tmp_path / "r20"))
+    assert proc.returncode == 0, proc.stderr
+    assert "--path-rate not given: its study reached its states at 20 Pa per step" in proc.stdout
+    assert "nothing to do" in proc.stdout
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--path-rate", "20",
                "--out", str(finished))
     assert proc.returncode == 2 and "path_rate" in proc.stderr and "state.path_rate is 2.0 there, 20.0 in this run" in proc.stderr, proc.stderr
