@@ -115,6 +115,10 @@ def validate(o):
         dist = psd.SizeDistribution.from_d50_cu(o.d50, o.cu)
     except ValueError as exc:
         raise cli.InputError(str(exc)) from None
+    if o.assembly != "sphere":
+        problem = clump_specimen.layers_problem(o.assembly, o.n, o.seed, o.d50, o.cu, o.phi_cell)
+        if problem:
+            raise cli.InputError(problem)
     # The cell must be longer than the interaction range of the largest pair (a clump's length:
     # its bounding diameter at the largest size).
     side = (o.n * 3.14159265 / 6 * dist.d50 ** 3 / o.phi_cell) ** (1 / 3)

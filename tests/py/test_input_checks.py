@@ -26,6 +26,8 @@ TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (truea
     (["--threads", "100000"], ["--threads", "at most"]),  # before: segfault
     (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
     (["--n", "1000000000"], ["memory", "this machine allows", "MemTotal"]),  # before: ran away past 7.8 GB
+    # before: after the estimate line, "the layer is thinner than a clump: use fewer layers", exit 1
+    (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers", "--n of about 148"]),
 ])
 def test_prepare_specimen_refuses_before_work(tmp_path, args, words):
     out = tmp_path / "s.npz"
