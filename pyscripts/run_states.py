@@ -87,8 +87,29 @@ def parser():
     return p
 
 
+def mpi_ranks():
+    """(ranks, this rank) of the mpiexec that started this process (Open MPI's or MPICH's
+    environment), or (1, 0) outside one."""
+    for size, rank in (("OMPI_COMM_WORLD_SIZE", "OMPI_COMM_WORLD_RANK"), ("PMI_SIZE", "PMI_RANK")):
+        if size in os.environ:
+            try:
+                return int(os.environ[size]), int(os.environ.get(rank, 0))
+            except ValueError:
+                pass
+    return 1, 0
+
+
 def validate(o):
     """Every check that needs no work; returns the states."""
+    ranks, rank = mpi_ranks()
+    if ranks > 1 and not o.mpi:
+        # Each rank ran its own study in --out: one held the lock, the others refused, and mpiexec
+        # then killed the one at work (an outside try). Rank 0 says so; the others leave quietly.
+        if rank != 0:
+            raise SystemExit(2)
+        raise cli.InputError("mpiexec started this script on %d ranks without --mpi; for MPI workers start as "
+                             "mpiexec -n K /usr/bin/python3 -m mpi4py.futures pyscripts/run_states.py --mpi ..."
+                             % ranks)
     problem = cli.output_problem(o.out)  # first: the thread count below is read from what --out holds
     if problem:
         raise cli.InputError(problem)

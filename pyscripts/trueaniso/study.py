@@ -485,10 +485,10 @@ def parse_ids(text):
         raise ValueError("no state named (give Table C1 numbers 1-39, e.g. 1,5,21)")
     if not all(items):  # "1," or "1,,5": a number left out, perhaps the one meant
         raise ValueError("%r has an empty item: give Table C1 numbers 1-39 separated by commas, e.g. 1,5,21" % text)
-    try:
-        ids = [int(t) for t in items]
-    except ValueError:
-        raise ValueError("%r: Table C1 states are numbers 1-39, e.g. 1,5,21" % text) from None
+    # Plain ASCII digits only: int() also reads "1_0" as 10 and a full-width digit as a digit.
+    if not all(t.isascii() and t.isdigit() for t in items):
+        raise ValueError("%r: Table C1 states are numbers 1-39, e.g. 1,5,21" % text)
+    ids = [int(t) for t in items]
     twice = sorted({i for i in ids if ids.count(i) > 1})
     if twice:
         raise ValueError("state %s is given twice" % ", ".join(map(str, twice)))

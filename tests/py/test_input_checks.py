@@ -58,6 +58,7 @@ def blocker(tmp_path):
     (["--ids", " , "], ["--ids: no state named"]),
     (["--ids", "1,5,1"], ["--ids: state 1 is given twice"]),  # before: de-duplicated without a word
     (["--ids", "1,"], ["--ids: '1,' has an empty item"]),  # before: ran state 1 alone
+    (["--ids", "1_0"], ["--ids: '1_0': Table C1 states are numbers"]),  # before: state 10 (Python's int())
     (["--ids", "1", "--gamma", "1"], ["--gamma 1 is outside"]),  # before: 2,000,000 steps, then exit 1
     (["--ids", "1", "--gamma", "1e-12"], ["--gamma 1e-12 is outside"]),
     (["--ids", "1", "--gamma", "nan"], ["--gamma", "finite"]),

@@ -174,3 +174,15 @@ def test_mpiexec_without_mpi4py_futures_is_refused(specimen_100, tmp_path):
     assert proc.stderr.count("without mpi4py.futures") == 1, proc.stderr
     assert "-m mpi4py.futures pyscripts/run_states.py --mpi" in proc.stderr
     assert not (tmp_path / "x").exists()
+
+
+def test_mpiexec_without_mpi_option_is_refused(specimen_100, tmp_path):
+    """`mpiexec -n 2 python3 run_states.py` without --mpi ran one study per rank in the same --out:
+    one held the lock, the other refused, and mpiexec killed the first mid-state. Now refused once."""
+    cmd = mpi_cmd(specimen_100, tmp_path / "x")
+    del cmd[cmd.index("-m"):cmd.index("-m") + 2]
+    cmd.remove("--mpi")
+    proc = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=300)
+    assert proc.returncode != 0
+    assert proc.stderr.count("mpiexec started this script on 2 ranks without --mpi") == 1, proc.stderr
+    assert not (tmp_path / "x").exists()
