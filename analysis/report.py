@@ -28,7 +28,7 @@ DEFAULT_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)  # the paper's particl
 DEPARTURES = [
     ("Boundary", "a periodic cell, stress-controlled by the cell's strain rate",
      "the paper's box has frictionless rigid walls; a periodic cell has no wall layer, so every particle is "
-     "bulk (DESIGN.md)"),
+     "bulk (docs/cell.md)"),
     ("Eq. 36 (Nc/V)", "read with the mean r^3 over particles", "as printed it divides by the sum of r^3; the "
      "mean gives Zm Np/(2V), which exceeds the counted Nc/V by Zm/Z (docs/fabric.md). Nc/V only scales C, so "
      "a_i^2, nu_ij and the contrast zeta do not depend on it"),
@@ -168,10 +168,14 @@ def _study_line(results):
     beta, eta = state.get("rolling_stiffness", 0.0), state.get("rolling_friction", 0.0)
     law = ("rolling resistance off (the paper's contact law)" if not beta else
            "rolling resistance beta = %g, eta_r = %g (not the paper's law: docs/rolling.md)" % (beta, eta))
-    return ("Study: %s %s (seed %s), e = %.4f and Zm = %.3f at the isotropic state; %s path; %s."
+    rate = state.get("path_rate", 2.0)  # Pa per step; "inf" in metadata.json for the whole load at once
+    reached = ("states reached at %s Pa per step" % rate if str(rate) not in ("inf", "2.0", "2")
+               else "states reached at the default 2 Pa per step" if str(rate) != "inf"
+               else "states reached with the whole load at once (--path-rate inf)")
+    return ("Study: %s %s (seed %s), e = %.4f and Zm = %.3f at the isotropic state; %s path, %s; %s."
             % (summ.get("n", "?"), fp.get("assembly", "sphere") + "s" if fp.get("assembly", "sphere") == "sphere"
                else fp.get("assembly"), spec.get("seed", "?"), summ.get("void_ratio", float("nan")),
-               summ.get("Zm", float("nan")), fp.get("path", "true-triaxial"), law))
+               summ.get("Zm", float("nan")), fp.get("path", "true-triaxial"), reached, law))
 
 
 def _missing_states_line(results, rows):

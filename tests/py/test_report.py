@@ -356,3 +356,16 @@ def test_a_study_is_compared_with_its_own_assembly(tmp_path):
     assert open(path).read().startswith("# Report: clump1")
     with pytest.raises(ResultsError, match="a study of clump1, not spheres"):
         report.build(study, str(tmp_path / "other"), assembly="spheres", log=lambda m: None)
+
+
+def test_the_study_line_names_the_path_rate(small_table, tmp_path):
+    """A study made with --path-rate gets a report that says so (before: nothing told it from the
+    default's; an outside try)."""
+    study = tmp_path / "study"
+    study.mkdir()
+    shutil.copy(small_table, study / "probes.csv")
+    for rate, words in ((2.0, "states reached at the default 2 Pa per step"), (20.0, "states reached at 20.0 Pa per step"),
+                        ("inf", "states reached with the whole load at once (--path-rate inf)")):
+        (study / "metadata.json").write_text(json.dumps(dict(fingerprint=dict(state=dict(path_rate=rate)))))
+        path, _ = report.build(str(study), str(tmp_path / ("rep%s" % rate)), log=lambda m: None)
+        assert words in open(path).read()
