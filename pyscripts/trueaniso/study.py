@@ -126,32 +126,38 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     if "checkpoint" in (spec_meta.get("parameters") or {}):  # prep_checkpoint's: mid-preparation, not at rest
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
-    m, summary = spec_meta["material"], spec_meta.get("summary") or {}
-    packing = dict(solid_fraction=1.0 / (1.0 + summary["void_ratio"]), coordination=summary["Zm"]) \
-        if summary.get("void_ratio", 0) > 0 and summary.get("Zm", 0) > 0 else triaxial.DENSE_PACKING
-    servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
-    rate, limit = float(servo["path_rate"]), servo["max_steps"]
-    start = [summary.get(k) for k in ("sigma_x", "sigma_y", "sigma_z")]
-    for i, b, sz in states:  # a rate too slow to get there: refused now, not after max_steps steps
-        if None in start:
-            break
-        way = max(abs(g - s0) for g, s0 in zip(triaxial.path_stresses(path, b, sz), start))
-        if way / rate > limit:
-            raise InputError("--path-rate %g: state %s is %.6g Pa from the specimen's stress, about %.3g steps at "
-                             "that rate, beyond the servo's %d; give at least %.3g Pa per step"
-                             % (rate, i, way, way / rate, limit, 2 * way / limit))
-    for i, b, sz in states:  # the largest principal stress of each state, in the specimen's own packing
-        problem = triaxial.hertz_range_problem(max(triaxial.path_stresses(path, b, sz)), m["shear_modulus"],
-                                               m["poisson"], what="state %s: its largest principal stress" % i,
-                                               **packing)
-        if problem:
-            raise InputError(problem)
+    _refuse_unreachable(states, path, spec_meta, state_options)
     if spec_meta["block_rotations"] and not restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)
     fp = fingerprint(spec_meta, assembly, gamma, restrain_rotations, skip_detection, damping, state_options,
                      probe_options, recipe, path)
     return ids, axes, spec_meta, fp
+
+
+def _refuse_unreachable(states, path, spec_meta, state_options):
+    """InputError for a state the servo cannot reach from this specimen: one too far for the path
+    rate within its max_steps (1e-9 Pa per step ran 3,000,000 steps, then blamed equilibrium), or
+    one whose stress presses the contacts beyond Hertz's range (triaxial.hertz_range_problem, in
+    the specimen's own packing)."""
+    m, summary = spec_meta["material"], spec_meta.get("summary") or {}
+    servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
+    rate, limit = float(servo["path_rate"]), servo["max_steps"]
+    start = [summary.get(k) for k in ("sigma_x", "sigma_y", "sigma_z")]
+    packing = dict(solid_fraction=1.0 / (1.0 + summary["void_ratio"]), coordination=summary["Zm"]) \
+        if summary.get("void_ratio", 0) > 0 and summary.get("Zm", 0) > 0 else triaxial.DENSE_PACKING
+    for i, b, sz in states:
+        goal = triaxial.path_stresses(path, b, sz)
+        problem = triaxial.hertz_range_problem(max(goal), m["shear_modulus"], m["poisson"],
+                                               what="state %s: its largest principal stress" % i, **packing)
+        if problem:
+            raise InputError(problem)
+        if None not in start:
+            way = max(abs(g - s0) for g, s0 in zip(goal, start))
+            if way / rate > limit:
+                raise InputError("--path-rate %g: state %s is %.6g Pa from the specimen's stress, about %.3g steps "
+                                 "at that rate, beyond the servo's %d; give at least %.3g Pa per step"
+                                 % (rate, i, way, way / rate, limit, 2 * way / limit))
 
 
 def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False, skip_detection=False,
