@@ -285,8 +285,9 @@ def contents_problem(a):
     for name in ("positions", "velocities", "angular_velocities", "orientations", "masses", "inertia", "radii",
                  "member_offsets", "c_normal", "c_normal_force", "c_shear_force",
                  *((_ROLLING,) if _ROLLING in a else ()), *(("volumes",) if "volumes" in a else ())):
-        if not np.issubdtype(a[name].dtype, np.floating) or not np.all(np.isfinite(a[name])):
-            return "non-finite values in %s" % name
+        problem = _float_problem(a[name], name)
+        if problem:
+            return problem
     if np.any(a["radii"] <= 0):
         return "radius <= 0"
     if np.any(a["masses"] <= 0):
@@ -385,13 +386,24 @@ def contacts_problem(scene, a):
     return None
 
 
+def _float_problem(x, name):
+    """An array that is not of finite floating-point numbers, named (an integer array was called
+    non-finite, an outside try)."""
+    if not np.issubdtype(x.dtype, np.floating):
+        return "%s must hold floating-point numbers, not %s" % (name, x.dtype)
+    if not np.all(np.isfinite(x)):
+        return "non-finite values in %s" % name
+    return None
+
+
 def cell_problem(a):
     """What makes the saved cell unusable (its shapes; a singular or inverted matrix), or None."""
     for name in ("cell", "cell_ref", "velocity_gradient"):
         if np.shape(a[name]) != (3, 3):
             return "%s must be a 3x3 matrix" % name
-        if not np.issubdtype(np.asarray(a[name]).dtype, np.floating) or not np.all(np.isfinite(a[name])):
-            return "non-finite values in %s" % name
+        problem = _float_problem(np.asarray(a[name]), name)
+        if problem:
+            return problem
     for name in ("cell", "cell_ref"):
         h = np.asarray(a[name], dtype=float)
         scale = np.prod(np.linalg.norm(h, axis=0))

@@ -202,6 +202,11 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
     if made_as is not None:  # allowed (a study may start from a state), but said: its states start stressed
         log("note: %s is the checkpoint of state %s of a study, not a specimen at its preparation pressure; "
             "this study's states are reached from that state" % (specimen_path, made_as))
+    had = (spec_meta.get("material") or {}).get("rolling_stiffness", 0.0)
+    if had and not (state_options or {}).get("rolling_stiffness", 0.0):
+        # A state's checkpoint keeps its rolling resistance; the options of this run set the law.
+        log("note: %s was made with rolling resistance (beta %g), which this run turns off; give "
+            "--rolling-stiffness and --rolling-friction to keep it (docs/rolling.md)" % (specimen_path, had))
     csv_path = os.path.join(out, CSV_NAME)
     with lock.held(out, wait=wait, log=log):
         if force_new:

@@ -193,6 +193,10 @@ def test_stored_volumes_are_checked_and_version_3_files_still_load(tmp_path):
              edit_arrays=lambda a: a.update(volumes=a["volumes"] * [1.0, 1.001]), reseal=True)
     with pytest.raises(specimen_file.SpecimenFileError, match="a sphere's volume disagrees with its radius"):
         specimen_file.read(str(tmp_path / "bad-s.npz"))
+    _rewrite(str(tmp_path / "s.npz"), str(tmp_path / "int-s.npz"),
+             edit_arrays=lambda a: a.update(volumes=np.ones(2, dtype=int)), reseal=True)
+    with pytest.raises(specimen_file.SpecimenFileError, match="volumes must hold floating-point numbers, not int64"):
+        specimen_file.read(str(tmp_path / "int-s.npz"))  # it was called "non-finite"
 
     def version_3(meta, arrays):
         meta["format_version"] = 3

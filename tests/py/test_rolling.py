@@ -102,3 +102,9 @@ def test_run_states_with_rolling_resistance(specimen_100, tmp_path):
     one_line_error(run_script("run_states.py", *args[:3], fresh, *args[4:], "--rolling-stiffness", "0.25"),
                    "rolling friction eta_r")
     assert not os.path.exists(fresh / "metadata.json")
+    # Its checkpoint as the specimen of a study without the options: taken, and said that the law
+    # of this run has no rolling resistance (it was run with rolling off without a word).
+    proc = run_script("run_states.py", "--specimen", out / "states" / "1.npz", "--out", tmp_path / "from1",
+                      "--ids", "1", "--probes", "z", "--threads", "1")
+    assert proc.returncode == 0, proc.stderr
+    assert "was made with rolling resistance (beta 0.25), which this run turns off" in proc.stdout
