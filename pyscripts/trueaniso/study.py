@@ -142,7 +142,8 @@ def _refuse_unreachable(states, path, spec_meta, state_options):
     the specimen's own packing)."""
     m, summary = spec_meta["material"], spec_meta.get("summary") or {}
     servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
-    rate, limit = float(servo["path_rate"]), servo["max_steps"]
+    # .get: a stand-in for the servo (a test's) declares no defaults, and so sets no limit
+    rate, limit = float(servo.get("path_rate", math.inf)), servo.get("max_steps", math.inf)
     start = [summary.get(k) for k in ("sigma_x", "sigma_y", "sigma_z")]
     packing = dict(solid_fraction=1.0 / (1.0 + summary["void_ratio"]), coordination=summary["Zm"]) \
         if summary.get("void_ratio", 0) > 0 and summary.get("Zm", 0) > 0 else triaxial.DENSE_PACKING
