@@ -116,7 +116,7 @@ def validate(o):
     except ValueError as exc:
         raise cli.InputError(str(exc)) from None
     if o.assembly != "sphere":
-        problem = clump_specimen.layers_problem(o.assembly, o.n, o.seed, o.d50, o.cu, o.phi_cell)
+        problem = clump_specimen.layers_problem(o.assembly, o.n, o.seed, d50=o.d50, cu=o.cu, phi_cell=o.phi_cell)
         if problem:
             raise cli.InputError(problem)
     # The cell must be longer than the interaction range of the largest pair (a clump's length:

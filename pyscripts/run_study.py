@@ -80,8 +80,7 @@ def validate(o):
             clump_specimen.check_count(o.assembly, o.n)
         except ValueError as exc:
             raise cli.InputError(str(exc)) from None
-        r = clump_specimen.recipe(o.assembly)
-        problem = clump_specimen.layers_problem(o.assembly, o.n, o.seed, r["d50"], r["cu"], r["phi_cell"])
+        problem = clump_specimen.layers_problem(o.assembly, o.n, o.seed)
         if problem:
             raise cli.InputError(problem)
     try:

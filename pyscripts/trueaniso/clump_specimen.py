@@ -107,6 +107,7 @@ def _thin_layer(n, template, d, quats, start, box, layers):
     at some seeds only, with an internal message, after the estimate line (an outside try)."""
     if layers == 1:
         return None
+
     def height(k):  # what random_sequential_clumps needs: lo_z < hi_z
         z = start * d[k] * (template.offsets @ clump_shapes.rotation_matrix(quats[k]).T)[:, 2]
         r = start * d[k] * np.asarray(template.radii)
@@ -121,13 +122,14 @@ def _thin_layer(n, template, d, quats, start, box, layers):
                                                                             need))
 
 
-def layers_problem(assembly, n, seed, d50, cu, phi_cell, phi_start=0.20):
-    """Why the assembly's stacked layers cannot hold n clumps drawn with this seed, or None
-    (prepare_specimen.py asks before any work)."""
-    r = recipe(assembly)
+def layers_problem(assembly, n, seed, phi_start=0.20, **overrides):
+    """Why the assembly's stacked layers (its recipe with `overrides`: d50, cu, phi_cell) cannot
+    hold n clumps drawn with this seed, or None (prepare_specimen.py and run_study.py ask before
+    any work)."""
+    r = recipe(assembly, **overrides)
     t = clump_shapes.template(r["shape"])
-    _, d, quats, _, start, box = _layer(n, t, _psd.SizeDistribution.from_d50_cu(d50, cu), seed,
-                                        r["orientation_weights"], phi_cell, r["layers"], phi_start)
+    _, d, quats, _, start, box = _layer(n, t, _psd.SizeDistribution.from_d50_cu(r["d50"], r["cu"]), seed,
+                                        r["orientation_weights"], r["phi_cell"], r["layers"], phi_start)
     return _thin_layer(n, t, d, quats, start, box, r["layers"])
 
 

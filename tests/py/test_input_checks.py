@@ -117,6 +117,7 @@ def test_run_study_out_must_be_a_writable_directory(blocker):
     (["--ids", ""], ["--ids: no state named"]),
     (["--ids", "1,1"], ["--ids: state 1 is given twice"]),
     (["--path-rate", "-2"], ["--path-rate", "not > 0"]),
+    (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers", "--n of about 148"]),
     (["--threads", "1000"], ["--threads", "at most"]),
     (["--out", "/sys/trueaniso-study"], ["cannot create files in /sys"]),
 ])
