@@ -168,10 +168,10 @@ def _study_line(results):
     beta, eta = state.get("rolling_stiffness", 0.0), state.get("rolling_friction", 0.0)
     law = ("rolling resistance off (the paper's contact law)" if not beta else
            "rolling resistance beta = %g, eta_r = %g (not the paper's law: docs/rolling.md)" % (beta, eta))
-    rate = state.get("path_rate", 2.0)  # Pa per step; "inf" in metadata.json for the whole load at once
-    reached = ("states reached at %s Pa per step" % rate if str(rate) not in ("inf", "2.0", "2")
-               else "states reached at the default 2 Pa per step" if str(rate) != "inf"
-               else "states reached with the whole load at once (--path-rate inf)")
+    rate = str(state.get("path_rate", 2.0))  # Pa per step; "inf" in metadata.json for the whole load at once
+    reached = ("states reached with the whole load at once (--path-rate inf)" if rate == "inf"
+               else "states reached at the default 2 Pa per step" if float(rate) == 2.0
+               else "states reached at %s Pa per step" % rate)
     return ("Study: %s %s (seed %s), e = %.4f and Zm = %.3f at the isotropic state; %s path, %s; %s."
             % (summ.get("n", "?"), fp.get("assembly", "sphere") + "s" if fp.get("assembly", "sphere") == "sphere"
                else fp.get("assembly"), spec.get("seed", "?"), summ.get("void_ratio", float("nan")),

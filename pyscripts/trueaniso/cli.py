@@ -101,9 +101,6 @@ def resolve_threads(o, study=True, preparation=None):
     return o.threads
 
 
-DEFAULT_PATH_RATE = 2.0  # Pa per step: triaxial.reach_state's default, every committed study's
-
-
 def add_path_rate_option(parser):
     parser.add_argument("--path-rate", type=positive_or_inf, default=None,
                         help="servo's path rate while states are reached, in Pa per step (when not given: the rate "
@@ -115,11 +112,13 @@ def add_path_rate_option(parser):
 def resolve_path_rate(o):
     """--path-rate when not given: the rate of the study --out holds (a rerun continues it instead
     of being refused for a rate the user never chose, as --threads), else the default. Says which."""
-    from . import study_dir
+    import inspect
+    from . import study_dir, triaxial
     if o.path_rate is None:
+        default = inspect.signature(triaxial.reach_state).parameters["path_rate"].default  # one home: the servo's
         held = None if getattr(o, "force_new", False) else study_dir.path_rate_of(o.out)
-        o.path_rate = DEFAULT_PATH_RATE if held is None else held
-        if held is not None and held != DEFAULT_PATH_RATE:
+        o.path_rate = default if held is None else held
+        if held is not None and held != default:
             print("%s: --path-rate not given: its study reached its states at %g Pa per step, so this run does too"
                   % (o.out, held), flush=True)
     return o.path_rate
