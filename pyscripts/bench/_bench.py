@@ -75,14 +75,14 @@ def orthorhombic(scene):
 
 
 def grid_rows(scene):
-    """The order specimen placement gives: bodies sorted by a grid of cells one largest diameter
-    wide, x fastest, then y, then z (rows of the grid)."""
+    """The order specimen placement gives (specimen.grid_rows): bodies sorted by a grid of cells
+    one largest diameter wide, x fastest, then y, then z."""
     import numpy as np
+    from trueaniso import specimen
     h = np.array(scene.cell)
     reduced = np.linalg.solve(h, np.array(scene.positions).T).T % 1.0
     cells = np.maximum(1, (np.diag(h) // (2.0 * np.max(scene.radii))).astype(int))
-    key = np.floor(reduced * cells).astype(int)
-    return np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
+    return specimen.grid_rows(reduced * cells, 1.0)
 
 
 def tiled(scene, k):

@@ -167,11 +167,8 @@ def random_loose_clumps(n, template, size_distribution, seed, orientation_weight
         pos.append(turned)
         qs.append(np.array([clump_shapes.quaternion_product(rz, q) for q in quats]))
     pos, quats, d = np.vstack(pos), np.vstack(qs), np.tile(d, layers)
-    # Memory order along a cell grid: neighbours in space are neighbours in the arrays (rows
-    # measured faster than a Morton order, docs/benchmarks.md, "Stepper changes").
     ncell = max(1, int(side // (2.0 * template.bounding_radius * d.max())))
-    key = np.floor(pos / (side / ncell)).astype(int)
-    along = np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
+    along = specimen.grid_rows(pos, side / ncell)
     return pos[along], quats[along], d[along], start, np.full(3, side)
 
 

@@ -72,12 +72,18 @@ def random_loose_packing(n, size_distribution, seed, phi_cell=0.60, phi_start=0.
             raise ValueError("the size distribution cannot fit the box: random placement failed")
         pos[i] = p
         grid.setdefault(tuple(c), []).append(i)
-    # Memory order along the cell grid (rows of one-diameter cells): neighbours in space are
-    # neighbours in the arrays. Measured against a Morton order (Scene.order_in_space) and a random
-    # one: rows were the fastest (docs/benchmarks.md, "Stepper changes").
-    key = np.floor(pos / cell).astype(int)
-    along = np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
+    along = grid_rows(pos, cell)
     return pos[along], radii[along], scale, np.full(3, side)
+
+
+def grid_rows(positions, width):
+    """The memory order of a new specimen: positions sorted by the cell of a grid (cells `width`
+    wide, a scalar or one per axis) they fall in, x fastest, then y, then z (rows of the grid), so
+    that neighbours in space are neighbours in the arrays. Measured against a Morton order
+    (Scene.order_in_space) and a random one: rows were the fastest (docs/benchmarks.md, "Stepper
+    changes"). Sphere and clump placement and the benchmarks' tiled scenes use it."""
+    key = np.floor(np.asarray(positions) / width).astype(int)
+    return np.lexsort((key[:, 0], key[:, 1], key[:, 2]))
 
 
 def new_scene(positions, radii, cell_size, shear_modulus=18e9, poisson=0.15, density=2500.0, friction=0.5):
