@@ -145,8 +145,17 @@ def _flat(d, prefix=""):
     return out
 
 
+NON_FINITE = ("inf", "-inf", "nan")  # how metadata.json keeps a non-finite number (study._effective)
+
+
 def _show(v):
-    return "absent" if v is _ABSENT else json.dumps(v)
+    """A value as a refusal line says it: JSON's spelling, but a non-finite number as the user
+    types it (inf, not JSON's Infinity), whether it is a float here or metadata's text there."""
+    if v is _ABSENT:
+        return "absent"
+    if isinstance(v, float) and not math.isfinite(v):
+        return repr(v)
+    return v if v in NON_FINITE else json.dumps(v)
 
 
 _ABSENT = object()

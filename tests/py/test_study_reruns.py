@@ -323,6 +323,10 @@ def test_differences_are_named_one_way_for_studies_checkpoints_and_specimens():
     assert [k for k, _, _ in study_dir.differences(there, here)] == ["d50", "law.rolling", "seed"]
     assert study_dir.said(study_dir.differences(dict(a="clump1"), dict(a="clump2"), rel_tol=0.5)) == [
         'a: "clump1" there, "clump2" here']
+    # A non-finite number as typed, whether a float (this run) or metadata's text: JSON's
+    # 'Infinity' in a refusal line was not what the user wrote (an outside try).
+    assert study_dir.said(study_dir.differences(dict(r="inf"), dict(r=2.0))) == ["r: inf there, 2.0 here"]
+    assert study_dir.said(study_dir.differences(dict(r=2.0), dict(r=float("inf")))) == ["r: 2.0 there, inf here"]
 
 
 def test_saved_work_is_a_row_or_a_state_checkpoint(tmp_path):
