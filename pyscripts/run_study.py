@@ -214,9 +214,9 @@ def main(argv=None):
         sres = statics.cached_record(o.out, scene=scene, log=log)
         if "21" in {str(sid) for sid, _, _ in states}:  # Table B1's second state
             statics.cached_record(o.out, "21", log=log)
-        log("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %.3f, zeta_v = %.3f"
+        log("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %s, zeta_v = %s"
             % ([round(e / 1e6, 1) for e in sres["E_free"]], [round(e / 1e6, 1) for e in sres["E_blocked"]],
-               sres["zeta_h"], sres["zeta_v"]))
+               statics.said_zeta(sres["zeta_h"]), statics.said_zeta(sres["zeta_v"])))
         csv_path = os.path.join(o.out, study.CSV_NAME)
         material = specimen_file.read(path)[1]["material"]
         contrast = zeta_contrast.fit(csv_path, material["shear_modulus"], material["poisson"])

@@ -7,6 +7,7 @@ import contextlib
 import csv
 import io
 import json
+import math
 import os
 import tempfile
 
@@ -33,9 +34,25 @@ def atomic_open(path, mode="w"):
 
 
 def write_json(path, obj):
+    """`obj` as standard JSON: a number that is not finite (NaN: a magnitude zeta no value in its
+    range reproduces, a standard error at a bound) is written null. Python's default wrote NaN,
+    which is not JSON: jq, JavaScript and other strict parsers refuse the whole file. Readers
+    take null as 'not determined'."""
+    text = json.dumps(_finite(json.loads(json.dumps(obj, default=_jsonable))), indent=2, sort_keys=True,
+                      allow_nan=False)
     with atomic_open(path, "w") as f:
-        json.dump(obj, f, indent=2, sort_keys=True, default=_jsonable)
-        f.write("\n")
+        f.write(text + "\n")
+
+
+def _finite(x):
+    """x with every non-finite float replaced by None, through dicts and lists."""
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite(v) for v in x]
+    return x
 
 
 def write_csv(path, rows, fieldnames=None):

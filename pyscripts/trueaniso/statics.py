@@ -8,6 +8,7 @@ zz, yz, xz, xy; engineering shear strains). docs/statics.md has the definitions 
 """
 
 import json
+import math
 import os
 
 from . import engines as _e
@@ -80,6 +81,14 @@ def state_record(scene):
                 zeta_h=float(zeta["zeta_h"]), zeta_v=float(zeta["zeta_v"]), residual=float(free["residual"]),
                 sigma=[float(s[i, i]) for i in range(3)], rattlers=len(free["rattlers"]),
                 time=free["time"]["total"] + blocked["time"]["total"])
+
+
+def said_zeta(z):
+    """A record's magnitude zeta for a log line: None (null in the record, NaN from the solve) is
+    a modulus no zeta in engines.ZETA_RANGE reproduces, as at clump2's isotropic state."""
+    if z is not None and math.isfinite(z):
+        return "%.3f" % z
+    return "none in [%g, %g] reproduces E" % tuple(_e.ZETA_RANGE)
 
 
 def state_file(out, state):

@@ -239,3 +239,17 @@ def test_loose_packing_at_a_high_stress_ratio():
     up = triaxial.probe(scene, sig, 2, **tight)
     down = triaxial.probe(scene, sig, 2, sign=-1, **tight)
     assert 0.5 * (up["E"] + down["E"]) == pytest.approx(free["E"][2], rel=5e-3)
+
+
+def test_records_are_standard_json(tmp_path):
+    """A statics record, summary.json and every other atomic.write_json file: a number that is not
+    finite is null. Before, clump2's isotropic record held zeta_h: NaN (no zeta in range reproduces
+    its modulus), which is not JSON: strict parsers (jq, JavaScript) refused the whole file."""
+    import json
+    from trueaniso import atomic
+    path = tmp_path / "record.json"
+    atomic.write_json(path, dict(zeta_h=float("nan"), se=[0.1, float("inf")], E=np.array([np.nan, 2.0])))
+    got = json.loads(path.read_text(), parse_constant=lambda c: pytest.fail("not JSON: %s" % c))
+    assert got == dict(zeta_h=None, se=[0.1, None], E=[None, 2.0])
+    assert statics.said_zeta(got["zeta_h"]) == "none in [0, 5] reproduces E"
+    assert statics.said_zeta(0.5521) == "0.552"
