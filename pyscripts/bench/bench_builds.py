@@ -4,8 +4,10 @@
 
 TREE is a checkout of trueaniso, built (./setup.sh), e.g. `git worktree add ../before HEAD~1`.
 Each run is a process of its own that imports that tree's engines and steps the specimen (tiled
-K x K x K times) with ContactDetection, ContactForces and NewtonIntegrator on one engine thread,
-as bench_stepper.py does; before and after alternate, the first of the pair alternating too.
+K x K x K times and numbered in grid rows, as a prepared specimen of that size is; before
+2026-11-30 a tiled scene kept its tiles' order, each tile's bodies together) with
+ContactDetection, ContactForces and NewtonIntegrator on one engine thread, as bench_stepper.py
+does; before and after alternate, the first of the pair alternating too.
 Figure: particle-steps per CPU second of the timed steps (CPU time, the figure other jobs on the
 machine disturb least). The two builds must step the packing to the same bits (a checksum of the
 positions and contact forces after the timed steps is compared): a change that alters results is not a speed-up
@@ -41,6 +43,7 @@ s, _ = specimen_file.load(specimen)
 if tile > 1:
     import _bench
     s = _bench.tiled(s, tile)
+    s.reorder_bodies(_bench.grid_rows(s))  # as a prepared specimen of that size (bench_stepper.py)
     dem.refresh(s)
 s.dt = 2.9e-8
 c = dem.Chain(s, damping=0.2)
