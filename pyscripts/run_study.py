@@ -25,6 +25,7 @@ import sys
 for _signal in (signal.SIGINT, signal.SIGTERM):
     signal.signal(_signal, lambda number, _: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
                                               os._exit(128 + number)))
+import inspect
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
@@ -89,6 +90,12 @@ def validate(o):
         raise cli.InputError("--ids: %s" % exc) from None
     if not o.mu > 0:
         raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
+    # Before the specimen is prepared (minutes at 4000 spheres; an outside try found the refusal
+    # after it): the specimen will sit at its preparation pressure, so the path rate is checked from
+    # there now (study.check checks it again on the file).
+    prepare_one = specimen.prepare_spheres if o.assembly == "sphere" else clump_specimen.prepare_clumps
+    pressure = inspect.signature(prepare_one).parameters["pressure"].default
+    study.refuse_slow_paths(states, "true-triaxial", (pressure,) * 3, dict(path_rate=o.path_rate))
     resources.check_threads(o.threads)
     spheres = o.n * members(o.assembly)
     prep, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())

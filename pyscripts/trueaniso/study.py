@@ -136,29 +136,42 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
 
 
 def _refuse_unreachable(states, path, spec_meta, state_options):
-    """InputError for a state the servo cannot reach from this specimen: one too far for the path
-    rate within its max_steps (1e-9 Pa per step ran 3,000,000 steps, then blamed equilibrium), or
-    one whose stress presses the contacts beyond Hertz's range (triaxial.hertz_range_problem, in
-    the specimen's own packing)."""
+    """InputError for a state the servo cannot reach from this specimen: one whose stress presses
+    the contacts beyond Hertz's range (triaxial.hertz_range_problem, in the specimen's own
+    packing), checked first for every state, or one too far for the path rate (refuse_slow_paths)."""
     m, summary = spec_meta["material"], spec_meta.get("summary") or {}
-    servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
-    # .get: a stand-in for the servo (a test's) declares no defaults, and so sets no limit
-    rate, limit = float(servo.get("path_rate", math.inf)), servo.get("max_steps", math.inf)
-    start = [summary.get(k) for k in ("sigma_x", "sigma_y", "sigma_z")]
     packing = dict(solid_fraction=1.0 / (1.0 + summary["void_ratio"]), coordination=summary["Zm"]) \
         if summary.get("void_ratio", 0) > 0 and summary.get("Zm", 0) > 0 else triaxial.DENSE_PACKING
     for i, b, sz in states:
-        goal = triaxial.path_stresses(path, b, sz)
-        problem = triaxial.hertz_range_problem(max(goal), m["shear_modulus"], m["poisson"],
-                                               what="state %s: its largest principal stress" % i, **packing)
+        problem = triaxial.hertz_range_problem(max(triaxial.path_stresses(path, b, sz)), m["shear_modulus"],
+                                               m["poisson"], what="state %s: its largest principal stress" % i,
+                                               **packing)
         if problem:
             raise InputError(problem)
-        if None not in start:
-            way = max(abs(g - s0) for g, s0 in zip(goal, start))
+    start = [summary.get(k) for k in ("sigma_x", "sigma_y", "sigma_z")]
+    if None not in start:
+        refuse_slow_paths(states, path, start, state_options)
+
+
+def refuse_slow_paths(states, path, start, state_options=None):
+    """InputError for a state too far for the servo's path rate within its max_steps (1e-9 Pa per
+    step ran 3,000,000 steps, then blamed equilibrium). Each state is measured from where it
+    starts, as run_states walks the paths (triaxial.paths): from the state before it on its
+    loading path, the first from `start` (the specimen's principal stresses). Measured from the
+    specimen, state 3 was refused at rates state 2's checkpoint reaches it at (an outside try)."""
+    servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
+    # .get: a stand-in for the servo (a test's) declares no defaults, and so sets no limit
+    rate, limit = float(servo.get("path_rate", math.inf)), servo.get("max_steps", math.inf)
+    for group in triaxial.paths(states).values():
+        where, before = "the specimen's stress, where its path starts", start
+        for i, b, sz in group:
+            goal = triaxial.path_stresses(path, b, sz)
+            way = max(abs(g - s0) for g, s0 in zip(goal, before))
             if way / rate > limit:
-                raise InputError("--path-rate %g: state %s is %.6g Pa from the specimen's stress, about %.3g steps "
-                                 "at that rate, beyond the servo's %d; give at least %.3g Pa per step"
-                                 % (rate, i, way, way / rate, limit, 2 * way / limit))
+                raise InputError("--path-rate %g: state %s is %.6g Pa from %s, about %.3g steps at that rate, "
+                                 "beyond the servo's %d; give at least %.3g Pa per step"
+                                 % (rate, i, way, where, way / rate, limit, 2 * way / limit))
+            where, before = "state %s's stress, the state before it on its path" % i, goal
 
 
 def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False, skip_detection=False,

@@ -167,6 +167,17 @@ def test_other_specimen_recipe_is_refused_before_preparing(first, tmp_path):
     assert meta["fingerprint"]["assembly"] == "sphere" and meta["fingerprint"]["recipe"]["assembly"] == "sphere"
 
 
+def test_a_path_rate_too_slow_is_refused_before_preparing(tmp_path):
+    """Before: run_study.py prepared the whole specimen (minutes at 4000 spheres), then refused
+    --path-rate 1e-9 and left the specimen behind (an outside try)."""
+    out = tmp_path / "W"
+    proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
+                           "--ids", "1,5", "--path-rate", "1e-9"], capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    one_line_error(proc, "--path-rate 1e-09: state 5 is 40000 Pa from the specimen's stress")
+    assert "preparing" not in proc.stdout and not out.exists()
+
+
 def test_kill_9_leaves_no_stale_summary_and_the_rerun_completes(first, tmp_path):
     """Before: a kill -9 among the states left the summary of the earlier run beside new rows."""
     out = tmp_path / "W"

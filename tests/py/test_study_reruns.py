@@ -342,3 +342,21 @@ def test_saved_work_is_a_row_or_a_state_checkpoint(tmp_path):
     (out / "probes.csv").unlink()
     (out / "states" / "1.npz").write_text("x")
     assert study_dir.has_saved_work(str(out))
+
+
+def test_the_path_rate_is_checked_from_where_each_state_starts():
+    """A state is reached from the state before it on its loading path (triaxial.paths), so the
+    path rate is checked over that distance. Measured from the specimen, state 3 (sigma_z 120 kPa,
+    after state 2 at 110 kPa) was refused at rates that reach it from state 2's checkpoint, and a
+    study holding state 2 could never be grown (an outside try)."""
+    from trueaniso import study
+    s2, s3 = study.table_states([2, 3])
+    p = (100e3, 100e3, 100e3)
+    # 10 kPa a state at 0.005 Pa per step: 2,000,000 steps each, within the servo's 3,000,000
+    study.refuse_slow_paths([s2, s3], "true-triaxial", p, dict(path_rate=0.005))
+    with pytest.raises(study.InputError, match="state 3 is 20000 Pa from the specimen's stress, where its path "
+                                               "starts, about 4e\\+06 steps"):
+        study.refuse_slow_paths([s3], "true-triaxial", p, dict(path_rate=0.005))  # alone, from the specimen
+    s4, = study.table_states([4])  # sigma_z 130 kPa: 20 kPa beyond state 2
+    with pytest.raises(study.InputError, match="state 4 is 20000 Pa from state 2's stress, the state before it"):
+        study.refuse_slow_paths([s2, s4], "true-triaxial", p, dict(path_rate=0.005))
