@@ -22,7 +22,8 @@ class NewtonIntegrator : public Engine {
  private:
   template <bool Rotations, bool Clumps>
   void integrate(Scene& scene) const;
-  static void advanceClump(Bodies& bodies, int b, Real dt, Real damping);
+  static constexpr int kClumpLanes = 4;  // clumps rotated side by side (NewtonIntegrator.cpp)
+  static void advanceClumps(Bodies& bodies, const int* b, int count, Real dt, Real damping);
   void checkStability(const Scene& scene);
   Real checkedDt_ = -1;
   long checkedStep_ = -1;
