@@ -145,7 +145,7 @@ def main():
     # One preparation per output at a time; under the lock, the temporary files of an
     # interrupted preparation of this output are removed.
     with lock.held(directory, wait=o.wait, name=".%s.lock" % name, what="specimen output %s" % o.out,
-                   log=lambda m: print(m, flush=True)):
+                   log=progress.say):
         checkpoint = os.path.basename(prep_checkpoint.path_for(o.out))
         for stray in os.listdir(directory):
             if stray.startswith(".tmp-") and stray.endswith(("-" + name, "-" + name[:-4] + ".json", "-" + checkpoint)):
@@ -179,7 +179,7 @@ def differences(o, meta):
 
 def prepare(o, dist):
     checkpoints = prep_checkpoint.for_specimen(o.out, settings(o), o.checkpoint_every,
-                                               log=None if o.quiet else lambda m: print(m, flush=True))
+                                               log=None if o.quiet else progress.say)
     if os.path.exists(o.out) and not o.force:
         try:
             scene, meta = specimen_file.load(o.out)
@@ -209,7 +209,7 @@ def prepare(o, dist):
     stale = checkpoints.differences()
     if stale and not o.force:  # refused before the estimate line, which read as the start of the work
         checkpoints.refuse_other()
-    bar = progress.Progress("  preparation", lambda m: print(m, flush=True), o.progress_every)
+    bar = progress.Progress("  preparation", progress.say, o.progress_every)
     if not o.quiet:
         members = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
         memory, seconds = resources.preparation_estimate(members, o.threads or resources.cores(), o.assembly)

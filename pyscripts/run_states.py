@@ -248,7 +248,7 @@ def main(argv=None):
                                                                 rolling_stiffness=o.rolling_stiffness,
                                                                 rolling_friction=o.rolling_friction), wait=o.wait,
                          force_new=o.force_new, progress_every=o.progress_every,
-                         log=lambda m: print(m, flush=True), executor=executor)
+                         log=progress.say, executor=executor)
     except triaxial.StateNotReached as exc:
         cli.fail(str(exc), 1)
     finally:

@@ -188,8 +188,7 @@ def main(argv=None):
     if o.threads:
         engines.set_threads(o.threads)
 
-    def log(m):
-        print(m, flush=True)
+    log = progress.say
     t0 = time.time()
     with lock.held(o.out, wait=o.wait, log=log):
         if o.force_new:

@@ -8,11 +8,21 @@ changes no result (the servo and the probe end a chunk at the step they are done
 preparation keeps its fixed 2,000-step chunks, which are part of its recipe (its servos run to the
 end of a chunk), so on very large specimens its lines come once per chunk.
 """
+import sys
 import time
 
 import numpy as np
 
 EVERY = 5.0  # seconds between lines: "about every few seconds"
+
+
+def say(message):
+    """`message` and its newline to stdout in one write, flushed: the log of every script. Under
+    mpiexec, Python's output is unbuffered (PYTHONUNBUFFERED=1), so print() wrote the text and the
+    newline apart, and lines of two workers ran together on one line, with an empty one after
+    (an outside try; 59 of 4000 lines of two ranks). One write of a line stays whole."""
+    sys.stdout.write(message + "\n")
+    sys.stdout.flush()
 
 
 def chunk_for(num_bodies, steps_per_body=2_000_000, smallest=100, largest=5000):

@@ -20,7 +20,7 @@ import sys
 import time
 
 from . import engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_dir, triaxial
-from .progress import EVERY, Progress, chunk_for
+from .progress import EVERY, Progress, chunk_for, say
 from .refusal import InputError
 from .triaxial import AXES
 
@@ -309,7 +309,7 @@ def _state_worker(job):
     engines.set_threads(job["fp"]["threads"])  # the study's thread count: the same bits as serial
     rows = []
     run = _Run(job["specimen_path"], job["spec_meta"], job["out"], job["fp"], job["axes"], None,
-               results_csv.Table(None, job["columns"], [], None), lambda m: print(m, flush=True), job["every"],
+               results_csv.Table(None, job["columns"], [], None), say, job["every"],
                job["loading"], job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)),
                keep=job["keep"])
     run.done = set(job["done"])

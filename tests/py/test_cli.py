@@ -67,3 +67,19 @@ def test_table_line_supplies_parameters(tmp_path):
     # A --line that is no number: one line too (before, argparse's usage line came first).
     proc = run("--table", str(table), "--line", "abc", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and proc.stderr == "error: argument --line: invalid int value: 'abc'\n", proc.stderr
+
+
+def test_a_log_line_is_one_write(monkeypatch):
+    """progress.say, the scripts' log: text and newline in one write. print() made two when Python
+    runs unbuffered, as mpiexec starts it (PYTHONUNBUFFERED=1), and two workers' lines ran together."""
+    import io
+    from trueaniso import progress
+    writes = []
+
+    class Recorder(io.StringIO):
+        def write(self, text):
+            writes.append(text)
+            return len(text)
+    monkeypatch.setattr("sys.stdout", Recorder())
+    progress.say("state 3: probe z")
+    assert writes == ["state 3: probe z\n"]

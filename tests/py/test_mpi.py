@@ -50,6 +50,9 @@ def test_mpi_run_equals_the_serial_run(serial, specimen_100, tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "3 loading paths with work left, on MPIPoolExecutor" in proc.stdout
     assert values(out) == values(serial) and len(values(out)) == 8
+    # Whole lines: printed unbuffered under mpiexec, two workers' lines ran together, each followed
+    # by an empty one (progress.say writes a line at once).
+    assert all(line.strip() for line in proc.stdout.splitlines()), proc.stdout
     assert "warning" not in proc.stdout  # 2 workers x 1 thread: within 2 cores
 
 
