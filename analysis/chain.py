@@ -22,6 +22,7 @@ from trueaniso import zeta as _zeta  # noqa: E402 - analysis.results put pyscrip
 AXES = "xyz"
 PAPER_VOID_RATIO = dict(spheres=0.584, clump1=0.445, clump2=0.636)  # section 2.1, at isotropic 100 kPa
 PAPER_ZETA = _zeta.PAPER_ZETA  # section 4.2, zeta_h = zeta_v = 0.552 for spheres
+ZETA_BOUNDS = _zeta.ZETA_BOUNDS  # the search range of every zeta fit; a fit on a bound is not determined
 # Paper values the report stands beside (Table 2 in MPa; section 4.3; Table B1 in MPa).
 PAPER = dict(
     spheres=dict(K=(1902.7, -22607.0, 67289.1), G=(3386.1, -40197.0, 119436.5), nu_rmse=0.003, zeta=(0.552, 0.552),
@@ -170,7 +171,9 @@ def fabric_parts(path, tab, shear_modulus, poisson, rotations):
 def zeta_per_state(tab, parts, reference):
     """One zeta (zeta_h = zeta_v) per state, fitted on that state's a_i^2 divided by those of the
     reference state (Appendix B's reference point), as the issue's zeta-against-Zm analysis does:
-    {state: zeta or None where the contrast does not depend on zeta}."""
+    {state: zeta, or None where it is not determined: the contrast does not depend on zeta, or the
+    fit stops at a bound of its range. Reported as values, clump2's bound zetas (1e-20 to 1e-19)
+    were ranked against Zm, a correlation of round-off (an outside try)}."""
     A_n, A_s = parts
     ref = (tab["E"][reference], A_n[reference], A_s[reference])
     out = {}
@@ -178,9 +181,10 @@ def zeta_per_state(tab, parts, reference):
         if k == reference:
             continue
         try:
-            out[sid] = _zeta.fit_common(tab["E"][[k]], A_n[[k]], A_s[[k]], min_states=1, reference=ref)["zeta"]
+            fit = _zeta.fit_common(tab["E"][[k]], A_n[[k]], A_s[[k]], min_states=1, reference=ref)
         except ValueError:
-            out[sid] = None
+            fit = None
+        out[sid] = None if fit is None or fit["at_bound"] else fit["zeta"]
     return out
 
 
@@ -198,4 +202,5 @@ def zeta_trend(tab, zetas, band=0.02, low_fraction=0.2):
     hi = [v for z, v in ok if z >= zm.max() - band]
     lo = [v for z, v in ok if z < zm.min() + low_fraction * (zm.max() - zm.min())]
     mean = lambda v: float(np.mean(v)) if v else None  # noqa: E731
-    return dict(rho=rho, high=mean(hi), n_high=len(hi), low=mean(lo), n_low=len(lo))
+    return dict(rho=rho, high=mean(hi), n_high=len(hi), low=mean(lo), n_low=len(lo),
+                n_undetermined=sum(v is None for v in zetas.values()), n=len(zetas))

@@ -43,7 +43,8 @@ DEPARTURES = [
      "763.97 MPa printed against 390.2 MPa for the true C44 (docs/statics.md section 5); E and nu use the "
      "normal block only and are unaffected"),
     ("zeta range", "[0, 5]", "the paper's zeta is a reduction in [0, 1]; a fit with rotations blocked lands at "
-     "1.01, so the bound is not clipped (docs/equations.md)"),
+     "1.01, which [0, 1] would clip, so the search goes to 5 (docs/equations.md). A fit that stops at 0 or 5 is "
+     "reported as at a bound: not determined by the states"),
     ("Table B1 Sphere*", "406.7 MPa closed form for the simple cubic packing at 100 kPa",
      "the paper prints 386.1-386.7 MPa for its equal-sized cubic packing; its own Eqs. 5-6 give "
      "E = (12 E*^2 sigma)^(1/3)/2 = 406.7 MPa at 100 kPa (docs/triaxial.md). Unexplained: a 5 % gap that "
@@ -394,7 +395,8 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         zh, zv = contrast["zeta_h"], contrast["zeta_v"]
         a2 = [("zeta = 1 (unmodified)", chain.micromechanical_a2(parts, 1.0, 1.0)),
               ("zeta = 0.552 (paper)", chain.micromechanical_a2(parts, chain.PAPER_ZETA, chain.PAPER_ZETA)),
-              ("zeta_h = %.3f, zeta_v = %.3f (fitted)" % (zh, zv), chain.micromechanical_a2(parts, zh, zv))]
+              ("zeta_h = %.3f, zeta_v = %.3f (fitted%s)" % (zh, zv, ", at a bound" if contrast["at_bound"] else ""),
+               chain.micromechanical_a2(parts, zh, zv))]
         preds = [(label, chain.predictions(tab, fits, a)) for label, a in a2]
         sphere = assembly == "spheres"
         # Fig. 4a fits all six ratios of the spheres; on clumps (Fig. 4b-c) the power law holds for
@@ -452,13 +454,17 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         rho = trend["rho"]
         lines += ["### zeta and Zm", "",
                   "| | paper | ours |", "|---|---|---|",
-                  "| zeta fitted on the contrast, all states | %s | zeta_h %.3f, zeta_v %.3f (one zeta: %.3f) |"
-                  % (paper_zeta, zh, zv, contrast["zeta"]),
+                  "| zeta fitted on the contrast, all states | %s | zeta_h %.3f, zeta_v %.3f (one zeta: %.3f)%s |"
+                  % (paper_zeta, zh, zv, contrast["zeta"],
+                     "; at a bound of the search (%g-%g): not determined by these states" % chain.ZETA_BOUNDS
+                     if contrast["at_bound"] else ""),
                   "| zeta per state against state %s, mean at the highest Zm (within 0.02) | %s, constant | %s (%d states) |"
                   % (tab["state"][ref], paper_zeta_short, _fmt(trend["high"], "%.3f"), trend["n_high"]),
                   "| the same, lowest fifth of the Zm range | %s, constant | %s (%d states) |"
                   % (paper_zeta_short, _fmt(trend["low"], "%.3f"), trend["n_low"]),
                   "| Spearman rank correlation of zeta with Zm | (zeta independent of state) | %s |" % _fmt(rho, "%.2f"),
+                  "| states whose own zeta is not determined (at a bound of the search, or a contrast that does "
+                  "not depend on zeta) | | %d of %d |" % (trend["n_undetermined"], trend["n"]),
                   "", "![zeta against Zm](%s)" % figs["fz"], ""]
         if exp and sphere:
             lines += ["### Fig. 4a: E_i/E_j = (sigma_i/sigma_j)^m", "",

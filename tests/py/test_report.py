@@ -369,3 +369,17 @@ def test_the_study_line_names_the_path_rate(small_table, tmp_path):
         (study / "metadata.json").write_text(json.dumps(dict(fingerprint=dict(state=dict(path_rate=rate)))))
         path, _ = report.build(str(study), str(tmp_path / ("rep%s" % rate)), log=lambda m: None)
         assert words in open(path).read()
+
+
+def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path):
+    """clump2 (docs/data/clump2-4000-s1): the contrast fit stops at zeta_v = 0 and every state's own
+    fit at 0. Before, the report printed 'zeta_h = 0.051, zeta_v = 0.000 (fitted)' like a result and
+    a Spearman correlation of -0.36 over per-state values of 1e-20 (an outside try)."""
+    from analysis import report
+    path, _ = report.build(os.path.join(REPO, "docs", "data", "clump2-4000-s1"), str(tmp_path / "r"), "clump2",
+                           log=lambda m: None)
+    text = open(path).read()
+    assert "zeta_v = 0.000 (fitted, at a bound)" in text
+    assert "at a bound of the search (0-5): not determined by these states" in text
+    assert "| Spearman rank correlation of zeta with Zm | (zeta independent of state) | n/a |" in text
+    assert "or a contrast that does not depend on zeta) | | 37 of 37 |" in text
