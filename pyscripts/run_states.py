@@ -162,10 +162,12 @@ def validate(o):
 
 
 def parse_sigma_v(text):
-    """'60e3,80e3' -> [60e3, 80e3] (Pa); refuses an empty list and what is not a number."""
-    items = [s.strip() for s in text.split(",") if s.strip()]
-    if not items:
+    """'60e3,80e3' -> [60e3, 80e3] (Pa); refuses an empty list or item and what is not a number."""
+    items = [s.strip() for s in text.split(",")]
+    if not any(items):
         raise ValueError("--sigma-v names no stress (give Pa values, e.g. 60e3,150e3)")
+    if not all(items):  # "100e3," or "60e3,,140e3": a stress left out, perhaps the one meant (as --ids)
+        raise ValueError("--sigma-v %r has an empty item: give Pa values separated by commas, e.g. 60e3,150e3" % text)
     try:
         return [float(s) for s in items]
     except ValueError:

@@ -485,9 +485,13 @@ def state_id(b, sigma_z):
 
 
 def parse_states(text):
-    """'b:sigma_z,b:sigma_z' (sigma_z in Pa) -> [(id, b, sigma_z)] with ids from ``state_id``."""
+    """'b:sigma_z,b:sigma_z' (sigma_z in Pa) -> [(id, b, sigma_z)] with ids from ``state_id``. An
+    empty item ('0.5:140e3,') is refused, as --ids refuses one: a state left out, perhaps the one meant."""
+    items = text.split(",")
+    if any(t.strip() for t in items) and not all(t.strip() for t in items):
+        raise ValueError("%r has an empty item: give b:sigma_z pairs separated by commas, e.g. 0.5:140e3,0:60e3" % text)
     out = []
-    for item in (t for t in text.split(",") if t.strip()):
+    for item in (t for t in items if t.strip()):
         try:
             b, sz = (float(v) for v in item.split(":"))
         except ValueError:

@@ -97,6 +97,8 @@ def test_rerun_on_another_path_is_refused(study, specimen_100):
     (["--ids", "1", "--sigma-v", "80e3"], ["--sigma-v belongs to --path cross-anisotropic"]),
     (["--path", "cross-anisotropic", "--sigma-v", "80e3,-5"], ["sigma_v must be a finite stress > 0"]),
     (["--path", "cross-anisotropic", "--sigma-v", "80e3,8e4"], ["given twice"]),
+    (["--path", "cross-anisotropic", "--sigma-v", "100e3,"], ["'100e3,' has an empty item"]),  # before: ran one
+    (["--path", "cross-anisotropic", "--sigma-v", "60e3,,140e3"], ["has an empty item"]),
     (["--path", "cross-anisotropic", "--sigma-v", "80e3,1e9"], ["state sv1000000", "of a radius"]),
     # 0.01 Pa apart: one name (ids keep 0.1 Pa), and the message shows both values
     (["--path", "cross-anisotropic", "--sigma-v", "100050,100049.99"], ["sv100.05 is given twice (100050, 100049.99 Pa"]),
