@@ -191,8 +191,12 @@ def _missing_states_line(results, rows):
     if not missing:
         return None
     missing.sort(key=lambda sid: (0, int(sid), "") if sid.isdigit() else (1, 0, sid))
-    return ("States of this study without a row in its table: %s (not reached, or not run yet: the run that "
-            "asked for them ended with the reason; docs/runs.md)." % ", ".join(missing))
+    # "States ...: 9" read as a count of nine (an outside try): the ids are named as states.
+    one = len(missing) == 1
+    named = missing[0] if one else ", ".join(missing[:-1]) + " and " + missing[-1]
+    return ("State%s %s of this study ha%s no row in its table (not reached, or not run yet: the run that asked for "
+            "%s ended with the reason; docs/runs.md)." % ("" if one else "s", named, "s" if one else "ve",
+                                                         "it" if one else "them"))
 
 
 def paper_figures(rows, out, tag, assembly):
@@ -380,8 +384,12 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         n = len(tab["state"])
         lines += ["## Probes with rotations %s: %d complete states" % (rot, n), ""]
         if n < 3:
-            lines += ["Fewer than 3 complete states: no fits.", ""]
+            lines += ["Fewer than 3 complete states (a state is complete when probed on x, y and z, which the "
+                      "fits need): no fits.", ""]
             continue
+        if n == 3:
+            lines += ["Three states: each quadratic of Table 2 passes through its three points, so its R^2 is 1 by "
+                      "construction, not a test of the fit.", ""]
         if not hyperelastic.quadratic_fittable(tab["Zm"]):
             lines += ["Fewer than 3 distinct Zm among the %d states (states of one contact network share Zm): "
                       "no fits." % n, ""]
@@ -560,9 +568,12 @@ def main(argv=None):
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("results", help="a results directory (with probes.csv) or a probe table")
     p.add_argument("--out", help="directory for report.md and its figures (default: RESULTS/report, or beside the table)")
-    p.add_argument("--assembly", default=None, choices=sorted(chain.PAPER),
-                   help="the paper's assembly to compare with (default: the study's own, from its metadata.json; "
-                        "spheres for a bare table)")
+    # The study scripts say "sphere" (prepare_specimen.py --assembly sphere), the paper's tables
+    # "spheres": both are taken, and anything else is refused in one line (argparse's choices
+    # printed the whole usage).
+    p.add_argument("--assembly", default=None, type=lambda v: {"sphere": "spheres"}.get(v, v),
+                   help="the paper's assembly to compare with: %s (default: the study's own, from its "
+                        "metadata.json; spheres for a bare table)" % ", ".join(sorted(chain.PAPER)))
     p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
     p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
     p.add_argument("--fig16", help="a cross-anisotropic study (run_states.py --path cross-anisotropic: its directory "
@@ -573,6 +584,9 @@ def main(argv=None):
                    help="solve the static stiffness of the isotropic state and of state 21 from the study's "
                         "checkpoints (states/1.npz, states/21.npz) where no record exists yet (Table B1)")
     o = p.parse_args(argv)
+    if o.assembly is not None and o.assembly not in chain.PAPER:
+        sys.stderr.write("error: --assembly %s: the paper's assemblies are %s\n" % (o.assembly, ", ".join(sorted(chain.PAPER))))
+        sys.exit(2)
     try:
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,
                         log=lambda m: sys.stderr.write(m + "\n"), fig16=o.fig16, clumps=o.clumps,

@@ -295,7 +295,10 @@ def test_bad_optional_inputs_are_refused_before_anything_is_written(small_table,
     for args, words in ((["--clumps", fig16], ("anisotropy_clumps.py", "assembly")),
                         (["--fig16", clumps], ("cross_anisotropy.py", "G_ratio")),
                         (["--fig16", str(tmp_path / "missing.json")], ("cannot read",)),
-                        (["--fig16", small_table], ("lacks the columns", "G"))):
+                        (["--fig16", small_table], ("lacks the columns", "G")),
+                        # argparse's choices printed the whole usage, and 'sphere' (the study
+                        # scripts' word) was among the refused
+                        (["--assembly", "clump3"], ("--assembly clump3", "clump1, clump2, spheres"))):
         out = tmp_path / "rep"
         proc = subprocess.run([sys.executable, "-m", "analysis.report", small_table, "--out", str(out), *args],
                               cwd=REPO, capture_output=True, text=True, timeout=300)
@@ -340,7 +343,7 @@ def test_states_without_rows_are_named(small_table, tmp_path):
     defined = {sid: dict(b=0.0, sigma_z=1e5) for sid in STATES + ("30", "sv50")}
     (study / "metadata.json").write_text(json.dumps(dict(states=defined)))
     path, _ = report.build(str(study), str(tmp_path / "rep"), log=lambda m: None)
-    assert "States of this study without a row in its table: 30, sv50 (not reached" in open(path).read()
+    assert "States 30 and sv50 of this study have no row in its table (not reached" in open(path).read()
     del defined["30"], defined["sv50"]
     (study / "metadata.json").write_text(json.dumps(dict(states=defined)))
     path, _ = report.build(str(study), str(tmp_path / "rep2"), log=lambda m: None)
@@ -383,3 +386,11 @@ def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path):
     assert "at a bound of the search (0-5): not determined by these states" in text
     assert "| Spearman rank correlation of zeta with Zm | (zeta independent of state) | n/a |" in text
     assert "or a contrast that does not depend on zeta) | | 37 of 37 |" in text
+
+
+def test_sphere_and_spheres_name_one_assembly(small_table, tmp_path):
+    """prepare_specimen.py and run_study.py say --assembly sphere; the report took only 'spheres'."""
+    proc = subprocess.run([sys.executable, "-m", "analysis.report", small_table, "--out", str(tmp_path / "r"),
+                           "--assembly", "sphere"], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "r" / "report.md").read_text().startswith("# Report: spheres")
