@@ -207,7 +207,9 @@ def main(argv=None):
     except (ResultsError, OSError, ValueError) as exc:
         sys.stderr.write("error: %s\n" % exc)
         sys.exit(2)
-    print("figures in %s; K, G fits: %s" % (o.out, fits))
+    # No fit (fewer than three complete states with distinct Zm) is said in words: 'K, G fits: None'.
+    print("figures in %s; K, G fits: %s" % (o.out, fits if fits else "none (Fig. 11 needs 3 states probed on x, y "
+                                                                    "and z with distinct Zm; no K_G_vs_Zm.png)"))
 
 
 if __name__ == "__main__":

@@ -113,8 +113,8 @@ def validate(o):
         raise cli.InputError("--out must name a .npz file")
     try:
         dist = psd.SizeDistribution.from_d50_cu(o.d50, o.cu)
-    except ValueError as exc:
-        raise cli.InputError(str(exc)) from None
+    except ValueError as exc:  # named by option and value: "Cu must lie in (1, 6)" said neither
+        raise cli.InputError("--d50 %g --cu %g: %s" % (o.d50, o.cu, exc)) from None
     if o.assembly != "sphere":
         problem = clump_specimen.layers_problem(o.assembly, o.n, o.seed, d50=o.d50, cu=o.cu, phi_cell=o.phi_cell)
         if problem:
@@ -213,8 +213,8 @@ def prepare(o, dist):
     if not o.quiet:
         members = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
         memory, seconds = resources.preparation_estimate(members, o.threads or resources.cores(), o.assembly)
-        print("preparing %d %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s"
-              % (o.n, o.assembly, o.seed, o.d50, o.cu, o.pressure / 1e3, resources.human_bytes(memory),
+        print("preparing %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s"
+              % (clump_specimen.particles(o.n, o.assembly), o.seed, o.d50, o.cu, o.pressure / 1e3, resources.human_bytes(memory),
                  resources.human_seconds(seconds)), flush=True)
     t0 = time.time()
     if stale and o.force:  # (one of these settings resumes; another one is refused before any work)

@@ -172,6 +172,11 @@ def random_loose_clumps(n, template, size_distribution, seed, orientation_weight
     return pos[along], quats[along], d[along], start, np.full(3, side)
 
 
+def particles(n, assembly):
+    """'1000 spheres', '53004 clump1 clumps': a count of particles in the log's words."""
+    return "%d %s" % (n, "spheres" if assembly == "sphere" else "%s clumps" % assembly)
+
+
 def bounding_diameter(assembly):
     """Largest length of an assembly's clump over its equivalent diameter."""
     return 2.0 * clump_shapes.template(recipe(assembly)["shape"]).bounding_radius

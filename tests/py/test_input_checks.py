@@ -22,6 +22,7 @@ TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (truea
     (["--pressure", "1e9"], ["--pressure of 1e+09 Pa", "about 30 % of a radius", "about 6.71e+07 Pa"]),
     (["--mu", "nan"], ["--mu", "finite"]),  # before: failed after the whole expansion
     (["--d50", "inf"], ["--d50", "finite"]),
+    (["--cu", "0.5"], ["--cu 0.5:", "Cu must lie in (1, 6)"]),  # before: named neither the option nor the value
     (["--seed=-1"], ["--seed", ">= 0"]),  # before: failed after the preparation started
     (["--threads", "100000"], ["--threads", "at most"]),  # before: segfault
     (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
