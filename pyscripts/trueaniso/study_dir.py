@@ -28,7 +28,19 @@ WAY_OUT = "use a new --out, or --force-new to move the old study aside into %s/"
 
 
 LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code": "the code version (code: a hash of engines/ and pyscripts/trueaniso/)",
-          "specimen": "the specimen (specimen: its checksum)", "threads": "the engine thread count (threads)"}
+          "specimen": "the specimen (specimen: its checksum)", "threads": "the engine thread count (threads)",
+          # The fields the scripts' options set, named by the option (an outside try read
+          # "state.friction is 0.5 there, 0.3 in this run" after giving --mu 0.3).
+          "state.friction": "the loading friction (--mu; state.friction)",
+          "state.path_rate": "the path rate (--path-rate; state.path_rate)",
+          "state.rolling_stiffness": "the rolling stiffness (--rolling-stiffness; state.rolling_stiffness)",
+          "state.rolling_friction": "the rolling friction (--rolling-friction; state.rolling_friction)",
+          "probe.damping": "the damping (--damping; probe.damping)",
+          "state.damping": "the damping (--damping; state.damping)",
+          "probe.gamma": "the probe strain (--gamma; probe.gamma)",
+          "probe.rotations": "the probes' rotations (--rotations; probe.rotations)",
+          "probe.detection": "the probes' contact detection (--skip-detection; probe.detection)",
+          "path": "the loading path (--path)"}
 
 
 class StudyMismatch(Refusal):

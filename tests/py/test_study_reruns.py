@@ -142,19 +142,20 @@ def test_rerun_of_a_finished_study_does_nothing(base, specimen_100, tmp_path):
 
 
 @pytest.mark.parametrize("args,field", [
-    (["--gamma", "2e-6"], "probe.gamma"),
-    (["--rotations", "restrained"], "probe.rotations"),
-    (["--mu", "0.3"], "state.friction"),
-    (["--damping", "0.3"], "damping"),
-    (["--skip-detection"], "probe.detection"),
-    (["--rolling-stiffness", "0.25", "--rolling-friction", "0.1"], "state.rolling_"),
+    (["--gamma", "2e-6"], ("--gamma; probe.gamma",)),
+    (["--rotations", "restrained"], ("--rotations; probe.rotations",)),
+    (["--mu", "0.3"], ("--mu; state.friction",)),  # before: the field alone, the option unnamed
+    (["--damping", "0.3"], ("--damping", "damping")),
+    (["--skip-detection"], ("--skip-detection; probe.detection",)),
+    (["--rolling-stiffness", "0.25", "--rolling-friction", "0.1"], ("--rolling-", "state.rolling_")),
 ])
 def test_other_settings_are_refused_in_one_line(base, specimen_100, tmp_path, args, field):
-    """Before: rows made with other settings were appended, and metadata listed only the last."""
+    """Before: rows made with other settings were appended, and metadata listed only the last.
+    The refusal names the option that sets what differs, beside its field in metadata.json."""
     out = copy(base, tmp_path)
     before = (out / "probes.csv").read_bytes(), (out / "metadata.json").read_bytes()
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", *args)
-    one_line_error(proc, "another study", field, "--force-new", "new --out")
+    one_line_error(proc, "another study", *field, "--force-new", "new --out")
     assert ((out / "probes.csv").read_bytes(), (out / "metadata.json").read_bytes()) == before
     assert not (out / "states" / "4.npz").exists()
 

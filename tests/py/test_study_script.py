@@ -145,7 +145,7 @@ def test_path_rate_is_an_option_of_the_study(finished, small_specimen, tmp_path)
     assert "nothing to do" in proc.stdout
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--path-rate", "20",
                "--out", str(finished))
-    assert proc.returncode == 2 and "path_rate" in proc.stderr and "state.path_rate is 2.0 there, 20.0 in this run" in proc.stderr, proc.stderr
+    assert proc.returncode == 2 and "path_rate" in proc.stderr and "the path rate (--path-rate; state.path_rate) is 2.0 there, 20.0 in this run" in proc.stderr, proc.stderr
 
 
 def test_metadata_stays_standard_json_with_an_infinite_path_rate(small_specimen, tmp_path):
