@@ -135,6 +135,11 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     return ids, axes, spec_meta, fp
 
 
+def _listed(ids, most=12):
+    """'1, 5, 9' or, for a long list, its first ids and how many more."""
+    return ", ".join(ids) if len(ids) <= most else "%s and %d more" % (", ".join(ids[:most]), len(ids) - most)
+
+
 def _refuse_unreachable(states, path, spec_meta, state_options):
     """InputError for a state the servo cannot reach from this specimen: one whose stress presses
     the contacts beyond Hertz's range (triaxial.hertz_range_problem, in the specimen's own
@@ -245,6 +250,10 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         if not any(run.needs(sid) for path in ordered for sid, _, _ in path):  # before, a rerun said nothing of it
             log("%s: the rows of every state asked for are already there; nothing to do" % out)
         else:  # a run that does nothing leaves metadata.json as it was (before, it added itself to the runs)
+            done = [str(sid) for sid, _, _ in states if not run.wanted(sid)]
+            if done:  # a resumed run began at its next state without a word of what it kept (an outside try)
+                log("%s: continuing the study; %d of the %d states asked for already have their rows (%s)"
+                    % (out, len(done), len(states), _listed(done)))
             study_dir.write_metadata(out, fp, states, axes, record, previous)
             os.makedirs(os.path.join(out, "states"), exist_ok=True)
         # A state the specimen cannot reach (near its strength, the servo holds it without settling)

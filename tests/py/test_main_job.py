@@ -83,6 +83,8 @@ def test_adding_states_continues_the_study(first, tmp_path):
     proc = main_job(out, "--ids", "1,5,21")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (out / "probes.csv").read_bytes().startswith(before)
+    # what it kept is said before it goes on (a resumed run began at its next state without a word)
+    assert "continuing the study; 2 of the 3 states asked for already have their rows (1, 5)" in proc.stdout
     summary = json.loads((out / "summary.json").read_text())
     assert summary["states"] == 3 and summary["probes"] == 9 and (out / "figures" / "K_G_vs_Zm.png").exists()
     # state 21 is Table B1's second state: its static solve is kept beside the isotropic one, and shown
