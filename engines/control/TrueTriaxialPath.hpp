@@ -29,6 +29,9 @@ struct TrueTriaxialState {
     std::ostringstream m;
     if (!(b >= 0 && b <= 1)) m << "b = " << b << " is outside [0, 1]";
     else if (!(p > 0)) m << "mean stress p = " << p << " Pa must be > 0";
+    // inf gave "principal stresses (-nan, -inf, inf)": the input named, not what follows from it
+    else if (!std::isfinite(sigmaZ) || !std::isfinite(p))
+      m << "sigma_z = " << sigmaZ << " Pa and p = " << p << " Pa must be finite";
     else {
       const Vec3 s = stresses();
       if (!((s.array() > 0).all()))

@@ -70,6 +70,7 @@ def blocker(tmp_path):
     (["--states", "0:125e3,0:125e3"], ["given twice"]),
     (["--states", "0.5:140e3,"], ["'0.5:140e3,' has an empty item"]),  # before: ran the one state
     (["--states", ",0.5:140e3"], ["has an empty item"]),
+    (["--states", "0.5:inf"], ["sigma_z = inf Pa", "must be finite"]),  # before: "stresses (-nan, -inf, inf)"
     # before: the isotropic state reached and probed under both names
     (["--states", "0:100e3,1:100e3"], ["states 1 and b1_sz100000 are one state", "(100000, 100000, 100000)"]),
     (["--ids", "1", "--assembly", "clump1"], ["is a sphere specimen, not clump1"]),  # the file says what it is
