@@ -12,6 +12,7 @@ estimated before any work, and a specimen that cannot fit in this machine's memo
 Inside yade-double the result is also written into O (cell and spheres) for viewing or export.
 """
 import json
+import math
 import os
 import signal
 import sys
@@ -124,9 +125,11 @@ def validate(o):
     side = (o.n * 3.14159265 / 6 * dist.d50 ** 3 / o.phi_cell) ** (1 / 3)
     length = dist.d[-1] * (1.0 if o.assembly == "sphere" else clump_specimen.bounding_diameter(o.assembly))
     if side < 1.2 * 2 * length:
+        least = int(math.ceil(o.n * (1.2 * 2 * length / side) ** 3))  # the side grows as n^(1/3)
         raise cli.InputError("%d particles of D50 %.3g m make a cell of %.3g m, shorter than the contact "
-                             "range of the largest spheres: the size distribution cannot fit the box"
-                             % (o.n, o.d50, side, ))
+                             "range of the largest %s: the size distribution cannot fit the box; use --n of at "
+                             "least %d" % (o.n, o.d50, side, "spheres" if o.assembly == "sphere" else "clumps",
+                                           least))
     problem = cli.output_problem(o.out, directory=False)
     if problem:
         raise cli.InputError(problem)

@@ -23,6 +23,9 @@ TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (truea
     (["--mu", "nan"], ["--mu", "finite"]),  # before: failed after the whole expansion
     (["--d50", "inf"], ["--d50", "finite"]),
     (["--cu", "0.5"], ["--cu 0.5:", "Cu must lie in (1, 6)"]),  # before: named neither the option nor the value
+    # before: refused without the count that fits (28 does: test_the_least_count_said_is_taken)
+    (["--n", "5"], ["cannot fit the box", "use --n of at least 28"]),
+    (["--assembly", "clump1", "--n", "60"], ["largest clumps", "use --n of at least 98"]),
     (["--seed=-1"], ["--seed", ">= 0"]),  # before: failed after the preparation started
     (["--threads", "100000"], ["--threads", "at most"]),  # before: segfault
     (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
@@ -35,6 +38,15 @@ def test_prepare_specimen_refuses_before_work(tmp_path, args, words):
     proc = run_script("prepare_specimen.py", "--out", out, *args, timeout=120)
     one_line_error(proc, *words)
     assert proc.stdout == "" and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args", [["--n", "28"], ["--assembly", "clump1", "--n", "98"]])
+def test_the_least_count_said_is_taken(tmp_path, args):
+    """The count the refusal above names passes the cell-size check: a directory as --out, checked
+    after it, is what refuses."""
+    (tmp_path / "d.npz").mkdir()
+    one_line_error(run_script("prepare_specimen.py", "--out", tmp_path / "d.npz", *args, timeout=120),
+                   "is a directory, not a file")
 
 
 def test_prepare_specimen_checks_its_output_before_preparing(tmp_path):
