@@ -387,13 +387,13 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
             lines += ["Fewer than 3 complete states (a state is complete when probed on x, y and z, which the "
                       "fits need): no fits.", ""]
             continue
-        if n == 3:
-            lines += ["Three states: each quadratic of Table 2 passes through its three points, so its R^2 is 1 by "
-                      "construction, not a test of the fit.", ""]
         if not hyperelastic.quadratic_fittable(tab["Zm"]):
             lines += ["Fewer than 3 distinct Zm among the %d states (states of one contact network share Zm): "
                       "no fits." % n, ""]
             continue
+        if n == 3:
+            lines += ["Three states: each quadratic of Table 2 passes through its three points, so its R^2 is 1 by "
+                      "construction, not a test of the fit.", ""]
         tag = "" if rot == "free" else "-" + rot
         ref = tab["state"].index("1") if "1" in tab["state"] else int(np.argmin(np.abs(tab["sigma"] - tab["sigma"].mean(1, keepdims=True)).sum(1)))
         fits = chain.table2(tab)
@@ -585,7 +585,8 @@ def main(argv=None):
                         "checkpoints (states/1.npz, states/21.npz) where no record exists yet (Table B1)")
     o = p.parse_args(argv)
     if o.assembly is not None and o.assembly not in chain.PAPER:
-        sys.stderr.write("error: --assembly %s: the paper's assemblies are %s\n" % (o.assembly, ", ".join(sorted(chain.PAPER))))
+        sys.stderr.write("error: --assembly %s: the paper's assemblies are %s\n"
+                         % (o.assembly, ", ".join(sorted(chain.PAPER))))
         sys.exit(2)
     try:
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,

@@ -217,8 +217,8 @@ def prepare(o, dist):
         members = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
         memory, seconds = resources.preparation_estimate(members, o.threads or resources.cores(), o.assembly)
         print("preparing %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s"
-              % (clump_specimen.particles(o.n, o.assembly), o.seed, o.d50, o.cu, o.pressure / 1e3, resources.human_bytes(memory),
-                 resources.human_seconds(seconds)), flush=True)
+              % (clump_specimen.particles(o.n, o.assembly), o.seed, o.d50, o.cu, o.pressure / 1e3,
+                 resources.human_bytes(memory), resources.human_seconds(seconds)), flush=True)
     t0 = time.time()
     if stale and o.force:  # (one of these settings resumes; another one is refused before any work)
         checkpoints.remove()

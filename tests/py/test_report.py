@@ -394,3 +394,18 @@ def test_sphere_and_spheres_name_one_assembly(small_table, tmp_path):
                            "--assembly", "sphere"], cwd=REPO, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "r" / "report.md").read_text().startswith("# Report: spheres")
+
+
+def test_three_states_say_their_r2_is_one_by_construction(small_table, tmp_path):
+    """A quadratic through three points fits exactly; the report printed R^2 1.0000 as if a test."""
+    path = tmp_path / "probes.csv"
+    with open(small_table) as f:
+        rows = list(csv.reader(f))
+    with open(path, "w", newline="") as f:
+        csv.writer(f).writerows([rows[0]] + [r for r in rows[1:] if r[0] in ("1", "9", "21")])
+    out, _ = report.build(str(path), str(tmp_path / "r"), log=lambda m: None)
+    text = open(out).read()
+    assert "## Probes with rotations free: 3 complete states" in text
+    assert "Three states: each quadratic of Table 2 passes through its three points" in text
+    out, _ = report.build(small_table, str(tmp_path / "r8"), log=lambda m: None)
+    assert "Three states" not in open(out).read()
