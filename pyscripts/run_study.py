@@ -91,11 +91,13 @@ def validate(o):
     if not o.mu > 0:
         raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
     # Before the specimen is prepared (minutes at 4000 spheres; an outside try found the refusal
-    # after it): the specimen will sit at its preparation pressure, so the path rate is checked from
-    # there now (study.check checks it again on the file).
-    prepare_one = specimen.prepare_spheres if o.assembly == "sphere" else clump_specimen.prepare_clumps
-    pressure = inspect.signature(prepare_one).parameters["pressure"].default
-    study.refuse_slow_paths(states, "true-triaxial", (pressure,) * 3, dict(path_rate=o.path_rate))
+    # after it): the specimen will sit at its preparation pressure within the preparation's stress
+    # tolerance, so the path rate is checked from there now, that far off (study.check checks it
+    # again on the file).
+    defaults = inspect.signature(specimen.prepare_spheres if o.assembly == "sphere"
+                                 else clump_specimen.prepare_clumps).parameters
+    study.refuse_slow_paths(states, "true-triaxial", (defaults["pressure"].default,) * 3, dict(path_rate=o.path_rate),
+                            start_within=defaults["stress_tolerance"].default)
     resources.check_threads(o.threads)
     spheres = o.n * members(o.assembly)
     prep, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())

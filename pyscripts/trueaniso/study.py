@@ -19,7 +19,7 @@ import os
 import sys
 import time
 
-from . import engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_dir, triaxial
+from . import dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_dir, triaxial
 from .progress import EVERY, Progress, chunk_for, say
 from .refusal import InputError
 from .triaxial import AXES
@@ -126,7 +126,7 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     if "checkpoint" in (spec_meta.get("parameters") or {}):  # prep_checkpoint's: mid-preparation, not at rest
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
-    _refuse_unreachable(states, path, spec_meta, state_options)
+    _refuse_unreachable(states, path, dict(spec_meta, summary=_summary(specimen_path, spec_meta)), state_options)
     if spec_meta["block_rotations"] and not restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)
@@ -138,6 +138,22 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
 def _listed(ids, most=12):
     """'1, 5, 9' or, for a long list, its first ids and how many more."""
     return ", ".join(ids) if len(ids) <= most else "%s and %d more" % (", ".join(ids[:most]), len(ids) - most)
+
+
+def _summary(specimen_path, spec_meta):
+    """The specimen's summary (its stresses, void ratio, Zm): as saved, or measured on the file's
+    scene when it has none. A specimen saved from a YADE scene (yade_bridge, specimen_file.save)
+    carries none, and the checks that read it were skipped: --path-rate 1e-9 started loading
+    (an outside try)."""
+    summary = spec_meta.get("summary") or {}
+    if all(k in summary for k in ("sigma_x", "sigma_y", "sigma_z", "void_ratio", "Zm")):
+        return summary
+    scene, _ = specimen_file.load(specimen_path)
+    dem.refresh(scene)  # the forces of the saved positions: what a loaded scene lacks
+    try:
+        return specimen.state(scene)
+    except ValueError:  # no contact carries a force: no stress to start from, nothing to check
+        return summary
 
 
 def _refuse_unreachable(states, path, spec_meta, state_options):
@@ -158,25 +174,57 @@ def _refuse_unreachable(states, path, spec_meta, state_options):
         refuse_slow_paths(states, path, start, state_options)
 
 
-def refuse_slow_paths(states, path, start, state_options=None):
+def refuse_slow_paths(states, path, start, state_options=None, start_within=0.0):
     """InputError for a state too far for the servo's path rate within its max_steps (1e-9 Pa per
     step ran 3,000,000 steps, then blamed equilibrium). Each state is measured from where it
     starts, as run_states walks the paths (triaxial.paths): from the state before it on its
-    loading path, the first from `start` (the specimen's principal stresses). Measured from the
-    specimen, state 3 was refused at rates state 2's checkpoint reaches it at (an outside try)."""
+    loading path, the first from `start` (the specimen's principal stresses, known to within
+    `start_within` Pa before the specimen exists). Measured from the specimen, state 3 was refused
+    at rates state 2's checkpoint reaches it at (an outside try). The ramp must end `settle_steps`
+    before max_steps: the servo holds the goal that long before it calls a state reached (a ramp
+    ending within them was accepted, then ran out of steps)."""
     servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
     # .get: a stand-in for the servo (a test's) declares no defaults, and so sets no limit
     rate, limit = float(servo.get("path_rate", math.inf)), servo.get("max_steps", math.inf)
+    room = limit - engines.TrueTriaxialServo().settle_steps
     for group in triaxial.paths(states).values():
-        where, before = "the specimen's stress, where its path starts", start
+        where, before, within = "the specimen's stress, where its path starts", start, start_within
         for i, b, sz in group:
             goal = triaxial.path_stresses(path, b, sz)
-            way = max(abs(g - s0) for g, s0 in zip(goal, before))
-            if way / rate > limit:
-                raise InputError("--path-rate %g: state %s is %.6g Pa from %s, about %.3g steps at that rate, "
-                                 "beyond the servo's %d; give at least %.3g Pa per step"
-                                 % (rate, i, way, where, way / rate, limit, 2 * way / limit))
-            where, before = "state %s's stress, the state before it on its path" % i, goal
+            way = max(abs(g - s0) for g, s0 in zip(goal, before)) + within
+            if way / rate > room:
+                least = _rounded_up(way / room)
+                raise InputError("--path-rate %g: state %s is %s%.6g Pa from %s%s: about %.3g steps at that rate, "
+                                 "beyond the servo's %d (less the %d it holds a state before calling it reached); "
+                                 "the least rate that fits is %.3g Pa per step, and twice that leaves half its steps "
+                                 "to settle%s"
+                                 % (rate, i, "up to " if within else "", way, where,
+                                    " (known to within %g Pa before it is prepared)" % within
+                                    if within else "", way / rate, limit, limit - room, least,
+                                    _nearer_states(path, i, b, sz, [str(s[0]) for s in group])))
+            where, before, within = "state %s's stress, the state before it on its path" % i, goal, 0.0
+
+
+def _rounded_up(x):
+    """x rounded up at its third significant digit (a least rate printed lower would not fit)."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - 2)
+    return math.ceil(x / unit - 1e-9) * unit
+
+
+def _nearer_states(path, sid, b, sz, asked):
+    """'; or ask for the states before it on its path too (--ids 2,3,4,5)': a Table C1 state is
+    reached from the one before it that is asked, so the nearer ones shorten its way at any rate
+    (a study's rate is fixed: the advice to raise it led to another refusal, an outside try)."""
+    if path != "true-triaxial":
+        return ""
+    for group in triaxial.paths(triaxial.table_c1_states()).values():
+        ids = [str(i) for i, _, _ in group]
+        if str(sid) in ids and (group[ids.index(str(sid))][1:] == (b, sz)):
+            before = ids[:ids.index(str(sid))]
+            if before and not set(before) <= set(asked):
+                return "; or ask for the states before it on its path too (--ids %s)" % ",".join(
+                    [i for i in ids if i in set(before) | set(asked) | {str(sid)}])
+    return ""
 
 
 def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False, skip_detection=False,
@@ -252,8 +300,9 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         else:  # a run that does nothing leaves metadata.json as it was (before, it added itself to the runs)
             done = [str(sid) for sid, _, _ in states if not run.wanted(sid)]
             if done:  # a resumed run began at its next state without a word of what it kept (an outside try)
-                log("%s: continuing the study; %d of the %d states asked for already have their rows (%s)"
-                    % (out, len(done), len(states), _listed(done)))
+                log("%s: continuing the study; %d of the %d states asked for already %s (%s)"
+                    % (out, len(done), len(states), "has its rows" if len(done) == 1 else "have their rows",
+                       _listed(done)))
             study_dir.write_metadata(out, fp, states, axes, record, previous)
             os.makedirs(os.path.join(out, "states"), exist_ok=True)
         # A state the specimen cannot reach (near its strength, the servo holds it without settling)
@@ -390,6 +439,8 @@ class _Run:
         ck = self.checkpoint(sid)
         if not os.path.exists(ck) and any(self.needs(s) for s, _, _ in path[k:]):
             self.reach(sid, b, sz, path[k - 1][0] if k else None, ck)
+        elif self.wanted(sid):  # an earlier run reached it and was stopped before its rows (an outside try)
+            self.log("state %s: reached by an earlier run; probed from its checkpoint %s" % (sid, ck))
         if self.wanted(sid):
             self.probe_state(sid, b, sz, ck)
 

@@ -176,7 +176,8 @@ def test_a_path_rate_too_slow_is_refused_before_preparing(tmp_path):
     proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
                            "--ids", "1,5", "--path-rate", "1e-9"], capture_output=True, text=True, timeout=300,
                           env=dict(os.environ, OMP_NUM_THREADS="1"))
-    one_line_error(proc, "--path-rate 1e-09: state 5 is 40000 Pa from the specimen's stress")
+    one_line_error(proc, "--path-rate 1e-09: state 1 is up to 100 Pa from the specimen's stress",
+                   "known to within 100 Pa before it is prepared")
     assert "preparing" not in proc.stdout and not out.exists()
 
 
@@ -231,3 +232,13 @@ def test_two_studies_cannot_share_a_directory(tmp_path):
                                "--out", str(out)], capture_output=True, text=True, timeout=300)
     one_line_error(proc, "in use by another run", "--wait")
     assert sorted(p.name for p in out.iterdir()) == [".lock"]
+
+
+def test_run_states_on_a_study_of_run_study_says_whose_it_is(first, tmp_path):
+    """Before: 'recipe.assembly is "sphere" there, absent in this run', a field the user never set."""
+    out = tmp_path / "W"
+    shutil.copytree(first[0], out)
+    proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_states.py"), "--specimen",
+                           str(out / "specimen.npz"), "--out", str(out), "--ids", "1", "--threads", "1"],
+                          capture_output=True, text=True, timeout=300, env=dict(os.environ, OMP_NUM_THREADS="1"))
+    one_line_error(proc, "a study made by run_study.py", "recipe.assembly", "continue it with run_study.py")

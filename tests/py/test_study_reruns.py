@@ -60,6 +60,9 @@ def test_resume_from_checkpoints_is_bit_identical(base, specimen_100, tmp_path):
     proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.count("probe x  E") == 2 and "state 3: b =" in proc.stdout  # state 2 x, state 3 z and x redone
+    # what it keeps is said: the rows, and a checkpoint an earlier run reached without its rows
+    assert "continuing the study; 1 of the 3 states asked for already has its rows (1)" in proc.stdout
+    assert "state 2: reached by an earlier run; probed from its checkpoint" in proc.stdout
     assert values(out) == values(base)  # every digit of every non-time column
     assert all(int(r["state_steps"]) > 0 for r in rows(out))
     assert {r["state"]: r["state_from"] for r in rows(out)} == {"1": "specimen", "2": "specimen", "3": "2"}
@@ -355,9 +358,38 @@ def test_the_path_rate_is_checked_from_where_each_state_starts():
     p = (100e3, 100e3, 100e3)
     # 10 kPa a state at 0.005 Pa per step: 2,000,000 steps each, within the servo's 3,000,000
     study.refuse_slow_paths([s2, s3], "true-triaxial", p, dict(path_rate=0.005))
-    with pytest.raises(study.InputError, match="state 3 is 20000 Pa from the specimen's stress, where its path "
-                                               "starts, about 4e\\+06 steps"):
+    with pytest.raises(study.InputError) as refused:
         study.refuse_slow_paths([s3], "true-triaxial", p, dict(path_rate=0.005))  # alone, from the specimen
+    said = str(refused.value)
+    assert "state 3 is 20000 Pa from the specimen's stress, where its path starts: about 4e+06 steps" in said
+    # the least rate, 20000 Pa over the 3,000,000 - 200 steps the ramp may take, rounded up (it said
+    # 'at least' twice that); and, since a study's rate is fixed, the states that shorten the way
+    assert "the least rate that fits is 0.00667 Pa per step" in said and said.endswith("(--ids 2,3)")
+    study.refuse_slow_paths([s3], "true-triaxial", p, dict(path_rate=0.00667))
     s4, = study.table_states([4])  # sigma_z 130 kPa: 20 kPa beyond state 2
     with pytest.raises(study.InputError, match="state 4 is 20000 Pa from state 2's stress, the state before it"):
         study.refuse_slow_paths([s2, s4], "true-triaxial", p, dict(path_rate=0.005))
+    # A ramp that ends within the servo's 200 settling steps of its limit cannot be reached (an
+    # outside try ran 3,000,000 steps at 0.0066629 for state 3, then 'no equilibrium').
+    with pytest.raises(study.InputError, match="less the 200 it holds a state"):
+        study.refuse_slow_paths([s2], "true-triaxial", p, dict(path_rate=10e3 / 2_999_900))
+    # Before the specimen exists its stress is known to within the preparation's tolerance: state 1
+    # is 0 Pa from 100 kPa, but up to 100 Pa from a prepared specimen (run_study refused after preparing).
+    s1, = study.table_states([1])
+    study.refuse_slow_paths([s1], "true-triaxial", p, dict(path_rate=1e-6))
+    with pytest.raises(study.InputError, match="known to within 100 Pa before it is prepared"):
+        study.refuse_slow_paths([s1], "true-triaxial", p, dict(path_rate=1e-6), start_within=100.0)
+
+
+def test_a_specimen_saved_without_summary_is_checked_too(specimen_100, tmp_path):
+    """A specimen saved from a YADE scene (yade_bridge, then specimen_file.save) has no summary, and
+    the path-rate check, which read the stresses there, was skipped: --path-rate 1e-9 started
+    loading (an outside try). Its stresses are now measured on the file's scene."""
+    from trueaniso import specimen_file
+    scene, meta = specimen_file.load(str(specimen_100))
+    bare = tmp_path / "bare.npz"
+    specimen_file.save(str(bare), scene, seed=meta["seed"])
+    assert not specimen_file.read(str(bare))[1].get("summary")
+    proc = states(bare, tmp_path / "study", "--ids", "5", "--probes", "z", "--path-rate", "1e-9")
+    one_line_error(proc, "--path-rate 1e-09: state 5 is", "from the specimen's stress")
+    assert not (tmp_path / "study" / "probes.csv").exists()
