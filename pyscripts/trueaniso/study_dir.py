@@ -220,6 +220,12 @@ def check(out, fingerprint, states):
         field, there, here = diff[0]
         more = " (and %d more difference%s)" % (len(diff) - 1, "s" if len(diff) > 2 else "") if len(diff) > 1 else ""
         way = _way_out(out)
+        if field.startswith("recipe.") and here is _ABSENT:
+            # run_states.py on run_study.py's directory: "recipe.assembly is "sphere" there, absent
+            # in this run" named a field the user never set (an outside try).
+            raise StudyMismatch("%s holds a study made by run_study.py (its specimen recipe, %s, is there and "
+                                "run_states.py gives none); continue it with run_study.py, or %s"
+                                % (out, ", ".join(k for k, _, _ in diff if k.startswith("recipe.")), way))
         if field == "threads" and len(diff) == 1 and isinstance(there, int):
             # The same study on another thread count: the last bits of every sum would differ.
             way = "continue it with --threads %d (under yade-double: -j %d), or %s" % (there, there, way)
