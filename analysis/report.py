@@ -342,6 +342,13 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     study's checkpoints first (solve_statics)."""
     csv_path = os.path.join(results, "probes.csv") if os.path.isdir(results) else results
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
+    # A study's probes.csv given as the file: its directory's metadata (assembly, material, the
+    # states asked) still applies. Before, clump1's table so given was reported as spheres against
+    # the paper's default material (an outside try).
+    beside = os.path.dirname(os.path.abspath(csv_path))
+    if not os.path.isdir(results) and os.path.basename(csv_path) == "probes.csv" and \
+            os.path.exists(os.path.join(beside, "metadata.json")):
+        results = beside
     # The study's own assembly unless told: before, every report compared with the paper's spheres,
     # also run_study.py's on clump1 (its sphere fit read 36,627 MPa at clump1's Zm 10.3; an outside try).
     own = study_assembly(results)

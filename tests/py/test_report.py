@@ -226,9 +226,17 @@ def test_table_b1_at_the_isotropic_state_and_state_21(specimen_100, tmp_path):
     assert "Study: 100 spheres (seed 3)" in text and "rolling resistance off (the paper's contact law)" in text
     proc = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0 and "solving" not in proc.stderr  # kept, not solved again
-    bare = subprocess.run([sys.executable, "-m", "analysis.report", str(out / "probes.csv"), "--statics"], cwd=REPO,
-                          capture_output=True, text=True, env=env, timeout=300)
+    # A table alone (no study beside it) has no checkpoints to solve; the study's own probes.csv
+    # stands for its directory (its metadata applies).
+    (tmp_path / "bare").mkdir()
+    shutil.copy(out / "probes.csv", tmp_path / "bare" / "probes.csv")
+    bare = subprocess.run([sys.executable, "-m", "analysis.report", str(tmp_path / "bare" / "probes.csv"), "--statics"],
+                          cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
     one_line_error(bare, "--statics", "state checkpoints")
+    given = subprocess.run([sys.executable, "-m", "analysis.report", str(out / "probes.csv"), "--out",
+                            str(tmp_path / "rep2")], cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
+    assert given.returncode == 0, given.stderr
+    assert "Study: 100 spheres (seed 3)" in (tmp_path / "rep2" / "report.md").read_text()  # before: no study line
 
 
 def test_fig16_section_from_the_committed_cross_anisotropic_data(small_table, tmp_path):
