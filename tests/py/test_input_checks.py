@@ -25,13 +25,17 @@ TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (truea
     (["--cu", "0.5"], ["--cu 0.5:", "Cu must lie in (1, 6)"]),  # before: named neither the option nor the value
     # before: refused without the count that fits (28 does: test_the_least_count_said_is_taken)
     (["--n", "5"], ["cannot fit the box", "use --n of at least 28"]),
-    (["--assembly", "clump1", "--n", "60"], ["largest clumps", "use --n of at least 98"]),
+    (["--assembly", "clump1", "--n", "60"], ["60 clump1 clumps", "use --n of at least 98"]),
+    # the least count that holds clump2's layers too: the two checks' advice, followed in turn, led
+    # from 60 to 67 (not a multiple of its 4 layers) to 80
+    (["--assembly", "clump2", "--n", "60"], ["use --n of at least 80"]),
     (["--seed=-1"], ["--seed", ">= 0"]),  # before: failed after the preparation started
     (["--threads", "100000"], ["--threads", "at most"]),  # before: segfault
     (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
     (["--n", "1000000000"], ["memory", "this machine allows", "MemTotal"]),  # before: ran away past 7.8 GB
     # before: after the estimate line, "the layer is thinner than a clump: use fewer layers", exit 1
-    (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers", "--n of about 148"]),
+    (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers",
+                                                            "--n 124 is the least that fits with this seed"]),
 ])
 def test_prepare_specimen_refuses_before_work(tmp_path, args, words):
     out = tmp_path / "s.npz"
@@ -40,7 +44,8 @@ def test_prepare_specimen_refuses_before_work(tmp_path, args, words):
     assert proc.stdout == "" and list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("args", [["--n", "28"], ["--assembly", "clump1", "--n", "98"]])
+@pytest.mark.parametrize("args", [["--n", "28"], ["--assembly", "clump1", "--n", "98"],
+                                  ["--assembly", "clump2", "--n", "80"], ["--assembly", "clump2", "--n", "124", "--seed", "3"]])
 def test_the_least_count_said_is_taken(tmp_path, args):
     """The count the refusal above names passes the cell-size check: a directory as --out, checked
     after it, is what refuses."""
@@ -133,7 +138,8 @@ def test_run_study_out_must_be_a_writable_directory(blocker):
     (["--ids", ""], ["--ids: no state named"]),
     (["--ids", "1,1"], ["--ids: state 1 is given twice"]),
     (["--path-rate", "-2"], ["--path-rate", "not > 0"]),
-    (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers", "--n of about 148"]),
+    (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers",
+                                                            "--n 124 is the least that fits with this seed"]),
     (["--threads", "1000"], ["--threads", "at most"]),
     (["--out", "/sys/trueaniso-study"], ["cannot create files in /sys"]),
 ])
