@@ -179,6 +179,10 @@ def _study_line(results):
                summ.get("Zm", float("nan")), fp.get("path", "true-triaxial"), reached, law))
 
 
+def _states(n):
+    return "1 state" if n == 1 else "%d states" % n
+
+
 def _missing_states_line(results, rows):
     """The states the study defines (metadata.json) that have no row in the table: not reached (a
     specimen near its strength creeps; docs/runs.md) or not run yet. Before, the report counted the
@@ -473,10 +477,10 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                   % (paper_zeta, zh, zv, contrast["zeta"],
                      "; at a bound of the search (%g-%g): not determined by these states" % chain.ZETA_BOUNDS
                      if contrast["at_bound"] else ""),
-                  "| zeta per state against state %s, mean at the highest Zm (within 0.02) | %s, constant | %s (%d states) |"
-                  % (tab["state"][ref], paper_zeta_short, _fmt(trend["high"], "%.3f"), trend["n_high"]),
-                  "| the same, lowest fifth of the Zm range | %s, constant | %s (%d states) |"
-                  % (paper_zeta_short, _fmt(trend["low"], "%.3f"), trend["n_low"]),
+                  "| zeta per state against state %s, mean at the highest Zm (within 0.02) | %s, constant | %s (%s) |"
+                  % (tab["state"][ref], paper_zeta_short, _fmt(trend["high"], "%.3f"), _states(trend["n_high"])),
+                  "| the same, lowest fifth of the Zm range | %s, constant | %s (%s) |"
+                  % (paper_zeta_short, _fmt(trend["low"], "%.3f"), _states(trend["n_low"])),
                   "| Spearman rank correlation of zeta with Zm | (zeta independent of state) | %s |" % _fmt(rho, "%.2f"),
                   "| states whose own zeta is not determined (at a bound of the search, or a contrast that does "
                   "not depend on zeta) | | %d of %d |" % (trend["n_undetermined"], trend["n"]),

@@ -417,3 +417,8 @@ def test_three_states_say_their_r2_is_one_by_construction(small_table, tmp_path)
     assert "Three states: each quadratic of Table 2 passes through its three points" in text
     out, _ = report.build(small_table, str(tmp_path / "r8"), log=lambda m: None)
     assert "Three states" not in open(out).read()
+
+
+def test_counts_of_states_are_said_in_good_english():
+    """'0.010 (1 states)' in the sphere report's zeta rows (an outside try)."""
+    assert [report._states(n) for n in (0, 1, 2)] == ["0 states", "1 state", "2 states"]
