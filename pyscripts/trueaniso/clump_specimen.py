@@ -102,9 +102,10 @@ def _layer(n, template, size_distribution, seed, orientation_weights, phi_cell, 
 
 
 def _thin_layer(n, template, d, quats, start, box, layers):
-    """Why a layer of stacked copies cannot hold its clumps (one is taller than the layer as
-    drawn), or None. Depends on the draws, so on n and the seed: a small clump2 (4 layers) failed
-    at some seeds only, with an internal message, after the estimate line (an outside try)."""
+    """(why a layer of stacked copies cannot hold its clumps: one is taller than the layer as
+    drawn, a first-order estimate of the count that would) or None. Depends on the draws, so on n
+    and the seed: a small clump2 (4 layers) failed at some seeds only, with an internal message,
+    after the estimate line (an outside try)."""
     if layers == 1:
         return None
 
@@ -118,25 +119,28 @@ def _thin_layer(n, template, d, quats, start, box, layers):
         return None
     need = layers * int(np.ceil(n / layers * (tallest / box[2]) ** 3 * 1.2))  # thickness grows as n^(1/3)
     return ("%d clumps in %d stacked layers make each layer %.3g mm thick, less than its tallest clump as drawn "
-            "(%.3g mm): give --n of about %d or more (or another --seed)" % (n, layers, 1e3 * box[2], 1e3 * tallest,
-                                                                            need))
+            "(%.3g mm)" % (n, layers, 1e3 * box[2], 1e3 * tallest), need)
 
 
 def layers_problem(assembly, n, seed, phi_start=0.20, **overrides):
     """Why the assembly's stacked layers (its recipe with `overrides`: d50, cu, phi_cell) cannot
     hold n clumps drawn with this seed, or None (prepare_specimen.py and run_study.py ask before
     any work). The message names the least count that fits (least_layered_count)."""
-    said = _layers_check(assembly, seed, phi_start, overrides)(n)
-    if said is None:
+    thin = _layers_check(assembly, seed, phi_start, overrides)(n)
+    if thin is None:
         return None
-    # The estimate in the message ignores that more clumps draw a taller one: followed, it led from
-    # 28 to 60 to 116 (an outside try). The draws are cheap at these counts, so the least count
-    # that fits with this seed is searched and named instead.
+    # The estimate ignores that more clumps draw a taller one: followed, it led from 28 to 60 to
+    # 116 (an outside try). The draws are cheap at these counts, so the least count that fits with
+    # this seed is searched and named instead; the estimate only where none is found.
+    why = thin[0]
     least = least_layered_count(assembly, n + recipe(assembly)["layers"], seed, phi_start, **overrides)
     if least is None:
-        return said
-    return said[:said.index(": give --n of about")] + ": --n %d is the least that fits with this seed (or give another " \
-        "--seed)" % least
+        return _with_estimate(thin)
+    return "%s: --n %d is the least that fits with this seed (or give another --seed)" % (why, least)
+
+
+def _with_estimate(thin):
+    return "%s: give --n of about %d or more (or another --seed)" % thin
 
 
 def least_layered_count(assembly, start, seed, phi_start=0.20, **overrides):
@@ -179,9 +183,9 @@ def random_loose_clumps(n, template, size_distribution, seed, orientation_weight
         raise ValueError("solid fractions must satisfy 0.05 <= phi_start < phi_cell < 0.75")
     rng, d, quats, side, start, box = _layer(n, template, size_distribution, seed, orientation_weights, phi_cell,
                                             layers, phi_start)
-    problem = _thin_layer(n, template, d, quats, start, box, layers)
-    if problem:
-        raise ValueError(problem)
+    thin = _thin_layer(n, template, d, quats, start, box, layers)
+    if thin:
+        raise ValueError(_with_estimate(thin))
     centres = random_sequential_clumps(template, start * d, quats, box, rng, periodic_z=(layers == 1))
     pos, qs = [centres], [quats]
     for k in range(1, layers):
