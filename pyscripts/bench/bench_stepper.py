@@ -11,7 +11,10 @@ update), no damping, fix nve/sphere, on N MPI ranks (the Debian build has no Ope
 data files written by lammps_peer.py. LAMMPS's pair pressure at step 0 is checked against ours
 before its time counts: the same packing and law, or the run stops. Each run is its own process;
 the figure is particle-steps per second of the timed steps only (set-up excluded); repeats
-interleave the codes (their order rotates) and the median is reported. With --doc the table
+interleave the codes (their order rotates) and the median is reported. A ratio is the median,
+over the rounds, of ours against the other code in the same round (each round runs every code
+once, minutes apart at most), with its range: this machine's speed drifts by more than a change
+of code over an hour, and a ratio of the medians would mix runs an hour apart. With --doc the table
 between the markers <!-- stepper:begin --> and <!-- stepper:end --> of that file is replaced.
 """
 import os
@@ -164,21 +167,25 @@ def main():
                 r = run_worker(code, th, o, dt)
                 res[code].append(r["n"] * r["steps"] / r["seconds"])
                 print("threads %d %-26s %.3f M particle-steps/s" % (th, code, res[code][-1] / 1e6), flush=True)
-        rows.append((th, {c: statistics.median(v) for c, v in res.items()}))
+        ratios = {c: [a / b for a, b in zip(res["ours"], res[c])] for c in o.codes if c != "ours"}
+        rows.append((th, {c: statistics.median(v) for c, v in res.items()}, ratios))
     n = s.num_bodies
     names = {"ours": "trueaniso", "yade": "YADE Mindlin", "lammps granular": "LAMMPS granular (mindlin)",
              "lammps gran/hertz/history": "LAMMPS gran/hertz/history"}
     others = [c for c in o.codes if c != "ours"]
     lines = ["Machine: %s. Specimen: %d spheres%s at 100 kPa (e = %.3f, Zm = %.2f), time step %.3g s, "
              "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
-             "Figures in M particle-steps/s; ratios: ours / theirs."
+             "Figures in M particle-steps/s (medians); ratios: ours / theirs in the same round, median and range "
+             "over the rounds."
              % (_bench.machine(), n, (" (%s tiled %d x %d x %d)" % (os.path.basename(o.specimen), o.tile, o.tile, o.tile)
                                       if o.tile > 1 else ""), meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d")), "",
              "| threads | %s |" % " | ".join(["trueaniso"] + ["%s | ratio" % names[c] for c in others]),
              "|" + "---|" * (2 + 2 * len(others))]
-    for th, med in rows:
-        cells = ["%.2f" % (med["ours"] / 1e6)] + ["%.3f | %.2f" % (med[c] / 1e6, med["ours"] / med[c]) for c in others]
+    for th, med, ratios in rows:
+        cells = ["%.2f" % (med["ours"] / 1e6)] + [
+            "%.3f | %.2f (%.2f-%.2f)" % (med[c] / 1e6, statistics.median(ratios[c]), min(ratios[c]), max(ratios[c]))
+            for c in others]
         lines.append("| %d | %s |" % (th, " | ".join(cells)))
 
     lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_stepper.py %s`"
