@@ -352,6 +352,31 @@ def _interrupted_line(what="interrupted"):
                    else " before the first checkpoint; the same command starts over")
 
 
+def _exits_after_script():
+    """True when the process ends with the script: python3, or yade-double -x (yade-batch's way);
+    a yade-double session left open for the user (no -x) goes on after it."""
+    if not in_yade():
+        return True
+    try:
+        from yade import runtime
+        return bool(runtime.opts.exitAfter)
+    except (ImportError, AttributeError):  # another YADE: keep Ctrl-C working
+        return False
+
+
+def _finished():
+    """The work is done and written; only the exit remains: python3's (about 0.03 s) or
+    yade-double's (about 0.4 s, IPython's exit handlers). A Ctrl-C there ended the run without a
+    word, killed by the signal (status 130 for a run that had finished), or with a traceback from
+    IPython's exit handler (found by an outside try, 5 of 5 times). From here on SIGINT and
+    SIGTERM are ignored, which the interpreter's exit keeps (it resets only handlers of its own):
+    the run ends with status 0, as it finished. Not in a yade-double session that stays open, where
+    Ctrl-C is the user's again."""
+    if _exits_after_script() and threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+
+
 def guarded(main, resumable=False):
     """Run main(); refusals and ValueError become one line and exit 2. A resumable script (its
     work continues from checkpoints: studies, preparations) says so when interrupted, by Ctrl-C or
@@ -364,6 +389,7 @@ def guarded(main, resumable=False):
     signal.signal(signal.SIGTERM, _terminate)
     try:
         main()
+        _finished()
     except (Refusal, ValueError) as exc:
         # ValueError: validation inside the library (bad specimen contents, bad arguments to an
         # engine); a traceback would hide the one line the user needs.
