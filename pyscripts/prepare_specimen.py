@@ -49,7 +49,8 @@ def assembly_defaults(assembly):
 def options(argv=None):
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--assembly", default="sphere", help="particle type: %s (docs/specimens.md)" % ", ".join(ASSEMBLIES))
-    p.add_argument("--n", type=cli.count, default=1000, help="number of particles")
+    p.add_argument("--n", type=cli.at_least(1, "an empty cell cannot be consolidated"), default=1000,
+                   help="number of particles")
     p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
     p.add_argument("--pressure", type=cli.finite, default=100e3, help="isotropic stress (Pa)")
     p.add_argument("--d50", type=cli.finite, help="median diameter by mass (m; clumps: of the equal-volume sphere); "
@@ -87,8 +88,6 @@ def validate(o):
     for k, v in assembly_defaults(o.assembly).items():
         if getattr(o, k) is None:
             setattr(o, k, v)
-    if o.n < 1:
-        raise cli.InputError("--n must be >= 1 (an empty cell cannot be consolidated)")
     if o.assembly != "sphere":
         try:
             clump_specimen.check_count(o.assembly, o.n)

@@ -46,7 +46,8 @@ SPECIMEN = "specimen.npz"
 def parser():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--assembly", default="sphere", help="sphere (default), clump1 or clump2 (docs/specimens.md)")
-    p.add_argument("--n", type=cli.count, default=1000, help="particles in the specimen (>= 100)")
+    p.add_argument("--n", type=cli.at_least(100, "a study specimen"), default=1000,
+                   help="particles in the specimen (>= 100)")
     p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
     p.add_argument("--ids", default=DEFAULT_IDS, help="Table C1 states to run, by number")
     p.add_argument("--mu", type=cli.finite, default=0.5,
@@ -71,8 +72,6 @@ def validate(o):
     # A study, or a preparation for one killed before the study began, goes on at its own count.
     cli.resolve_threads(o, preparation=prep_checkpoint.path_for(os.path.join(o.out, SPECIMEN)))
     cli.resolve_path_rate(o)
-    if o.n < 100:
-        raise cli.InputError("--n must be >= 100 for a study specimen")
     o.assembly = {"spheres": "sphere"}.get(o.assembly, o.assembly)
     if o.assembly not in ASSEMBLIES:
         raise cli.InputError("unknown assembly %r (available: %s)" % (o.assembly, ", ".join(ASSEMBLIES)))

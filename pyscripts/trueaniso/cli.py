@@ -180,6 +180,21 @@ def count(text):
     return k
 
 
+def at_least(least, why=""):
+    """An argparse type: an integer >= least, refused with that least (count() said '>= 0' for a
+    particle count whose least is 1 or 100, and the next check then named the real one)."""
+    def parse(text):
+        try:
+            k = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError("%r is not an integer" % text) from None
+        if k < least:
+            raise argparse.ArgumentTypeError("%r is not >= %d%s" % (text, least, " (%s)" % why if why else ""))
+        return k
+    parse.__name__ = "integer"  # what argparse calls the type in its messages
+    return parse
+
+
 def output_problem(path, directory=True, option="--out"):
     """Why `path` cannot be written, or None: a directory (or a file) that exists or can be
     created, in a place where this user can create files. Checked by creating and removing a

@@ -30,6 +30,7 @@ TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (truea
     # from 60 to 67 (not a multiple of its 4 layers) to 80
     (["--assembly", "clump2", "--n", "60"], ["use --n of at least 80"]),
     (["--seed=-1"], ["--seed", ">= 0"]),  # before: failed after the preparation started
+    (["--n=-5"], ["--n", "'-5' is not >= 1", "empty cell"]),  # before: '>= 0', and --n 0 then said '>= 1'
     (["--threads", "100000"], ["--threads", "at most"]),  # before: segfault
     (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
     (["--n", "1000000000"], ["memory", "this machine allows", "MemTotal"]),  # before: ran away past 7.8 GB
@@ -134,6 +135,8 @@ def test_run_study_out_must_be_a_writable_directory(blocker):
 
 @pytest.mark.parametrize("args,words", [
     (["--seed=-1"], ["--seed", ">= 0"]),
+    (["--n=-5"], ["--n", "'-5' is not >= 100", "a study specimen"]),  # before: '>= 0', and --n 0 then '>= 100'
+    (["--n", "0"], ["--n", "'0' is not >= 100"]),
     (["--n", "1000000000"], ["memory", "this machine allows"]),
     (["--ids", ""], ["--ids: no state named"]),
     (["--ids", "1,1"], ["--ids: state 1 is given twice"]),
