@@ -55,8 +55,8 @@ def parser():
                         "its increment nears the stress noise (docs/triaxial.md)" % (lo, hi))
     p.add_argument("--probes", help="probe axes, each at most once: letters of x, y, z (e.g. zxy), or names separated "
                                     "by commas, where the shear probes yz, xz, xy (G_ij) may be given too (e.g. "
-                                    "z,x,y,yz,xz,xy). Default: zxy on the true-triaxial path, all six on the "
-                                    "cross-anisotropic one")
+                                    "z,x,y,yz,xz,xy; one shear probe alone: xy, with its comma). Default: zxy on "
+                                    "the true-triaxial path, all six on the cross-anisotropic one")
     p.add_argument("--rotations", choices=("free", "restrained"), default="free",
                    help="particle rotations during probes")
     p.add_argument("--skip-detection", action="store_true",
@@ -178,7 +178,20 @@ def probe_axes(text, path):
     """The probe axes as names: letters (zxy) or comma-separated names (z,x,y,yz,xz,xy)."""
     if text is None:
         return list(triaxial.AXES) if path == "cross-anisotropic" else ["z", "x", "y"]
-    names = [s.strip() for s in text.split(",")] if "," in text else list(text)
+    shear = [n for n in triaxial.AXES if len(n) == 2]
+    if text.strip() in shear:
+        # Read as letters, 'xy' ran the normal probes x and y, not the shear probe the help and the
+        # CSV call xy (an outside try): two readings, so neither is guessed.
+        n = text.strip()
+        raise cli.InputError("--probes %r is ambiguous: the shear probe %s, or the normal probes %s and %s? Write "
+                             "'%s,' for the shear probe alone, '%s,%s' for the two normal probes"
+                             % (text, n, n[0], n[1], n, n[0], n[1]))
+    if "," in text:
+        names = [s.strip() for s in text.split(",")]
+        if len(names) == 2 and names[0] and not names[1]:  # 'xy,': a list of one name, as a 1-tuple is written
+            names = names[:1]
+    else:
+        names = list(text)
     if not names or any(n not in triaxial.AXES for n in names) or len(set(names)) != len(names):
         raise cli.InputError("--probes must name each axis at most once: letters of x, y, z (e.g. zxy), or names "
                              "separated by commas among x, y, z, yz, xz, xy (got %r)" % text)

@@ -93,6 +93,9 @@ def blocker(tmp_path):
     (["--states", "0:100e3,1:100e3"], ["states 1 and b1_sz100000 are one state", "(100000, 100000, 100000)"]),
     (["--ids", "1", "--assembly", "clump1"], ["is a sphere specimen, not clump1"]),  # the file says what it is
     (["--ids", "1", "--assembly", "clump3"], ["--assembly", "invalid choice"]),
+    # before: ran the normal probes x and y, where the help and the CSV name the shear probe xy
+    (["--ids", "1", "--probes", "xy"], ["'xy' is ambiguous", "'xy,' for the shear probe alone", "'x,y'"]),
+    (["--ids", "1", "--probes", "yz"], ["'yz' is ambiguous"]),
 ])
 def test_run_states_refuses_before_work(specimen_100, tmp_path, args, words):
     out = tmp_path / "out"
@@ -325,3 +328,13 @@ def test_overlap_estimate_bounds_a_prepared_specimen(specimen_100):
     p = (st["sigma_x"] + st["sigma_y"] + st["sigma_z"]) / 3
     estimate = engines.hertz_overlap_ratio(s.shear_modulus, s.poisson, p, 1 / (1 + st["void_ratio"]), st["Zm"])
     assert 0.8 < measured / estimate <= 1.0, (measured, estimate)
+
+
+@pytest.mark.parametrize("text,names", [("zxy", ["z", "x", "y"]), ("zx", ["z", "x"]), ("x,y", ["x", "y"]),
+                                        ("xy,", ["xy"]), ("yz,xz", ["yz", "xz"]), ("z,", ["z"])])
+def test_probe_names(text, names):
+    """Letters, or names with commas; one name alone with its comma (a shear probe by itself could
+    not be asked for: 'yz,' was refused and 'yz' ran y and z)."""
+    sys.path.insert(0, SCRIPTS)
+    import run_states
+    assert run_states.probe_axes(text, "true-triaxial") == names
