@@ -177,7 +177,7 @@ def main(argv):
             return 2
         zr = "Zm %.3f-%.3f" % s["Zm"]
         gr = ("  Zm_gap1e-3 %.3f-%.3f" % s["Zm_gap1e-3"]) if "Zm_gap1e-3" in s else ""
-        print("%s: %d states  %s%s  reversals %d  wall %.0f s" % (p, s["states"], zr, gr, s["reversals"],
+        print("%s: %d state%s  %s%s  reversals %d  wall %.0f s" % (p, s["states"], "" if s["states"] == 1 else "s", zr, gr, s["reversals"],
                                                                   s["wall_time"]))
     return 0
 

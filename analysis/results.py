@@ -4,6 +4,7 @@ The table is read by the same code that writes it (trueaniso/results_csv.py), so
 by an interrupted run is recognised and left out rather than read as numbers, and anything else
 wrong with the file is one ``ResultsError`` line, never a traceback.
 """
+import math
 import os
 import sys
 
@@ -22,10 +23,47 @@ class Probes(list):
     note = None
 
 
-def read_probes(path, need=("state", "probe", "E")):
-    """Rows of a probe table as dicts of strings, with the columns in `need` present."""
+SHEAR_PROBES = ("yz", "xz", "xy")
+
+
+def table_path(path):
+    """A probe table's path: the file given, or a study directory's probes.csv."""
+    if os.path.isdir(path):
+        inside = os.path.join(path, "probes.csv")
+        if not os.path.isfile(inside):
+            raise ResultsError("%s is a directory without probes.csv (a study's probe table, written by "
+                               "run_states.py or run_study.py)" % path)
+        return inside
     if not os.path.isfile(path):
         raise ResultsError("%s does not exist (a probe table is written by run_states.py or run_study.py)" % path)
+    return path
+
+
+def _check_rows(path, rows, columns):
+    """One row a probe, and its modulus a positive number: a table appended twice was analysed as
+    it came, and a NaN or negative E changed the fits and the reversals without a word (an outside
+    try); the report alone refused them, and named no row."""
+    seen = {}
+    for line, r in enumerate(rows, start=2):  # line 1 is the header
+        key = (r.get("rotations"), r.get("state"), r.get("probe"), r.get("sign"))
+        if key in seen:
+            raise ResultsError("%s: state %s probe %s (rotations %s) is in lines %d and %d: one row a probe "
+                               "(a table appended twice?)" % (path, r.get("state"), r.get("probe"),
+                                                             r.get("rotations") or "?", seen[key], line))
+        seen[key] = line
+        modulus = "G" if r.get("probe") in SHEAR_PROBES else "E"
+        if modulus not in columns:
+            continue
+        value = number(r, modulus, path)
+        if not (math.isfinite(value) and value > 0):
+            raise ResultsError("%s: state %s probe %s has %s = %r, not a positive number (line %d)"
+                               % (path, r.get("state"), r.get("probe"), modulus, r[modulus], line))
+
+
+def read_probes(path, need=("state", "probe", "E")):
+    """Rows of a probe table as dicts of strings, with the columns in `need` present; `path` is the
+    table or a study directory holding probes.csv."""
+    path = table_path(path)
     try:
         table = results_csv.read(path)
     except (results_csv.TableError, UnicodeDecodeError) as exc:
@@ -35,6 +73,7 @@ def read_probes(path, need=("state", "probe", "E")):
     missing = [c for c in need if c not in table.columns]
     if missing:
         raise ResultsError("%s lacks the columns %s" % (path, ", ".join(missing[:6]) + (" ..." if len(missing) > 6 else "")))
+    _check_rows(path, table.rows, table.columns)
     out = Probes(table.rows)
     if table.torn is not None:
         out.note = ("%s: the last row was cut short (an interrupted run; the next run of the study redoes it) "

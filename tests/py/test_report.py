@@ -422,3 +422,55 @@ def test_three_states_say_their_r2_is_one_by_construction(small_table, tmp_path)
 def test_counts_of_states_are_said_in_good_english():
     """'0.010 (1 states)' in the sphere report's zeta rows (an outside try)."""
     assert [report._states(n) for n in (0, 1, 2)] == ["0 states", "1 state", "2 states"]
+
+
+SMALL_TABLE = os.path.join(REPO, "docs", "data", "table-c1-spheres-4000.csv")
+
+
+def _edited(tmp_path, edit):
+    with open(SMALL_TABLE, newline="") as f:
+        rows = list(csv.reader(f))[:7]  # header and the first two states' probes
+    edit(rows)
+    path = tmp_path / "probes.csv"
+    with open(path, "w", newline="") as f:
+        csv.writer(f).writerows(rows)
+    return str(path)
+
+
+def _set_E(value):
+    def edit(rows):
+        rows[2][rows[0].index("E")] = value
+    return edit
+
+
+@pytest.mark.parametrize("edit,words", [
+    (lambda rows: rows.extend(rows[1:3]), ["state 1 probe z", "lines 2 and 8", "one row a probe"]),
+    (_set_E("nan"), ["E = 'nan', not a positive number (line 3)"]),
+    (_set_E("-1e8"), ["E = '-1e8', not a positive number"]),
+    (_set_E("inf"), ["not a positive number"]),
+])
+def test_every_analysis_refuses_a_bad_row_the_same_way(tmp_path, edit, words):
+    """The shared reader (analysis/results.py) refuses a table appended twice and a modulus that is
+    not a positive number, naming the row: figures and path_fidelity used them without a word (a
+    NaN E moved the K r^2 from 0.976 to 0.950), the report refused without naming the row."""
+    from analysis import path_fidelity, results
+    path = _edited(tmp_path, edit)
+    with pytest.raises(ResultsError) as exc:
+        results.read_probes(path)
+    assert all(w in str(exc.value) for w in words), str(exc.value)
+    for tool in (["analysis.figures", path, "--out", str(tmp_path / "f")], ["analysis.path_fidelity", path],
+                 ["analysis.report", path, "--out", str(tmp_path / "r")]):
+        proc = subprocess.run([sys.executable, "-m"] + tool, capture_output=True, text=True, cwd=REPO, timeout=120)
+        assert proc.returncode == 2 and proc.stderr.strip().startswith("error:") and words[-1] in proc.stderr, \
+            (tool, proc.stderr)
+
+
+def test_a_study_directory_is_taken_for_its_probe_table(tmp_path):
+    """analysis.figures, path_fidelity and cross_anisotropy said a study directory 'does not
+    exist'; report took it. Each now reads DIR/probes.csv; a directory without one is named so."""
+    from analysis import results
+    path = _edited(tmp_path, lambda rows: None)
+    assert results.read_probes(str(tmp_path)) == results.read_probes(path)
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ResultsError, match="is a directory without probes.csv"):
+        results.read_probes(str(tmp_path / "empty"))
