@@ -126,7 +126,9 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     if "checkpoint" in (spec_meta.get("parameters") or {}):  # prep_checkpoint's: mid-preparation, not at rest
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
-    _refuse_unreachable(states, path, dict(spec_meta, summary=_summary(specimen_path, spec_meta)), state_options)
+    summary = _summary(specimen_path, spec_meta)
+    _refuse_unloaded(specimen_path, summary)
+    _refuse_unreachable(states, path, dict(spec_meta, summary=summary), state_options)
     if spec_meta["block_rotations"] and not restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)
@@ -154,6 +156,21 @@ def _summary(specimen_path, spec_meta):
         return specimen.state(scene)
     except ValueError:  # no contact carries a force: no stress to start from, nothing to check
         return summary
+
+
+def _refuse_unloaded(specimen_path, summary):
+    """InputError for a specimen that carries no stress (a loose cloud, no loaded contact, as a YADE
+    scene saved before it was consolidated): the servo strained it to its 5 % limit and reported
+    that 'the specimen fails' at stresses (0, 0, 0) kPa (an outside try)."""
+    stresses = [summary.get(k) for k in ("sigma_x", "sigma_y", "sigma_z")]
+    if None in stresses:  # nothing measured (a scene that could not be evaluated): the servo's own checks
+        return
+    if summary.get("Nc", 1) == 0 or max(abs(x) for x in stresses) == 0:
+        raise InputError("specimen %s carries no stress (%s loaded contacts, void ratio %s): a stress path starts "
+                         "from a consolidated packing; prepare one with prepare_specimen.py, or consolidate the "
+                         "scene (in YADE, say) before saving it" % (specimen_path, summary.get("Nc", 0),
+                                                                   "%.3g" % summary["void_ratio"]
+                                                                   if "void_ratio" in summary else "unknown"))
 
 
 def _refuse_unreachable(states, path, spec_meta, state_options):

@@ -338,3 +338,19 @@ def test_probe_names(text, names):
     sys.path.insert(0, SCRIPTS)
     import run_states
     assert run_states.probe_axes(text, "true-triaxial") == names
+
+
+def test_a_specimen_that_carries_no_stress_is_refused_before_work(tmp_path):
+    """A loose cloud (no loaded contact, as a YADE scene saved before consolidation) was stepped to
+    the servo's 5 % strain limit and reported as 'the specimen fails' at stresses (0, 0, 0) kPa
+    (an outside try); it is refused before any work, saying why."""
+    from trueaniso import psd, specimen_file
+    pos, radii, scale, cell = specimen.random_loose_packing(60, psd.PAPER_SPHERES, 1)
+    scene = specimen.new_scene(pos, radii * scale, cell)
+    dem.refresh(scene)
+    path = tmp_path / "loose.npz"
+    specimen_file.save(str(path), scene)
+    out = tmp_path / "out"
+    proc = run_script("run_states.py", "--specimen", path, "--ids", "1", "--probes", "z", "--out", out, timeout=120)
+    one_line_error(proc, "carries no stress", "0 loaded contacts", "consolidate")
+    assert not out.exists()
