@@ -158,14 +158,24 @@ def _material(results):
     return None, None
 
 
-def _study_line(results):
+def _study_line(results, rows=()):
     """What the study is (from its metadata.json): specimen size, seed, void ratio and Zm, the
-    loading path and the contact law's rolling resistance; None for a bare table."""
+    loading path and the contact law's rolling resistance; None for a bare table. A specimen saved
+    without a summary (from a YADE scene: specimen_file.save) gave '? spheres (seed None), e = nan';
+    its size, e and Zm are then read from the isotropic state's row, and said so."""
     meta = read_metadata(results)
     if meta is None:
         return None
     spec, fp = meta.get("specimen") or {}, meta.get("fingerprint") or {}
-    summ, state = spec.get("summary") or {}, fp.get("state") or {}
+    summ, state = dict(spec.get("summary") or {}), fp.get("state") or {}
+    where = ""
+    if not all(k in summ for k in ("n", "void_ratio", "Zm")):
+        iso = next((r for r in rows if r.get("state") == "1"), None)
+        try:
+            summ = dict(n=int(float(iso["Np"])), void_ratio=float(iso["void_ratio"]), Zm=float(iso["Zm"]))
+            where = " (the specimen records no summary: size, e and Zm from state 1's row)"
+        except (TypeError, KeyError, ValueError):  # no isotropic row: said as not recorded
+            where = " (the specimen records no summary)"
     beta, eta = state.get("rolling_stiffness", 0.0), state.get("rolling_friction", 0.0)
     law = ("rolling resistance off (the paper's contact law)" if not beta else
            "rolling resistance beta = %g, eta_r = %g (not the paper's law: docs/rolling.md)" % (beta, eta))
@@ -173,10 +183,12 @@ def _study_line(results):
     reached = ("states reached with the whole load at once (--path-rate inf)" if rate == "inf"
                else "states reached at the default 2 Pa per step" if float(rate) == 2.0
                else "states reached at %s Pa per step" % rate)
-    return ("Study: %s %s (seed %s), e = %.4f and Zm = %.3f at the isotropic state; %s path, %s; %s."
+    seed = spec.get("seed")
+    return ("Study: %s %s (%s), e = %s and Zm = %s at the isotropic state%s; %s path, %s; %s."
             % (summ.get("n", "?"), fp.get("assembly", "sphere") + "s" if fp.get("assembly", "sphere") == "sphere"
-               else fp.get("assembly"), spec.get("seed", "?"), summ.get("void_ratio", float("nan")),
-               summ.get("Zm", float("nan")), fp.get("path", "true-triaxial"), reached, law))
+               else fp.get("assembly"), "seed not recorded" if seed is None else "seed %s" % seed,
+               _fmt(summ.get("void_ratio"), "%.4f"), _fmt(summ.get("Zm"), "%.3f"), where,
+               fp.get("path", "true-triaxial"), reached, law))
 
 
 def _states(n):
@@ -384,7 +396,7 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
              "Made by `analysis/report.py` from `%s` on %s. Material: G = %.4g Pa, nu = %.3g (%s; checked "
              "against the table's micromechanical moduli). Each table gives the paper's number beside ours."
              % (csv_path, time.strftime("%Y-%m-%d"), material["shear_modulus"], material["poisson"], where), ""]
-    for line in (_study_line(results), _missing_states_line(results, rows)):
+    for line in (_study_line(results, rows), _missing_states_line(results, rows)):
         if line:
             lines += [line, ""]
     os.makedirs(out, exist_ok=True)

@@ -474,3 +474,20 @@ def test_a_study_directory_is_taken_for_its_probe_table(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(ResultsError, match="is a directory without probes.csv"):
         results.read_probes(str(tmp_path / "empty"))
+
+
+def test_study_line_of_a_specimen_saved_without_summary(specimen_100, tmp_path):
+    """A specimen saved from a YADE scene (specimen_file.save with no summary) gave the report's
+    header '? spheres (seed None), e = nan and Zm = nan' although state 1's row held them (an
+    outside try); they are taken from that row, and said so."""
+    from conftest import run_script
+    from trueaniso import specimen_file
+    scene, _ = specimen_file.load(str(specimen_100))
+    bare = tmp_path / "bare.npz"
+    specimen_file.save(str(bare), scene)
+    out = tmp_path / "study"
+    proc = run_script("run_states.py", "--specimen", bare, "--ids", "1", "--probes", "zxy", "--out", out, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    line = report._study_line(str(out), list(csv.DictReader(open(out / "probes.csv"))))
+    assert line.startswith("Study: 100 spheres (seed not recorded), e = 0.")
+    assert "nan" not in line and "from state 1's row" in line
