@@ -198,6 +198,9 @@ def _shared_material(spheres):
 
 
 def _check_homo_deform(O):
+    if not O.periodic:  # O.cell is None: an AttributeError traceback before
+        raise BridgeError("write_to_yade writes into a periodic scene that holds the bodies (ids) already; "
+                          "this O is not periodic: build the scene in YADE with yade_scene_from(scene)")
     if O.cell.homoDeform != 2:
         raise BridgeError("the bridge converts velocities for YADE's default O.cell.homoDeform = 2 "
                           "(total velocities); this scene has %d" % O.cell.homoDeform)

@@ -171,6 +171,7 @@ def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json,
     assert "FrictPhys" in refusals["linear"] and "import_contacts=False" in refusals["linear"]
     assert "blockedDOFs 'xyz'" in refusals["blocked"] and "dynamic False" in refusals["fixed"]
     assert r["linear_positions_only"] is True
+    assert "not periodic" in r["write_not_periodic"] and "yade_scene_from" in r["write_not_periodic"]
     assert "betan" in refusals["damped"] and "determinant 0" in refusals["singular_trsf"]
     # A second outside try: scene_from_yade (which now evaluates, so wraps bodies into the cell)
     # then write_to_yade lost 20-50 % of YADE's contacts: the interactions kept their old images.

@@ -169,5 +169,12 @@ try:
     res["linear_positions_only"] = True
 except yade_bridge.BridgeError as exc:
     res["linear_positions_only"] = str(exc)
+# write_to_yade into an O that is not periodic: one BridgeError (an AttributeError traceback before).
+O.reset()
+try:
+    yade_bridge.write_to_yade(ours, O)
+    res["write_not_periodic"] = None
+except yade_bridge.BridgeError as exc:
+    res["write_not_periodic"] = str(exc)
 with open(out, "w") as f:
     json.dump(res, f, indent=1)
