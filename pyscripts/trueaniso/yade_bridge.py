@@ -68,15 +68,34 @@ def scene_from_yade(O=None, import_contacts=True):
         s, ids = _spheres_from_yade(O, bodies, import_contacts)
     from . import dem
     dem.refresh(s)
+    _check_apart(s, ids)
     return s, ids
+
+
+def _check_apart(s, ids):
+    """Two bodies at one point (distance 0) have a contact without a normal: the import returned
+    and the stress read NaN until specimen_file.save refused 'non-finite values in c_normal' (an
+    outside try). Refused here, naming them."""
+    c = s.contact_arrays()
+    bad = np.flatnonzero(~np.isfinite(c["normal"]).all(axis=1))
+    if bad.size:
+        k = int(bad[0])
+        raise BridgeError("bodies #%d and #%d sit at one point (their spheres' centres coincide): a contact "
+                          "between them has no direction; move or erase one (%d such contact%s)"
+                          % (ids[int(c["body1"][k])], ids[int(c["body2"][k])], bad.size, "" if bad.size == 1 else "s"))
 
 
 def _check_free(bodies):
     """Our stepper moves every body: a YADE body with blocked DOFs, or not dynamic (a fixed
     sphere), would silently become free. Refused instead."""
+    from yade import Sphere
     for b in bodies:
         if b.isClumpMember:
             continue  # its clump carries its state
+        if not b.isClump and not isinstance(b.shape, Sphere):
+            # Named first: a wall (fixed) was told to be freed, then refused as not a sphere (an outside try).
+            raise BridgeError("body #%d is a %s; the bridge imports spheres and clumps of spheres only: erase it "
+                              "before the import" % (b.id, type(b.shape).__name__))
         if not b.dynamic or b.state.blockedDOFs:
             raise BridgeError("body #%d is not free (dynamic %s, blockedDOFs %r); trueaniso moves every body: free "
                               "it, or erase it, before the import" % (b.id, b.dynamic, b.state.blockedDOFs))

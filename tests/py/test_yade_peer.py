@@ -173,6 +173,8 @@ def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json,
     assert r["linear_positions_only"] is True
     assert "not periodic" in r["write_not_periodic"] and "yade_scene_from" in r["write_not_periodic"]
     assert "betan" in refusals["damped"] and "determinant 0" in refusals["singular_trsf"]
+    assert "is a Wall" in refusals["wall"] and "free it" not in refusals["wall"]
+    assert "bodies #4 and #" in refusals["coincident"] and "one point" in refusals["coincident"]
     # A second outside try: scene_from_yade (which now evaluates, so wraps bodies into the cell)
     # then write_to_yade lost 20-50 % of YADE's contacts: the interactions kept their old images.
     assert r["wrapped_on_import"] > 0

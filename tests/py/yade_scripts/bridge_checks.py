@@ -87,9 +87,19 @@ def singular_trsf():
     O.cell.trsf = Matrix3(1, 0, 0, 0, 1, 0, 0, 0, 0)
 
 
+def wall():  # a fixed wall: named as a wall, not told to be freed (an outside try)
+    O.bodies.append(utils.wall((0, 0, 0), axis=2))
+
+
+def coincident():  # a sphere on another's centre: the import returned, with a NaN stress
+    b = O.bodies[4]
+    O.bodies.append(utils.sphere(b.state.pos, b.shape.radius, material=b.material))
+
+
 res["refusals"] = {name: refusal(edit) for name, edit in
                    (("viscel", viscel), ("linear", linear), ("blocked", blocked), ("fixed", fixed),
-                    ("damped", damped), ("singular_trsf", singular_trsf))}
+                    ("damped", damped), ("singular_trsf", singular_trsf), ("wall", wall),
+                    ("coincident", coincident))}
 
 
 # A scene YADE has moved leaves bodies outside its cell; our import wraps them in. Written straight
