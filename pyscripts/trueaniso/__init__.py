@@ -35,6 +35,16 @@ def _find_extension():
     return _trueaniso
 
 
-engines = _find_extension()
+def __getattr__(name):
+    """`engines` (the compiled module) is loaded on first use, not with the package: reading and
+    analysing results (trueaniso.results_csv, analysis/) needs none of it, and on a machine without
+    the build those tools ended in a 20-line ImportError traceback (an outside try)."""
+    if name == "engines":
+        global engines
+        engines = _find_extension()
+        return engines
+    raise AttributeError("module 'trueaniso' has no attribute %r" % name)
+
+
 __version__ = "0.1.0"
 FORMAT_VERSION = 4  # specimen files; 2: the checksum covers the metadata; 3: the full cell matrix; 4: the bodies' volumes (docs/specimens.md)
