@@ -91,7 +91,9 @@ def resolve_threads(o, study=True, preparation=None):
             continued = "its study" if o.threads else None
         if o.threads is None and preparation is not None:
             o.threads = prep_checkpoint.saved_threads(preparation)  # refuses an unreadable checkpoint
-            continued = "its interrupted preparation" if o.threads else None
+            # "unfinished", not "interrupted": it may be running in another process, which the lock
+            # then refuses (a second run_study.py during the first one's preparation; an outside try).
+            continued = "its unfinished preparation" if o.threads else None
     o.threads = o.threads or 0
     if continued:
         # Said as a fact about the work, not as "continuing": a check after it may still refuse the

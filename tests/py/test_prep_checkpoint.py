@@ -162,7 +162,7 @@ def test_script_killed_then_rerun_writes_the_uninterrupted_specimen(tmp_path):
     again = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--checkpoint-every", 20000,
                        "--out", out, env=dict(OMP_NUM_THREADS="2"))
     assert again.returncode == 0, again.stderr
-    assert "its interrupted preparation ran at 1 engine thread, so this run does too" in again.stdout
+    assert "its unfinished preparation ran at 1 engine thread, so this run does too" in again.stdout
     assert "resuming the preparation from" in again.stdout
     assert not os.path.exists(ck)
     a, _ = specimen_file.load(str(tmp_path / "whole.npz"))
