@@ -9,7 +9,7 @@ import sys
 import numpy as np
 
 from . import hyperelastic
-from .results import ResultsError, number, read_probes
+from .results import ResultsError, number, read_probes, said
 
 
 def _plt():
@@ -205,7 +205,7 @@ def main(argv=None):
         modulus_vs_stress(rows, os.path.join(o.out, "E_vs_sigma.png"), o.title)
         fits = scalar_moduli_vs_zm(rows, os.path.join(o.out, "K_G_vs_Zm.png"))
     except (ResultsError, OSError, ValueError) as exc:
-        sys.stderr.write("error: %s\n" % exc)
+        sys.stderr.write("error: %s\n" % said(exc))
         sys.exit(2)
     # No fit (fewer than three complete states with distinct Zm) is said in words: 'K, G fits: None'.
     print("figures in %s; K, G fits: %s" % (o.out, fits if fits else "none (Fig. 11 needs 3 states probed on x, y "

@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from . import chain, figures, hyperelastic, zeta_contrast
-from .results import ResultsError, read_metadata, read_probes
+from .results import ResultsError, read_metadata, read_probes, said
 
 AXES = "xyz"
 DEFAULT_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)  # the paper's particles (section 2.1)
@@ -405,7 +405,7 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         sel = [r for r in rows if r["rotations"] == rot]
         tab = chain.state_table(sel)
         n = len(tab["state"])
-        lines += ["## Probes with rotations %s: %d complete states" % (rot, n), ""]
+        lines += ["## Probes with rotations %s: %d complete state%s" % (rot, n, "" if n == 1 else "s"), ""]
         if n < 3:
             lines += ["Fewer than 3 complete states (a state is complete when probed on x, y and z, which the "
                       "fits need): no fits.", ""]
@@ -595,8 +595,9 @@ def main(argv=None):
     # "spheres": both are taken, and anything else is refused in one line (argparse's choices
     # printed the whole usage).
     p.add_argument("--assembly", default=None, type=lambda v: {"sphere": "spheres"}.get(v, v),
-                   help="the paper's assembly to compare with: %s (default: the study's own, from its "
-                        "metadata.json; spheres for a bare table)" % ", ".join(sorted(chain.PAPER)))
+                   help="the paper's assembly to compare with: %s (sphere, as the scripts spell it, is "
+                        "spheres; default: the study's own, from its metadata.json; spheres for a bare table)"
+                        % ", ".join(sorted(chain.PAPER)))
     p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
     p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
     p.add_argument("--fig16", help="a cross-anisotropic study (run_states.py --path cross-anisotropic: its directory "
@@ -616,7 +617,7 @@ def main(argv=None):
                         log=lambda m: sys.stderr.write(m + "\n"), fig16=o.fig16, clumps=o.clumps,
                         statics=o.statics)
     except (ResultsError, OSError, ValueError, RuntimeError) as exc:
-        sys.stderr.write("error: %s\n" % exc)
+        sys.stderr.write("error: %s\n" % said(exc))
         sys.exit(2)
     print("report: %s" % path)
 

@@ -18,6 +18,14 @@ class ResultsError(ValueError):
     """A results file that cannot be analysed; the message is one line for the user."""
 
 
+def said(exc):
+    """An error as the tools' one line: an OSError by its file and its reason ('/x/report: Read-only
+    file system'), not Python's '[Errno 30] Read-only file system: ...' (an outside try)."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return "%s: %s" % (exc.filename, exc.strerror) if exc.filename else exc.strerror
+    return str(exc)
+
+
 class Probes(list):
     """The complete rows of a probe table; ``note`` says what was left out, if anything."""
     note = None

@@ -102,8 +102,8 @@ def validate(o):
     prep, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
     # The static solve's memory goes with the bodies' degrees of freedom and the contacts (members).
     statics_memory = resources.interpreter_bytes() + resources.STATICS_BYTES_PER_SPHERE * spheres
-    resources.check_memory(max(prep, statics_memory), "a study of %d %s (its exact static solve)"
-                           % (o.n, o.assembly))
+    resources.check_memory(max(prep, statics_memory), "a study of %s (its exact static solve)"
+                           % clump_specimen.particles(o.n, o.assembly))
     return states
 
 

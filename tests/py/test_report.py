@@ -491,3 +491,16 @@ def test_study_line_of_a_specimen_saved_without_summary(specimen_100, tmp_path):
     line = report._study_line(str(out), list(csv.DictReader(open(out / "probes.csv"))))
     assert line.startswith("Study: 100 spheres (seed not recorded), e = 0.")
     assert "nan" not in line and "from state 1's row" in line
+
+
+def test_an_os_error_is_said_by_its_file_and_reason(tmp_path):
+    """'[Errno 30] Read-only file system: ...' was the tools' line for an output they could not
+    write (an outside try); the file and the reason now, also through the figures tool."""
+    from analysis.results import said
+    assert said(OSError(30, "Read-only file system", "/x/report")) == "/x/report: Read-only file system"
+    assert said(ResultsError("no rows")) == "no rows"
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    proc = subprocess.run([sys.executable, "-m", "analysis.figures", SMALL_TABLE, "--out", str(blocker / "figs")],
+                          capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert proc.returncode == 2 and proc.stderr == "error: %s: Not a directory\n" % (blocker / "figs"), proc.stderr
