@@ -160,10 +160,14 @@ def _spheres_from_yade(O, bodies, import_contacts):
         raise BridgeError("the YADE scene has no spheres")
     young, poisson, density, friction_angle = _shared_material(spheres)
     s = engines.Scene()
-    s.shear_modulus = young / (2.0 * (1.0 + poisson))
-    s.poisson = poisson
-    s.density = density
-    s.friction = math.tan(friction_angle)
+    try:
+        s.shear_modulus = young / (2.0 * (1.0 + poisson))
+        s.poisson = poisson
+        s.density = density
+        s.friction = math.tan(friction_angle)
+    except (ValueError, ZeroDivisionError) as exc:  # said in our terms ("shear modulus must be > 0") before
+        raise BridgeError("the spheres' FrictMat (young %g, poisson %g, density %g, frictionAngle %g) cannot be "
+                          "converted: %s" % (young, poisson, density, friction_angle, exc)) from None
     try:
         s.cell = h  # a singular or inverted hSize is refused here, with the engines' message
     except ValueError as exc:
@@ -174,7 +178,13 @@ def _spheres_from_yade(O, bodies, import_contacts):
     except ValueError:
         s.cell_ref = h  # no usable reference: strains count from now
     pos = np.array([[b.state.pos[k] for k in range(3)] for b in spheres])
-    s.add_spheres(pos, np.array([b.shape.radius for b in spheres]))
+    radii = np.array([b.shape.radius for b in spheres])
+    bad = np.flatnonzero(~np.isfinite(pos).all(axis=1) | ~(np.isfinite(radii) & (radii > 0)))
+    if bad.size:  # the engines said 'sphere position must be finite', naming no body
+        b = spheres[int(bad[0])]
+        raise BridgeError("body #%d has position %s and radius %g: not finite, or not > 0 (%d such bodies)"
+                          % (b.id, tuple(b.state.pos), b.shape.radius, bad.size))
+    s.add_spheres(pos, radii)
     _check_homo_deform(O)
     grad = _current_velocity_gradient(O)
     vel = np.array([[b.state.vel[k] for k in range(3)] for b in spheres])

@@ -175,6 +175,8 @@ def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json,
     assert "betan" in refusals["damped"] and "determinant 0" in refusals["singular_trsf"]
     assert "is a Wall" in refusals["wall"] and "free it" not in refusals["wall"]
     assert "bodies #4 and #" in refusals["coincident"] and "one point" in refusals["coincident"]
+    assert "young 0" in refusals["young_zero"] and "shear modulus must be > 0" in refusals["young_zero"]
+    assert refusals["nan_position"].startswith("body #6 has position (nan")
     # A second outside try: scene_from_yade (which now evaluates, so wraps bodies into the cell)
     # then write_to_yade lost 20-50 % of YADE's contacts: the interactions kept their old images.
     assert r["wrapped_on_import"] > 0

@@ -96,10 +96,19 @@ def coincident():  # a sphere on another's centre: the import returned, with a N
     O.bodies.append(utils.sphere(b.state.pos, b.shape.radius, material=b.material))
 
 
+def young_zero():
+    for b in O.bodies:
+        b.material.young = 0
+
+
+def nan_position():
+    O.bodies[6].state.pos = Vector3(float("nan"), 0, 0)
+
+
 res["refusals"] = {name: refusal(edit) for name, edit in
                    (("viscel", viscel), ("linear", linear), ("blocked", blocked), ("fixed", fixed),
                     ("damped", damped), ("singular_trsf", singular_trsf), ("wall", wall),
-                    ("coincident", coincident))}
+                    ("coincident", coincident), ("young_zero", young_zero), ("nan_position", nan_position))}
 
 
 # A scene YADE has moved leaves bodies outside its cell; our import wraps them in. Written straight
