@@ -54,3 +54,16 @@ def test_bench_stepper_refuses_bad_input_before_any_run(specimen_100):
                         (["--repeats", "0"], "--repeats >= 1"), (["--steps", "-1"], "--steps")):
         one_line_error(run_script(os.path.join("bench", "bench_stepper.py"), "--specimen", specimen_100, *args,
                                   timeout=60), words)
+
+
+def test_bench_state_split_on_the_isotropic_state(specimen_100):
+    """The ramp and hold split (docs/runs.md, clump2's steps) adds up, and bad ids are one line."""
+    import json
+    from conftest import one_line_error, run_script
+    proc = run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100, "--ids", "1",
+                      "--gains", "0.01", "--chunk", "50", timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    r = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert r["status"] == "reached" and r["ramp"] is not None and r["ramp"] + r["hold"] == r["steps"]
+    one_line_error(run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100,
+                              "--ids", "40", timeout=60), "no Table C1 state 40")

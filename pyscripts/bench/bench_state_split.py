@@ -1,0 +1,80 @@
+"""Where a state's steps go: the servo's ramp (and its stalls) against its hold, for servo gains.
+
+    /usr/bin/python3 pyscripts/bench/bench_state_split.py --specimen S.npz [--ids 2,6,10] [--gains 0.01,0.03]
+
+Every state is reached from the specimen itself, once per gain, with the study's servo settings
+otherwise (triaxial.reach_state's defaults: 2 Pa per step, damping 0.4, inertial number 1e-3, one
+engine thread). The ramp is the steps until the servo's goal reaches the state (its progress
+reaches 1), "stalled" the ramp's steps in which the goal did not move (a stress more than the
+follow tolerance behind it); the hold is the rest, until every stress is within 100 Pa and the
+unbalanced force below 1e-4 for 200 steps. One JSON line per state and gain (docs/runs.md,
+"Where clump2's steps to a state go").
+"""
+import inspect
+import json
+import os
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+sys.path[:0] = [os.path.dirname(HERE)]
+from trueaniso import cli  # noqa: E402
+
+
+def options():
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimen", required=True, help="specimen file (.npz)")
+    p.add_argument("--ids", default="2,6,10,14,18,22", help="Table C1 states by number")
+    p.add_argument("--gains", default="0.01,0.03", help="servo gains (fraction of the stress error closed a step)")
+    p.add_argument("--chunk", type=cli.at_least(1), default=500, help="steps between looks at the servo")
+    o = cli.parse(p)
+    try:
+        o.gains = [float(g) for g in o.gains.split(",")]
+        o.ids = [int(i) for i in o.ids.split(",")]
+    except ValueError:
+        cli.fail("--gains and --ids take numbers separated by commas")
+    return o
+
+
+def split(specimen_path, b, sigma_z, gain, chunk):
+    import numpy as np
+    from trueaniso import dem, engines, specimen_file, triaxial
+    defaults = {k: v.default for k, v in inspect.signature(triaxial.reach_state).parameters.items()}
+    s, _ = specimen_file.load(specimen_path)
+    servo = engines.TrueTriaxialServo()
+    servo.set_goal(b, sigma_z, defaults["p"])
+    servo.path_rate = defaults["path_rate"]
+    servo.gain = gain
+    servo.loading_friction = defaults["friction"]
+    d50 = 2.0 * float(np.median(s.radii))
+    servo.max_strain_rate = dem.strain_rate_for_inertial_number(defaults["inertial_number"], d50, s.density,
+                                                                defaults["p"])
+    chain = dem.Chain(s, damping=defaults["damping"], controllers=[servo])
+    servo.start(s)
+    t0, ramp, stalled, last = time.time(), None, 0, -1.0
+    while servo.status not in ("reached", "failed"):
+        chain.run(chunk)
+        if ramp is None and servo.progress >= 1.0:
+            ramp = servo.steps
+        elif ramp is None:
+            stalled += chunk if servo.progress == last else 0
+            last = servo.progress
+    return dict(status=servo.status, steps=servo.steps, ramp=ramp, ramp_stalled=stalled,
+                hold=servo.steps - (ramp or 0), seconds=round(time.time() - t0, 1))
+
+
+def main():
+    o = options()
+    from trueaniso import engines, triaxial
+    engines.set_threads(1)
+    states = {i: (b, sz) for i, b, sz in triaxial.table_c1_states()}
+    for i in o.ids:
+        if i not in states:
+            cli.fail("--ids: no Table C1 state %d" % i)
+    for i in o.ids:
+        for g in o.gains:
+            print(json.dumps(dict(state=i, gain=g, **split(o.specimen, *states[i], g, o.chunk))), flush=True)
+
+
+if __name__ == "__main__":
+    cli.guarded(main)
