@@ -10,7 +10,6 @@ follow tolerance behind it); the hold is the rest, until every stress is within 
 unbalanced force below 1e-4 for 200 steps. One JSON line per state and gain (docs/runs.md,
 "Where clump2's steps to a state go").
 """
-import inspect
 import json
 import os
 import sys
@@ -37,30 +36,24 @@ def options():
 
 
 def split(specimen_path, b, sigma_z, gain, chunk):
-    import numpy as np
-    from trueaniso import dem, engines, specimen_file, triaxial
-    defaults = {k: v.default for k, v in inspect.signature(triaxial.reach_state).parameters.items()}
+    """The state reached as a study reaches it (triaxial.reach_state), its servo watched every chunk."""
+    from trueaniso import specimen_file, triaxial
     s, _ = specimen_file.load(specimen_path)
-    servo = engines.TrueTriaxialServo()
-    servo.set_goal(b, sigma_z, defaults["p"])
-    servo.path_rate = defaults["path_rate"]
-    servo.gain = gain
-    servo.loading_friction = defaults["friction"]
-    d50 = 2.0 * float(np.median(s.radii))
-    servo.max_strain_rate = dem.strain_rate_for_inertial_number(defaults["inertial_number"], d50, s.density,
-                                                                defaults["p"])
-    chain = dem.Chain(s, damping=defaults["damping"], controllers=[servo])
-    servo.start(s)
-    t0, ramp, stalled, last = time.time(), None, 0, -1.0
-    while servo.status not in ("reached", "failed"):
-        chain.run(chunk)
-        if ramp is None and servo.progress >= 1.0:
-            ramp = servo.steps
-        elif ramp is None:
-            stalled += chunk if servo.progress == last else 0
-            last = servo.progress
-    return dict(status=servo.status, steps=servo.steps, ramp=ramp, ramp_stalled=stalled,
-                hold=servo.steps - (ramp or 0), seconds=round(time.time() - t0, 1))
+    seen = dict(ramp=None, stalled=0, last=-1.0)
+
+    def watch(servo):
+        if seen["ramp"] is None and servo.progress >= 1.0:
+            seen["ramp"] = servo.steps
+        elif seen["ramp"] is None:
+            seen["stalled"] += chunk if servo.progress == seen["last"] else 0
+            seen["last"] = servo.progress
+    t0 = time.time()
+    try:
+        info = triaxial.reach_state(s, b, sigma_z, gain=gain, chunk=chunk, progress=watch)
+    except triaxial.StateNotReached as exc:
+        return dict(status="failed", message=str(exc), seconds=round(time.time() - t0, 1))
+    return dict(status=info["status"], steps=info["steps"], ramp=seen["ramp"], ramp_stalled=seen["stalled"],
+                hold=info["steps"] - (seen["ramp"] or 0), seconds=round(time.time() - t0, 1))
 
 
 def main():

@@ -45,7 +45,8 @@ def _effective(function, options):
     """The keyword values a protocol really runs with: its defaults, overridden by options, so
     the metadata states the tolerances (stress, unbalanced force, steps) behind every row."""
     skip = {"scene", "hold", "axis", "sign", "gamma", "b", "sigma_z", "progress", "restrain_rotations",
-            "skip_detection", "damping", "chunk"}  # chunk: changes no result (trueaniso/progress.py)
+            "skip_detection", "damping", "chunk",  # chunk: changes no result (trueaniso/progress.py)
+            "gain"}  # the servo's gain: no study sets it (the engine's 0.01); bench_state_split.py varies it
     out = {k: p.default for k, p in inspect.signature(function).parameters.items()
            if p.default is not inspect.Parameter.empty and k not in skip}
     out.update(options or {})

@@ -119,7 +119,8 @@ def set_rolling(scene, stiffness, friction):
 def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0,
                 unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
                 stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
-                control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0):
+                control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0,
+                gain=None):
     """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
 
     Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
@@ -129,6 +130,8 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     non-zero `shear` is then refused). rolling_stiffness, rolling_friction: the optional rolling
     resistance of the contact law (beta, eta_r; docs/rolling.md), set on the scene for the loading
     and kept in its checkpoint, so its probes run with it too; 0, 0 (the paper) turns it off.
+    gain: the servo's (the fraction of the stress error closed a step; None: the engine's 0.01, every
+    study's; bench_state_split.py compares others).
     Raises StateNotReached if the specimen cannot get there: it
     stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
     strains beyond `max_strain`, or runs `max_steps`.
@@ -141,6 +144,8 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     servo.shear_goal = np.asarray(shear, dtype=float)
     servo.validate()  # shear goals on a path that holds the shear strains: refused before any work
     servo.path_rate = path_rate
+    if gain is not None:
+        servo.gain = gain
     servo.stress_tolerance = tolerance
     servo.unbalanced_tolerance = unbalanced
     servo.max_strain = max_strain
