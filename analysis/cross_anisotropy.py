@@ -40,6 +40,12 @@ def cross_anisotropic_moduli(E, G, nu=None):
     return out
 
 
+# sigma_x and sigma_y of a cross-anisotropic state are one horizontal stress: the servo holds each
+# within 100 Pa of 100 kPa (0.1 %); 1 % leaves room for a held state's drift and refuses any Table C1
+# state with b between 0 and 1 (their horizontal stresses differ by 4 % or more).
+HORIZONTAL_TOLERANCE = 0.01
+
+
 def states(path):
     """[{state, sigma_v, sigma_h, measures...}] of the states with all six probes, in file order."""
     rows = read_probes(path, ("state", "probe", "E", "G", "sigma_x", "sigma_y", "sigma_z", "nu_1", "nu_2",
@@ -58,6 +64,13 @@ def states(path):
             for k in ("nu_1", "nu_2"):
                 nu[probes[a][k + "_name"][3:]] = number(probes[a], k, path)
         r = probes["z"]
+        sx, sy = number(r, "sigma_x", path), number(r, "sigma_y", path)
+        if abs(sx - sy) > HORIZONTAL_TOLERANCE * 0.5 * abs(sx + sy):
+            # A true-triaxial state (21: 60 and 100 kPa) was shown as Fig. 16 with sigma_h their mean
+            # (an outside try): its x and y are not one horizontal direction.
+            raise ResultsError("%s: state %s is not cross-anisotropic: sigma_x %.1f and sigma_y %.1f kPa differ (Fig. 16 "
+                               "needs sigma_x = sigma_y: run_states.py --path cross-anisotropic)"
+                               % (path, sid, sx / 1e3, sy / 1e3))
         m = cross_anisotropic_moduli(E, G, nu)
         m.update(state=sid, sigma_v=number(r, "sigma_z", path),
                  sigma_h=0.5 * (number(r, "sigma_x", path) + number(r, "sigma_y", path)))

@@ -141,3 +141,26 @@ def test_outputs_go_where_asked_or_are_refused_first(tmp_path):
                               capture_output=True, text=True, cwd=REPO, timeout=120)
         assert proc.returncode == 2 and proc.stdout == "", proc.stderr
         assert proc.stderr.startswith("error: %s" % option) and len(proc.stderr.splitlines()) == 1, proc.stderr
+
+
+def test_a_state_with_two_horizontal_stresses_is_not_fig16(tmp_path):
+    """A true-triaxial state (21: sigma_x 100, sigma_y 60 kPa) probed with the six probes was shown
+    as Fig. 16, its sigma_h the mean of the two (an outside try). Refused, naming the state."""
+    import csv as _csv
+    from analysis import cross_anisotropy
+    from analysis.results import ResultsError
+    src = os.path.join(REPO, "docs", "data", "fig16-spheres-4000-s1", "probes.csv")
+    with open(src, newline="") as f:
+        rows = list(_csv.DictReader(f))
+    first = rows[0]["state"]
+    for r in rows:
+        if r["state"] == first:
+            r["sigma_y"] = str(0.6 * float(r["sigma_x"]))
+    path = tmp_path / "probes.csv"
+    with open(path, "w", newline="") as f:
+        w = _csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    with pytest.raises(ResultsError, match="state %s is not cross-anisotropic" % first):
+        cross_anisotropy.states(str(path))
+    assert len(cross_anisotropy.states(src)) >= 3  # the real study passes
