@@ -25,13 +25,21 @@ def options():
     p.add_argument("--specimen", required=True, help="specimen file (.npz)")
     p.add_argument("--ids", default="2,6,10,14,18,22", help="Table C1 states by number")
     p.add_argument("--gains", default="0.01,0.03", help="servo gains (fraction of the stress error closed a step)")
-    p.add_argument("--chunk", type=cli.at_least(1), default=500, help="steps between looks at the servo")
+    p.add_argument("--chunk", type=cli.at_least(1), default=500,
+                   help="steps between looks at the servo: the ramp's end and its stalls are counted to this "
+                        "many steps (the state's total is exact)")
     o = cli.parse(p)
     try:
         o.gains = [float(g) for g in o.gains.split(",")]
         o.ids = [int(i) for i in o.ids.split(",")]
     except ValueError:
         cli.fail("--gains and --ids take numbers separated by commas")
+    # Every value checked before the first state runs (a bad second gain failed after the first's work).
+    bad = [g for g in o.gains if not 0 < g <= 1]  # the servo's range (CellServoLaw); nan fails too
+    if bad:
+        cli.fail("--gains: %s not in (0, 1] (the fraction of the stress error closed a step)" % bad[0])
+    if len(set(o.ids)) != len(o.ids) or len(set(o.gains)) != len(o.gains):
+        cli.fail("--ids and --gains name each value once")
     return o
 
 

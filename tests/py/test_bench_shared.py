@@ -65,5 +65,10 @@ def test_bench_state_split_on_the_isotropic_state(specimen_100):
     assert proc.returncode == 0, proc.stderr
     r = json.loads(proc.stdout.strip().splitlines()[-1])
     assert r["status"] == "reached" and r["ramp"] is not None and r["ramp"] + r["hold"] == r["steps"]
-    one_line_error(run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100,
-                              "--ids", "40", timeout=60), "no Table C1 state 40")
+    for args, words in ((["--ids", "40"], "no Table C1 state 40"),
+                        # before: the first gain's state ran, then the second was refused (a second outside try)
+                        (["--ids", "1", "--gains", "0.03,5"], "--gains: 5.0 not in (0, 1]"),
+                        (["--ids", "1,1"], "name each value once")):
+        proc = run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100, *args, timeout=60)
+        one_line_error(proc, words)
+        assert proc.stdout == ""
