@@ -77,7 +77,11 @@ def _check_apart(s, ids):
     and the stress read NaN until specimen_file.save refused 'non-finite values in c_normal' (an
     outside try). Refused here, naming them."""
     c = s.contact_arrays()
-    bad = np.flatnonzero(~np.isfinite(c["normal"]).all(axis=1))
+    apart = ~np.isfinite(c["normal"]).all(axis=1)
+    if not s.has_clumps:  # a sphere on another's image (a cell vector away) has a round-off branch, not NaN
+        touching = c["normal_force"] > 0
+        apart |= touching & (np.linalg.norm(c["branch"], axis=1) < 1e-9 * float(np.max(s.radii)))
+    bad = np.flatnonzero(apart)
     if bad.size:
         k = int(bad[0])
         raise BridgeError("bodies #%d and #%d sit at one point (their spheres' centres coincide): a contact "
@@ -185,6 +189,12 @@ def _spheres_from_yade(O, bodies, import_contacts):
         raise BridgeError("body #%d has position %s and radius %g: not finite, or not > 0 (%d such bodies)"
                           % (b.id, tuple(b.state.pos), b.shape.radius, bad.size))
     s.add_spheres(pos, radii)
+    motion = np.array([[*b.state.vel, *b.state.angVel] for b in spheres])
+    bad = np.flatnonzero(~np.isfinite(motion).all(axis=1))
+    if bad.size:  # before: imported, then specimen_file.save refused 'non-finite values in velocities'
+        b = spheres[int(bad[0])]
+        raise BridgeError("body #%d has velocity %s and angular velocity %s: not finite (%d such bodies)"
+                          % (b.id, tuple(b.state.vel), tuple(b.state.angVel), bad.size))
     _check_homo_deform(O)
     grad = _current_velocity_gradient(O)
     vel = np.array([[b.state.vel[k] for k in range(3)] for b in spheres])
@@ -219,7 +229,11 @@ def _shared_material(spheres):
         if type(m).__name__ != "FrictMat":
             raise BridgeError("body %d has a %s material; the bridge converts FrictMat (young, poisson, density, "
                               "frictionAngle) to the paper's Hertz-Mindlin law only" % (b.id, type(m).__name__))
-        values.add(tuple(float(getattr(m, k)) for k in MATERIAL_FIELDS))
+        value = tuple(float(getattr(m, k)) for k in MATERIAL_FIELDS)
+        if not all(math.isfinite(v) for v in value):  # NaN != NaN: every sphere counted as its own material
+            raise BridgeError("body %d's FrictMat has %s: not finite" % (b.id, ", ".join(
+                "%s %g" % (k, v) for k, v in zip(MATERIAL_FIELDS, value) if not math.isfinite(v))))
+        values.add(value)
     if len(values) != 1:
         raise BridgeError("all spheres must share one material (young, poisson, density, frictionAngle); "
                           "this scene has %d different ones" % len(values))
@@ -272,6 +286,11 @@ def write_to_yade(scene, O=None, ids=None):
     ids = ids if ids is not None else list(range(scene.num_bodies))
     if len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
+    missing = [i for i in ids if not 0 <= i < len(O.bodies) or O.bodies[i] is None]
+    if missing:  # an IndexError ('Body id out of range') from deep inside before (a second outside try)
+        raise BridgeError("write_to_yade writes into the YADE bodies the scene came from; O has no body #%d (%d of "
+                          "the %d missing): build the scene in YADE with yade_scene_from(scene)"
+                          % (missing[0], len(missing), len(ids)))
     current = _current_velocity_gradient(O)
     before = _interaction_images(O)
     shift = nearest_image_shifts(O, ids, scene.positions, scene.cell)

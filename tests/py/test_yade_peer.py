@@ -177,6 +177,10 @@ def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json,
     assert "bodies #4 and #" in refusals["coincident"] and "one point" in refusals["coincident"]
     assert "young 0" in refusals["young_zero"] and "shear modulus must be > 0" in refusals["young_zero"]
     assert refusals["nan_position"].startswith("body #6 has position (nan")
+    assert "young nan: not finite" in refusals["nan_young"]
+    assert refusals["nan_velocity"].startswith("body #7 has velocity (nan")
+    assert "bodies #4 and #" in refusals["on_an_image"] and "one point" in refusals["on_an_image"]
+    assert "O has no body #" in r["write_missing_bodies"]
     # A second outside try: scene_from_yade (which now evaluates, so wraps bodies into the cell)
     # then write_to_yade lost 20-50 % of YADE's contacts: the interactions kept their old images.
     assert r["wrapped_on_import"] > 0

@@ -105,10 +105,25 @@ def nan_position():
     O.bodies[6].state.pos = Vector3(float("nan"), 0, 0)
 
 
+def nan_young():  # NaN != NaN: each sphere was counted as its own material
+    for b in O.bodies:
+        b.material.young = float("nan")
+
+
+def nan_velocity():
+    O.bodies[7].state.vel = Vector3(float("nan"), 0, 0)
+
+
+def on_an_image():  # a sphere on another's centre plus a cell vector: a round-off branch, not NaN
+    b = O.bodies[4]
+    O.bodies.append(utils.sphere(b.state.pos + O.cell.hSize.col(0), b.shape.radius, material=b.material))
+
+
 res["refusals"] = {name: refusal(edit) for name, edit in
                    (("viscel", viscel), ("linear", linear), ("blocked", blocked), ("fixed", fixed),
                     ("damped", damped), ("singular_trsf", singular_trsf), ("wall", wall),
-                    ("coincident", coincident), ("young_zero", young_zero), ("nan_position", nan_position))}
+                    ("coincident", coincident), ("young_zero", young_zero), ("nan_position", nan_position),
+                    ("nan_young", nan_young), ("nan_velocity", nan_velocity), ("on_an_image", on_an_image))}
 
 
 # A scene YADE has moved leaves bodies outside its cell; our import wraps them in. Written straight
@@ -188,6 +203,14 @@ try:
     res["linear_positions_only"] = True
 except yade_bridge.BridgeError as exc:
     res["linear_positions_only"] = str(exc)
+# write_to_yade into a periodic O without the scene's bodies: one BridgeError (an IndexError before).
+yade_bridge.yade_scene_from(ours, O, import_contacts=False)
+O.bodies.erase(len(O.bodies) - 1)
+try:
+    yade_bridge.write_to_yade(ours, O)
+    res["write_missing_bodies"] = None
+except yade_bridge.BridgeError as exc:
+    res["write_missing_bodies"] = str(exc)
 # write_to_yade into an O that is not periodic: one BridgeError (an AttributeError traceback before).
 O.reset()
 try:
