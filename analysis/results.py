@@ -59,13 +59,25 @@ def _check_rows(path, rows, columns):
                                "(a table appended twice?)" % (path, r.get("state"), r.get("probe"),
                                                              r.get("rotations") or "?", seen[key], line))
         seen[key] = line
-        modulus = "G" if r.get("probe") in SHEAR_PROBES else "E"
-        if modulus not in columns:
-            continue
-        value = number(r, modulus, path)
-        if not (math.isfinite(value) and value > 0):
-            raise ResultsError("%s: state %s probe %s has %s = %r, not a positive number (line %d)"
-                               % (path, r.get("state"), r.get("probe"), modulus, r[modulus], line))
+        shear = r.get("probe") in SHEAR_PROBES
+        modulus = "G" if shear else "E"
+        if modulus in columns:
+            try:
+                value = number(r, modulus, path)
+            except ResultsError as exc:
+                raise ResultsError("%s (line %d)" % (exc, line)) from None
+            if not (math.isfinite(value) and value > 0):
+                raise ResultsError("%s: state %s probe %s has %s = %r, not a positive number (line %d)"
+                                   % (path, r.get("state"), r.get("probe"), modulus, r[modulus], line))
+        for ratio in () if shear else ("nu_1", "nu_2"):  # a NaN Poisson's ratio passed every tool
+            if ratio in columns and r.get(ratio, "") != "":
+                try:
+                    ok = math.isfinite(float(r[ratio]))
+                except ValueError:
+                    ok = False
+                if not ok:
+                    raise ResultsError("%s: state %s probe %s has %s = %r, not a finite number (line %d)"
+                                       % (path, r.get("state"), r.get("probe"), ratio, r[ratio], line))
 
 
 def read_probes(path, need=("state", "probe", "E")):

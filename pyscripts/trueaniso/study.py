@@ -367,7 +367,7 @@ def _run_paths_on(executor, run, paths):
                 for row, columns in rows:
                     run.append(row, columns)
                 if rows:
-                    run.log("state %s: %d rows appended" % (path[k][0], len(rows)))
+                    run.log("state %s: %d row%s appended" % (path[k][0], len(rows), "" if len(rows) == 1 else "s"))
                 if failure:
                     failed.append(run.path_failed(path, failure))
                 elif k + 1 < len(path):

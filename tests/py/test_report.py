@@ -448,6 +448,8 @@ def _set_E(value):
     (_set_E("nan"), ["E = 'nan', not a positive number (line 3)"]),
     (_set_E("-1e8"), ["E = '-1e8', not a positive number"]),
     (_set_E("inf"), ["not a positive number"]),
+    (_set_E(""), ["E = '', not a number (line 3)"]),  # before: no line named (a second outside try)
+    (lambda rows: rows[2].__setitem__(rows[0].index("nu_1"), "nan"), ["nu_1 = 'nan', not a finite number (line 3)"]),
 ])
 def test_every_analysis_refuses_a_bad_row_the_same_way(tmp_path, edit, words):
     """The shared reader (analysis/results.py) refuses a table appended twice and a modulus that is
