@@ -245,6 +245,7 @@ def prepare(o, dist):
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)
     specimen_file.write_summary(o.out, meta)  # derived from the .npz; rewritten from it if lost
+    cli.work_done()
     checkpoints.remove()  # only now: the specimen is complete on disk
     if not o.quiet:
         print("saved %s in %.1f s" % (o.out, time.time() - t0))

@@ -247,6 +247,7 @@ def main(argv=None):
         atomic.write_json(os.path.join(o.out, "summary.json"), dict(
             specimen=st, states=len({r["state"] for r in rows}), probes=len(rows), statics=sres, K_G_fits=fits,
             zeta_contrast=contrast, report=os.path.relpath(report_path, o.out), wall_time=time.time() - t0))
+    cli.work_done()  # the rest is lines and YADE's O: a Ctrl-C now ends a finished run
     log("results: %s (probes.csv, figures/, summary.json) in %.0f s" % (o.out, time.time() - t0))
     log("report: %s" % report_path)
     if cli.in_yade():

@@ -348,14 +348,37 @@ def release_start_guard():
 
 
 _saved_work = None  # set by a resumable script once it knows where its work goes (saves_work_in)
+_work_complete = None  # ... and how to see that all of it is written (saves_work_in's complete)
+_done = False  # set by work_done()
 
 
-def saves_work_in(check):
+def saves_work_in(check, complete=None):
     """Tell guarded() how to see whether an interrupted run has anything to resume from: check()
     is True when a checkpoint or a finished row of this command's work is on disk. Without it, an
-    interruption before the first checkpoint promised a resume, and the rerun started over."""
-    global _saved_work
+    interruption before the first checkpoint promised a resume, and the rerun started over.
+    complete(), when given, is True once all of the command's work is written: a Ctrl-C then (in
+    the few milliseconds between the last line and the end of main) ends the run as finished."""
+    global _saved_work, _work_complete
     _saved_work = check
+    _work_complete = complete
+
+
+def work_done():
+    """The script's work is all written; what remains is its last lines and the exit. A Ctrl-C
+    from here on ends it as finished (status 0), not as interrupted (a second outside try: 130 and
+    'the same command resumes' for a run whose every row was written, 6 of 6 at zero delay)."""
+    global _done
+    _done = True
+    _finished()
+
+
+def _complete_already():
+    if _done:
+        return True
+    try:
+        return bool(_work_complete and _work_complete())
+    except Exception:  # cannot tell: interrupted, as before
+        return False
 
 
 def _interrupted_line(what="interrupted"):
@@ -412,6 +435,13 @@ def guarded(main, resumable=False):
         # engine); a traceback would hide the one line the user needs.
         fail(str(exc))
     except (KeyboardInterrupt, Terminated) as exc:
+        if _complete_already():  # the signal came after the last result was written: finished
+            _finished()
+            try:
+                sys.stdout.flush()
+            except OSError:
+                pass
+            os._exit(0)
         status = 128 + (signal.SIGTERM if isinstance(exc, Terminated) else signal.SIGINT)
         fail(_interrupted_line() if resumable else "interrupted", status)
     except BrokenPipeError:

@@ -80,6 +80,18 @@ def has_saved_work(out):
     return os.path.isdir(states) and any(n.endswith(".npz") and not n.startswith(".") for n in os.listdir(states))
 
 
+def has_rows(out, state_ids, probes):
+    """True when probes.csv in `out` holds a complete row of every state and probe asked for: the
+    run's work is all written (cli.guarded then takes a late Ctrl-C as the exit's, not the work's)."""
+    from . import results_csv
+    try:
+        rows = results_csv.read(os.path.join(out, CSV_NAME)).rows
+    except Exception:  # unreadable: not known to be complete
+        return False
+    have = {(r.get("state"), r.get("probe")) for r in rows}
+    return all((str(i), p) in have for i in state_ids for p in probes)
+
+
 def supersede(out, log=print):
     """--force-new: move everything of the old study into out/superseded/<time>/ (nothing is
     deleted); the caller holds the lock."""

@@ -318,6 +318,37 @@ print("exited as finished", flush=True)
 """
 
 
+SIGNAL_IN_MAIN = """
+import os, signal, sys, time
+sys.path.insert(0, %r)
+from trueaniso import cli
+def main():
+    cli.saves_work_in(lambda: True, complete=lambda: %s)
+    %s
+    print("last line", flush=True)
+    os.kill(os.getpid(), signal.SIGINT)  # the key pressed between the last line and the end of main
+    time.sleep(5)
+cli.guarded(main, resumable=True)
+"""
+
+
+@pytest.mark.parametrize("complete,mark,finished", [("True", "", True), ("False", "", False),
+                                                   ("False", "cli.work_done()", True)])
+def test_signal_between_the_last_line_and_the_end_of_main(tmp_path, complete, mark, finished):
+    """A Ctrl-C 0-5 ms after a run's last line, still inside main, said 'interrupted; the same
+    command resumes' with status 130 for a run whose every row was written (a second outside try,
+    6 of 6). A script that can tell its work is complete (saves_work_in's complete, or work_done)
+    now ends as finished; one that is not complete still says it resumes."""
+    script = tmp_path / "late.py"
+    script.write_text(SIGNAL_IN_MAIN % (SCRIPTS, complete, mark))
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert "last line" in proc.stdout
+    if finished:
+        assert proc.returncode == 0 and proc.stderr == "", (proc.returncode, proc.stderr)
+    else:
+        assert proc.returncode == 130 and "interrupted; the same command resumes" in proc.stderr, proc.stderr
+
+
 @pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
 @pytest.mark.parametrize("runner", ["python3", "yade-double"])
 def test_signal_after_the_work_is_done_keeps_status_0(tmp_path, runner, sig):
