@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from . import chain, figures, hyperelastic, zeta_contrast
-from .results import ResultsError, read_metadata, read_probes, said
+from .results import ResultsError, read_metadata, read_probes, said, table_path
 
 AXES = "xyz"
 DEFAULT_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)  # the paper's particles (section 2.1)
@@ -281,7 +281,7 @@ def fig16_rows(source):
     from . import cross_anisotropy
     if source.endswith(".json"):
         return _json_list(source, FIG16_KEYS, "the output of analysis/cross_anisotropy.py --out")
-    return cross_anisotropy.states(os.path.join(source, "probes.csv") if os.path.isdir(source) else source)
+    return cross_anisotropy.states(source)  # a study directory or its probes.csv (results.table_path)
 
 
 def clump_entries(source):
@@ -356,7 +356,7 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     a cross-anisotropic study (or its JSON) for the Fig. 16 section; `clumps`: the JSON of
     anisotropy_clumps.py for the clump section; `statics`: solve Table B1's states from the
     study's checkpoints first (solve_statics)."""
-    csv_path = os.path.join(results, "probes.csv") if os.path.isdir(results) else results
+    csv_path = table_path(results)
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     # A study's probes.csv given as the file: its directory's metadata (assembly, material, the
     # states asked) still applies. Before, clump1's table so given was reported as spheres against
