@@ -16,10 +16,10 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from analysis.results import ResultsError, number, read_probes  # noqa: E402
+from analysis.results import SHEAR_PROBES, ResultsError, number, read_probes  # noqa: E402
 
 NORMAL = ("x", "y", "z")
-SHEAR = ("yz", "xz", "xy")
+SHEAR = SHEAR_PROBES
 
 
 def cross_anisotropic_moduli(E, G, nu=None):

@@ -10,7 +10,7 @@ import collections
 
 import numpy as np
 
-from .results import ResultsError, read_probes
+from .results import SHEAR_PROBES, ResultsError, read_probes
 from trueaniso import fabric, zeta  # noqa: E402 - results.py put pyscripts/ on the path
 
 AXES = "xyz"
@@ -26,7 +26,7 @@ def read_probe_table(path, complete_only=False):
     rows = read_probes(path, NEEDED)
     states = collections.OrderedDict()
     for r in rows:
-        if r["probe"] in ("yz", "xz", "xy"):  # shear probes (G_ij) take no part in the E_i contrast
+        if r["probe"] in SHEAR_PROBES:  # shear probes (G_ij) take no part in the E_i contrast
             continue
         per_axis = states.setdefault((r["rotations"], r["state"]), {})
         if r["probe"] not in ("x", "y", "z") or r["probe"] in per_axis:

@@ -173,13 +173,7 @@ def non_negative(text):
 
 def count(text):
     """An integer >= 0 (seeds, thread counts)."""
-    try:
-        k = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError("%r is not an integer" % text) from None
-    if k < 0:
-        raise argparse.ArgumentTypeError("%r is not >= 0" % text)
-    return k
+    return at_least(0)(text)
 
 
 def at_least(least, why=""):
