@@ -192,9 +192,18 @@ def probe_axes(text, path):
             names = names[:1]
     else:
         names = list(text)
-    if not names or any(n not in triaxial.AXES for n in names) or len(set(names)) != len(names):
-        raise cli.InputError("--probes must name each axis at most once: letters of x, y, z (e.g. zxy), or names "
-                             "separated by commas among x, y, z, yz, xz, xy (got %r)" % text)
+    unknown = [n for n in names if n not in triaxial.AXES]
+    if not names or unknown:
+        # 'yx,' is not a repeat of anything: it is no name (an outside try), so it is named as such.
+        named = [repr(n) for n in unknown if n]
+        what = ("%s %s no probe's name" % (", ".join(named), "is" if len(named) == 1 else "are") if named
+                else "an empty item" if names else "no probe given")
+        raise cli.InputError("--probes %r: %s. Give letters of x, y, z (e.g. zxy), or names separated by commas "
+                             "among x, y, z, yz, xz, xy" % (text, what))
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise cli.InputError("--probes %r names %s more than once; each probe runs once a state"
+                             % (text, " and ".join(repeated)))
     return names
 
 

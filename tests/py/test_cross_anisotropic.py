@@ -103,8 +103,11 @@ def test_rerun_on_another_path_is_refused(study, specimen_100):
     # 0.01 Pa apart: one name (ids keep 0.1 Pa), and the message shows both values
     (["--path", "cross-anisotropic", "--sigma-v", "100050,100049.99"], ["sv100.05 is given twice (100050, 100049.99 Pa"]),
     (["--path", "cross-anisotropic", "--sigma-v", "eighty"], ["expected stresses in Pa"]),
-    (["--path", "cross-anisotropic", "--probes", "z,yz,yz"], ["--probes must name each axis at most once"]),
-    (["--ids", "1", "--probes", "z,zz"], ["--probes must name each axis at most once"]),
+    (["--path", "cross-anisotropic", "--probes", "z,yz,yz"], ["--probes 'z,yz,yz' names yz more than once"]),
+    (["--ids", "1", "--probes", "z,zz"], ["--probes 'z,zz': 'zz' is no probe's name"]),
+    # 'yx,' repeats nothing: it was called a repeat (an outside try)
+    (["--ids", "1", "--probes", "yx,"], ["--probes 'yx,': 'yx' is no probe's name", "yz, xz, xy"]),
+    (["--ids", "1", "--probes", "z,,x"], ["--probes 'z,,x': an empty item"]),
     (["--path", "diagonal", "--ids", "1"], ["--path", "invalid choice"]),
 ])
 def test_bad_path_input_is_refused_before_work(specimen_100, tmp_path, args, words):
