@@ -47,13 +47,23 @@ def table_path(path):
     return path
 
 
+def _state_key(text):
+    """A state's text as one key: a Table C1 number written '1.0' or ' 1' (a table edited by hand or
+    by a spreadsheet) is state 1, so its second row is found as a repeat (an outside try)."""
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        return text
+    return str(int(value)) if value.is_integer() else text
+
+
 def _check_rows(path, rows, columns):
     """One row a probe, and its modulus a positive number: a table appended twice was analysed as
     it came, and a NaN or negative E changed the fits and the reversals without a word (an outside
     try); the report alone refused them, and named no row."""
     seen = {}
     for line, r in enumerate(rows, start=2):  # line 1 is the header
-        key = (r.get("rotations"), r.get("state"), r.get("probe"), r.get("sign"))
+        key = (r.get("rotations"), _state_key(r.get("state")), r.get("probe"), r.get("sign"))
         if key in seen:
             raise ResultsError("%s: state %s probe %s (rotations %s) is in lines %d and %d: one row a probe "
                                "(a table appended twice?)" % (path, r.get("state"), r.get("probe"),

@@ -437,6 +437,14 @@ def _edited(tmp_path, edit):
     return str(path)
 
 
+def _restate(row, state):
+    def edit(rows):
+        copy = list(rows[row])
+        copy[rows[0].index("state")] = state
+        rows.append(copy)
+    return edit
+
+
 def _set_E(value):
     def edit(rows):
         rows[2][rows[0].index("E")] = value
@@ -445,6 +453,8 @@ def _set_E(value):
 
 @pytest.mark.parametrize("edit,words", [
     (lambda rows: rows.extend(rows[1:3]), ["state 1 probe z", "lines 2 and 8", "one row a probe"]),
+    # the same state written '1.0' (by hand, or a spreadsheet) passed as another (a second outside try)
+    (_restate(1, "1.0"), ["state 1.0 probe z", "lines 2 and 8", "one row a probe"]),
     (_set_E("nan"), ["E = 'nan', not a positive number (line 3)"]),
     (_set_E("-1e8"), ["E = '-1e8', not a positive number"]),
     (_set_E("inf"), ["not a positive number"]),
