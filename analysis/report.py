@@ -184,11 +184,18 @@ def _study_line(results, rows=()):
                else "states reached at the default 2 Pa per step" if float(rate) == 2.0
                else "states reached at %s Pa per step" % rate)
     seed = spec.get("seed")
-    return ("Study: %s %s (%s), e = %s and Zm = %s at the isotropic state%s; %s path, %s; %s."
+    # The probes' settings: a study run with --skip-detection or rotations restrained read like any
+    # other in its report (a second outside try).
+    probe = fp.get("probe") or {}
+    probes = "" if not probe else "; probes of strain %s, rotations %s, contact detection %s" % (
+        _fmt(probe.get("gamma"), "%g"),
+        probe.get("rotations", "?") + (" (--rotations restrained)" if probe.get("rotations") == "restrained" else ""),
+        probe.get("detection", "?") + (" (--skip-detection)" if probe.get("detection") == "off" else ""))
+    return ("Study: %s %s (%s), e = %s and Zm = %s at the isotropic state%s; %s path, %s; %s%s."
             % (summ.get("n", "?"), fp.get("assembly", "sphere") + "s" if fp.get("assembly", "sphere") == "sphere"
                else fp.get("assembly"), "seed not recorded" if seed is None else "seed %s" % seed,
                _fmt(summ.get("void_ratio"), "%.4f"), _fmt(summ.get("Zm"), "%.3f"), where,
-               fp.get("path", "true-triaxial"), reached, law))
+               fp.get("path", "true-triaxial"), reached, law, probes))
 
 
 def _states(n):

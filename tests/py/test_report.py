@@ -382,6 +382,22 @@ def test_the_study_line_names_the_path_rate(small_table, tmp_path):
         assert words in open(path).read()
 
 
+def test_the_study_line_names_the_probe_settings(small_table, tmp_path):
+    """A study probed with --skip-detection or rotations restrained read like any other in its
+    report (a second outside try); the probes' strain, rotations and detection are said."""
+    study = tmp_path / "study"
+    study.mkdir()
+    shutil.copy(small_table, study / "probes.csv")
+    for probe, words in ((dict(gamma=1e-6, rotations="free", detection="on"),
+                          "probes of strain 1e-06, rotations free, contact detection on."),
+                         (dict(gamma=2e-6, rotations="restrained", detection="off"),
+                          "probes of strain 2e-06, rotations restrained (--rotations restrained), "
+                          "contact detection off (--skip-detection).")):
+        (study / "metadata.json").write_text(json.dumps(dict(fingerprint=dict(state={}, probe=probe))))
+        path, _ = report.build(str(study), str(tmp_path / ("rep" + probe["detection"])), log=lambda m: None)
+        assert words in open(path).read()
+
+
 def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path):
     """clump2 (docs/data/clump2-4000-s1): the contrast fit stops at zeta_v = 0 and every state's own
     fit at 0. Before, the report printed 'zeta_h = 0.051, zeta_v = 0.000 (fitted)' like a result and
