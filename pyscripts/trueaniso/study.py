@@ -311,8 +311,14 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         run = _Run(specimen_path, spec_meta, out, fp, axes, csv_path, table, log, progress_every, path,
                    dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
                         damping=damping, **(probe_options or {})),
-                   dict(damping=damping, **(state_options or {})), keep=checkpoints)
-        ordered = [path for _, path in sorted(triaxial.paths(states).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
+                   dict(damping=damping, **(state_options or {})), keep=checkpoints, asked=ids)
+        # The paths run over the states asked and the states of earlier runs whose checkpoints are
+        # here: a state is reached from the nearest one before it on its path, so adding states to a
+        # study in path order gives the rows of asking them all at once. Before, the paths held only
+        # the states asked: --ids 1,2,3 then --ids 5 reached 5 from the specimen, not from 3 (an
+        # outside try: 234 cells differed from one run's, E_z by 3e-6).
+        walk = states + held_states(out, previous, ids)
+        ordered = [path for _, path in sorted(triaxial.paths(walk).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
         if not any(run.needs(sid) for path in ordered for sid, _, _ in path):  # before, a rerun said nothing of it
             log("%s: the rows of every state asked for are already there; nothing to do" % out)
         else:  # a run that does nothing leaves metadata.json as it was (before, it added itself to the runs)
@@ -339,6 +345,18 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
             raise triaxial.StateNotReached("%d loading path%s stopped (the rows of every other state are written): %s"
                                            % (len(failed), "" if len(failed) == 1 else "s", "; ".join(failed)))
         return results_csv.read(csv_path).rows
+
+
+def held_states(out, previous, asked):
+    """[(id, b, sigma_z)] of the states earlier runs of the study in `out` defined (its
+    metadata.json, `previous`), not among `asked`, whose checkpoints are there: where a path of
+    this run continues from."""
+    asked = {str(i) for i in asked}
+    held = []
+    for sid, d in ((previous or {}).get("states") or {}).items():
+        if sid not in asked and os.path.exists(os.path.join(out, "states", "%s.npz" % sid)):
+            held.append((int(sid) if sid.isdigit() else sid, float(d["b"]), float(d["sigma_z"])))
+    return held
 
 
 def _run_paths_on(executor, run, paths):
@@ -387,7 +405,7 @@ def _state_worker(job):
     run = _Run(job["specimen_path"], job["spec_meta"], job["out"], job["fp"], job["axes"], None,
                results_csv.Table(None, job["columns"], [], None), say, job["every"],
                job["loading"], job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)),
-               keep=job["keep"])
+               keep=job["keep"], asked=job["asked"])
     run.done = set(job["done"])
     try:
         run.step(job["path"], job["k"])
@@ -400,7 +418,7 @@ class _Run:
     """One run's walk over the loading paths (the caller holds the lock)."""
 
     def __init__(self, specimen_path, spec_meta, out, fp, axes, csv_path, table, log, every, path, probe_kw, state_kw,
-                 sink=None, keep=()):
+                 sink=None, keep=(), asked=None):
         self.specimen_path, self.spec_meta, self.out, self.fp, self.loading = specimen_path, spec_meta, out, fp, path
         self.axes, self.csv_path, self.log, self.every = axes, csv_path, log, every
         self.columns = list(table.columns)
@@ -408,12 +426,15 @@ class _Run:
         self.probe_kw, self.state_kw = probe_kw, state_kw
         self.sink = sink or self.append
         self.keep = {str(k) for k in keep}
+        # The states this run probes (None: every state on its paths); the others are where it starts.
+        self.asked = None if asked is None else {str(k) for k in asked}
 
     def job(self, path, k):
         """What a worker needs to do state k of `path` as this run would (picklable)."""
         return dict(specimen_path=self.specimen_path, spec_meta=self.spec_meta, out=self.out, fp=self.fp,
                     axes=self.axes, columns=self.columns, every=self.every, loading=self.loading, probe_kw=self.probe_kw,
-                    state_kw=self.state_kw, done=sorted(self.done), path=path, k=k, keep=sorted(self.keep))
+                    state_kw=self.state_kw, done=sorted(self.done), path=path, k=k, keep=sorted(self.keep),
+                    asked=None if self.asked is None else sorted(self.asked))
 
     def append(self, row, columns):
         """A row into probes.csv (this process holds the lock)."""
@@ -430,6 +451,8 @@ class _Run:
         return os.path.join(self.out, "states", "%s.npz" % sid)
 
     def wanted(self, sid):
+        if self.asked is not None and str(sid) not in self.asked:  # an earlier run's state: a start only
+            return []
         return [a for a in self.axes if (str(sid), a) not in self.done]
 
     def path_failed(self, path, exc):

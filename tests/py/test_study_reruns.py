@@ -68,6 +68,35 @@ def test_resume_from_checkpoints_is_bit_identical(base, specimen_100, tmp_path):
     assert {r["state"]: r["state_from"] for r in rows(out)} == {"1": "specimen", "2": "specimen", "3": "2"}
 
 
+def test_states_added_later_start_from_the_study_s_checkpoints(base, specimen_100, tmp_path):
+    """A state added by a later run is reached from the nearest state before it on its path that
+    the study holds, so a study grown in path order has the rows of one run. Before, the paths
+    held only the states asked: --ids 1,2,3 then --ids 5 reached 5 from the specimen, not from 3,
+    unlike --ids 1,2,3,5 (an outside try: 234 cells differed, E_z by 3e-6). Serially and on an
+    executor's worker processes, as under --mpi."""
+    import concurrent.futures
+    from trueaniso import study
+    whole = tmp_path / "whole"
+    assert states(specimen_100, whole, "--ids", "1,2,3,5", "--probes", "zx").returncode == 0
+    added = copy(base, tmp_path)
+    proc = states(specimen_100, added, "--ids", "5", "--probes", "zx")
+    assert proc.returncode == 0, proc.stderr
+    assert "state 5: b = 0.00, sigma_z = 140.0 kPa, from state 3" in proc.stdout
+    assert values(added) == values(whole)  # every digit of every non-time column, state_from 3 included
+    # on worker processes (the job carries which states are probed: states 1-3 are starts only)
+    pooled = tmp_path / "pooled"
+    shutil.copytree(base, pooled)
+    threads = study.engines.threads()
+    study.engines.set_threads(1)  # the study's count, as run_script's OMP_NUM_THREADS=1
+    try:
+        with concurrent.futures.ProcessPoolExecutor(1) as pool:
+            study.run_states(str(specimen_100), study.table_states([5]), str(pooled), probes="zx",
+                             log=lambda m: None, executor=pool)
+    finally:
+        study.engines.set_threads(threads)
+    assert values(pooled) == values(whole)
+
+
 def running_until_first_row(spec, out, *args):
     """run_states.py started in the background on one thread, handed back once its first row is in
     probes.csv (or it has ended, or 300 s have passed); its stderr is a pipe for the caller."""
