@@ -69,9 +69,12 @@ def add_threads_option(parser, study=False, continues="the study --out holds (a 
     names the work whose count it then takes."""
     from . import resources
     parser.add_argument("--threads", type=count, default=None if study else 0,
-                        help="OpenMP threads of the engines: 0 = all %d cores, at most %d (%d x the cores)%s"
+                        # 0 is OpenMP's own count: OMP_NUM_THREADS when set (the MPI recipe sets it to 1),
+                        # which the help said nothing of (an outside try: 'all cores' recorded 1)
+                        help="OpenMP threads of the engines: 0 = OpenMP's count (OMP_NUM_THREADS when set, else "
+                             "all %d cores; one a worker under --mpi), at most %d (%d x the cores)%s"
                              % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE,
-                                "; when not given: the count of %s, else all cores" % continues if study else ""))
+                                "; when not given: the count of %s, else 0" % continues if study else ""))
 
 
 def resolve_threads(o, study=True, preparation=None):

@@ -44,7 +44,7 @@ def max_threads():
 def check_threads(threads, option="--threads"):
     """0 (all cores) or 1..4 x cores; beyond, OpenMP only slows down and at ~1e5 threads crashes."""
     if threads < 0 or threads > max_threads():
-        raise InputError("%s %d: give 0 (all %d cores) or at most %d (%d x the cores; more threads only slow "
+        raise InputError("%s %d: give 0 (OpenMP's count: OMP_NUM_THREADS, else all %d cores) or at most %d (%d x the cores; more threads only slow "
                          "the contact loops down)" % (option, threads, cores(), max_threads(), THREADS_PER_CORE))
     return threads
 

@@ -205,6 +205,11 @@ def test_a_rerun_without_threads_continues_at_the_study_s_count(base, specimen_1
     assert json.loads((out / "metadata.json").read_text())["fingerprint"]["threads"] == 1
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", "--threads", "2")
     one_line_error(proc, "another study", "thread count", "--threads 1")
+    # --threads 0 is OpenMP's count, OMP_NUM_THREADS's when set: the refusal says where this run's
+    # came from (an outside try typed 0, read 'all cores' in the help, and was told '2 in this run')
+    proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", "--threads", "0",
+                  env=dict(OMP_NUM_THREADS="2"))
+    one_line_error(proc, "thread count (threads) is 1 there, 2 in this run (OMP_NUM_THREADS=2)", "--threads 1")
 
 
 def test_other_specimen_is_refused(base, specimen_100, tmp_path):
