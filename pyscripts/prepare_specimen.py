@@ -33,8 +33,6 @@ except ImportError as exc:  # the compiled module not built (or a Debian package
     sys.stderr.write("error: %s\n" % exc)
     os._exit(2)
 
-ASSEMBLIES = ("sphere", "clump1", "clump2")
-ALIASES = {"spheres": "sphere"}
 # Defaults of the options that depend on the assembly (the clumps' are their recipes').
 SPHERE_DEFAULTS = dict(d50=0.195e-3, cu=1.25, mu_prep=0.015, phi_cell=0.60)
 
@@ -48,7 +46,8 @@ def assembly_defaults(assembly):
 
 def options(argv=None):
     p = cli.Parser(description=cli.description(__doc__))
-    p.add_argument("--assembly", default="sphere", help="particle type: %s (docs/specimens.md)" % ", ".join(ASSEMBLIES))
+    p.add_argument("--assembly", type=cli.assembly, default="sphere",
+                   help="particle type: %s (docs/specimens.md)" % ", ".join(cli.ASSEMBLIES))
     p.add_argument("--n", type=cli.at_least(1, "an empty cell cannot be consolidated"), default=1000,
                    help="number of particles")
     p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
@@ -82,9 +81,6 @@ def options(argv=None):
 
 
 def validate(o):
-    o.assembly = ALIASES.get(o.assembly, o.assembly)
-    if o.assembly not in ASSEMBLIES:
-        raise cli.InputError("unknown assembly %r (available: %s)" % (o.assembly, ", ".join(ASSEMBLIES)))
     for k, v in assembly_defaults(o.assembly).items():
         if getattr(o, k) is None:
             setattr(o, k, v)

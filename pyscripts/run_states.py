@@ -37,7 +37,7 @@ except ImportError as exc:  # the compiled module not built (or a Debian package
 def parser():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--specimen", required=True, help="specimen file from prepare_specimen.py (.npz)")
-    p.add_argument("--assembly", choices=("sphere", "clump1", "clump2"),
+    p.add_argument("--assembly", type=cli.assembly,
                    help="refuse a specimen of another assembly (the specimen file says which it is)")
     p.add_argument("--states", help="b:sigma_z pairs, sigma_z in Pa, comma separated (e.g. 0.5:140e3,0:60e3); "
                                     "a state's id is its Table C1 number, else b<b>_sz<sigma_z>")

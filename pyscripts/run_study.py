@@ -39,13 +39,13 @@ except ImportError as exc:  # the compiled module not built (or a Debian package
     os._exit(2)
 
 DEFAULT_IDS = "1,5,9,13,17,21,25,35,39"
-ASSEMBLIES = ("sphere", "clump1", "clump2")
 SPECIMEN = "specimen.npz"
 
 
 def parser():
     p = cli.Parser(description=cli.description(__doc__))
-    p.add_argument("--assembly", default="sphere", help="sphere (default), clump1 or clump2 (docs/specimens.md)")
+    p.add_argument("--assembly", type=cli.assembly, default="sphere",
+                   help="sphere (default), clump1 or clump2 (docs/specimens.md)")
     p.add_argument("--n", type=cli.at_least(100, "a study specimen"), default=1000,
                    help="particles in the specimen (>= 100)")
     p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
@@ -72,9 +72,6 @@ def validate(o):
     # A study, or a preparation for one killed before the study began, goes on at its own count.
     cli.resolve_threads(o, preparation=prep_checkpoint.path_for(os.path.join(o.out, SPECIMEN)))
     cli.resolve_path_rate(o)
-    o.assembly = {"spheres": "sphere"}.get(o.assembly, o.assembly)
-    if o.assembly not in ASSEMBLIES:
-        raise cli.InputError("unknown assembly %r (available: %s)" % (o.assembly, ", ".join(ASSEMBLIES)))
     if o.assembly != "sphere":
         try:
             clump_specimen.check_count(o.assembly, o.n)
