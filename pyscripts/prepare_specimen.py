@@ -142,6 +142,7 @@ def validate(o):
 def main():
     o = options()
     dist = validate(o)
+    o.given = dict(threads=o.threads, checkpoint_every=o.checkpoint_every)  # before a resumed preparation's
     cli.saves_work_in(lambda: os.path.exists(prep_checkpoint.path_for(o.out)))
     directory, name = os.path.split(os.path.abspath(o.out))
     # One preparation per output at a time; under the lock, the temporary files of an
@@ -179,6 +180,26 @@ def differences(o, meta):
     return study_dir.said(study_dir.differences({k: have[k] for k in want}, want, rel_tol=1e-9))
 
 
+def _kept_with(o, meta):
+    """What the kept specimen was made with that this run asked otherwise, none of which changes
+    the recipe but each the last bits: a --threads or --checkpoint-every given, and the code. It
+    was kept without a word (an outside try asked for --checkpoint-every 0 and got the old file)."""
+    p, other = meta.get("parameters", {}), []
+    threads = o.given["threads"] if o.given["threads"] != 0 else engines.threads()
+    if o.given["threads"] is not None and p.get("threads") is not None and p["threads"] != threads:
+        other.append("it was made at %d engine thread%s, not %d" % (p["threads"], "" if p["threads"] == 1 else "s",
+                                                                     threads))
+    every = o.given["checkpoint_every"]
+    if every is not None and p.get("checkpoint_every") is not None and p["checkpoint_every"] != every:
+        def said(k):
+            return "without checkpoints" if k == 0 else "with checkpoints every %d steps" % k
+        other.append("%s, not %s" % (said(p["checkpoint_every"]), said(every)))
+    code = (meta.get("versions") or {}).get("code")
+    if code and code != provenance.code_version():
+        other.append("by code %s, not this %s" % (code, provenance.code_version()))
+    return "; note: %s, so its last bits are not what this run would give" % ", ".join(other) if other else ""
+
+
 def prepare(o, dist):
     checkpoints = prep_checkpoint.for_specimen(o.out, settings(o), o.checkpoint_every,
                                                log=None if o.quiet else progress.say)
@@ -192,7 +213,7 @@ def prepare(o, dist):
             raise cli.InputError("%s exists and was prepared with other settings (%s); use --force to prepare it "
                                  "again (it is replaced only when the new one is complete), or another --out"
                                  % (o.out, "; ".join(diff)))
-        print("kept existing specimen %s (use --force to prepare again)" % o.out)
+        print("kept existing specimen %s (use --force to prepare again)%s" % (o.out, _kept_with(o, meta)))
         pending = checkpoints.differences()
         if pending == []:
             checkpoints.remove()  # of a run killed after its save

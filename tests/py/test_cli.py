@@ -95,3 +95,17 @@ def test_every_script_reads_assembly_the_same_way(script):
     required = ["--specimen", "s.npz"] if script == "run_states" else []
     for given, taken in (("spheres", "sphere"), ("sphere", "sphere"), ("clump2", "clump2")):
         assert read(required + ["--out", "o.npz", "--assembly", given]).assembly == taken
+
+
+def test_a_kept_specimen_says_what_it_was_made_with_that_this_run_asked_otherwise(tmp_path):
+    """A specimen is kept when its recipe matches; a --threads or --checkpoint-every given
+    otherwise (each changes its last bits) was passed over without a word (an outside try)."""
+    out = tmp_path / "s.npz"
+    first = run("--n", "100", "--seed", "3", "--threads", "1", "--checkpoint-every", "0", "--quiet", "--out", str(out))
+    assert first.returncode == 0, first.stderr
+    same = run("--n", "100", "--seed", "3", "--threads", "1", "--out", str(out))
+    assert "kept existing specimen" in same.stdout and "note:" not in same.stdout
+    other = run("--n", "100", "--seed", "3", "--threads", "2", "--checkpoint-every", "1000", "--out", str(out))
+    assert other.returncode == 0, other.stderr
+    assert ("note: it was made at 1 engine thread, not 2, without checkpoints, not with checkpoints every 1000 "
+            "steps, so its last bits are not what this run would give") in other.stdout
