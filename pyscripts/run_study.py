@@ -217,11 +217,13 @@ def main(argv=None):
         except triaxial.StateNotReached as exc:
             cli.fail(str(exc), 1)
         sres = statics.cached_record(o.out, scene=scene, log=log)
-        if "21" in {str(sid) for sid, _, _ in states}:  # Table B1's second state
-            statics.cached_record(o.out, "21", log=log)
-        log("statics (isotropic state): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %s, zeta_v = %s"
-            % ([round(e / 1e6, 1) for e in sres["E_free"]], [round(e / 1e6, 1) for e in sres["E_blocked"]],
-               statics.said_zeta(sres["zeta_h"]), statics.said_zeta(sres["zeta_v"])))
+        solved = [("isotropic state", sres)]
+        if "21" in {str(sid) for sid, _, _ in states}:  # Table B1's second state (its line was missing)
+            solved.append(("state 21", statics.cached_record(o.out, "21", log=log)))
+        for what, rec in solved:
+            log("statics (%s): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %s, zeta_v = %s"
+                % (what, [round(e / 1e6, 1) for e in rec["E_free"]], [round(e / 1e6, 1) for e in rec["E_blocked"]],
+                   statics.said_zeta(rec["zeta_h"]), statics.said_zeta(rec["zeta_v"])))
         csv_path = os.path.join(o.out, study.CSV_NAME)
         material = specimen_file.read(path)[1]["material"]
         contrast = zeta_contrast.fit(csv_path, material["shear_modulus"], material["poisson"])
@@ -243,9 +245,11 @@ def main(argv=None):
         report_path, _ = report.build(o.out, os.path.join(o.out, "report"), log=log)
         atomic.write_json(os.path.join(o.out, "summary.json"), dict(
             specimen=st, states=len({r["state"] for r in rows}), probes=len(rows), statics=sres, K_G_fits=fits,
-            zeta_contrast=contrast, report=os.path.relpath(report_path, o.out), wall_time=time.time() - t0))
+            zeta_contrast=contrast, report=os.path.relpath(report_path, o.out),
+            # this run's: a resumed study's earlier runs are in probes.csv's state and probe times
+            run_wall_time=time.time() - t0))
     cli.work_done()  # the rest is lines and YADE's O: a Ctrl-C now ends a finished run
-    log("results: %s (probes.csv, figures/, summary.json) in %.0f s" % (o.out, time.time() - t0))
+    log("results: %s (probes.csv, figures/, summary.json); this run took %.0f s" % (o.out, time.time() - t0))
     log("report: %s" % report_path)
     if cli.in_yade():
         from trueaniso import yade_bridge

@@ -294,7 +294,9 @@ def table_argv(parser, values, where):
 
 def _table_source(known):
     """(path, line) of the parameter table, or None: --table/--line first, then YADE_BATCH."""
-    if known.table:
+    if known.table is not None:
+        if not known.table.strip():  # --table "" read as no table, then "--line needs --table" (an outside try)
+            raise InputError("--table is empty: give the parameter table's path")
         if known.line is None:
             raise InputError("--table needs --line (the line number as a text editor shows it, as yade-batch counts)")
         return known.table, known.line

@@ -69,6 +69,7 @@ class Checkpoints:
         self.log = log or (lambda m: None)
         self.way_out = way_out  # the option that starts afresh, named in refusals
         self.since = 0  # steps since the last checkpoint (or the start of this run)
+        self.resumed = False  # set by resume()
 
     def saved_recipe(self):
         """The recipe of the checkpoint on disk, or None when there is none (read without the
@@ -114,6 +115,7 @@ class Checkpoints:
             return None
         scene, meta = specimen_file.load(self.path)
         place = meta["parameters"]["checkpoint"]["place"]
+        self.resumed = True  # the script's last line then says the time of every run, not only its own
         self.log("resuming the preparation from %s (%s, %d steps done)"
                  % (self.path, place["stage"], sum(place["steps"].values())))
         return scene, place

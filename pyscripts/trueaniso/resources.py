@@ -20,10 +20,14 @@ INTERPRETER_BYTES = {"python3": 60e6, "yade": 300e6}
 # The exact static solve (statics.static_stiffness, run by run_study.py on its specimen):
 # 7.6 GB at 53,004 spheres (docs/statics.md) = 143 kB per sphere; 160 kB with a margin.
 STATICS_BYTES_PER_SPHERE = 160e3
-# Preparation time: random placement ~3.5 ms per sphere (pure Python), then the recipe's steps of
-# ~0.75 us per member sphere on one thread (docs/specimens.md: 53,004 spheres in 58.5 min).
+# Preparation time: random placement ~3.5 ms per sphere (pure Python), then the recipe's steps at
+# ~0.45 us per member sphere on one thread: 53,004 spheres took 80 min of CPU for 180,000 steps
+# (0.50 us, beside other jobs, 2026-11-29), the 53,004-clump1 preparation 0.27-0.33 us a member
+# (2026-11-30, docs/runs.md). It was 0.75 us, from before the force loop's changes of issue 15,
+# and the estimates came out 2-5 times the wall time (an outside try: 51 s said, 11 s taken, at
+# 300 spheres, whose recipe takes half the steps of a large one).
 PLACEMENT_SECONDS_PER_SPHERE = 3.5e-3
-STEP_SECONDS_PER_SPHERE = 0.75e-6
+STEP_SECONDS_PER_SPHERE = 0.45e-6
 # Steps of each recipe (docs/specimens.md, "Preparation cost"): spheres about 2e5; clump1's
 # rotation-free expansion creeps, 380,000 at 4000 clumps; clump2 215,500.
 PREPARATION_STEPS = {"sphere": 2.2e5, "clump1": 3.8e5, "clump2": 2.2e5}

@@ -320,7 +320,7 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         walk = states + held_states(out, previous, ids)
         ordered = [path for _, path in sorted(triaxial.paths(walk).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
         if not any(run.needs(sid) for path in ordered for sid, _, _ in path):  # before, a rerun said nothing of it
-            log("%s: the rows of every state asked for are already there; nothing to do" % out)
+            log("%s: the rows of every state asked for are already there; no state to run" % out)
         else:  # a run that does nothing leaves metadata.json as it was (before, it added itself to the runs)
             done = [str(sid) for sid, _, _ in states if not run.wanted(sid)]
             if done:  # a resumed run began at its next state without a word of what it kept (an outside try)

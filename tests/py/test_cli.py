@@ -28,6 +28,7 @@ def run(*args, timeout=120):
     (["--assembly", "clump2", "--n", "1001"], "multiple of 4"),  # clump2 is four copies of a layer
     (["--assembly", "clump1", "--n", "4"], "cannot fit the box"),  # a clump is longer than a sphere
     (["--out", "x.txt"], ".npz"),
+    (["--table", "", "--line", "2"], "--table is empty"),  # it said '--line needs --table' (an outside try)
 ])
 def test_bad_input_one_line_and_nothing_written(tmp_path, args, message):
     out = tmp_path / "s.npz"

@@ -92,7 +92,7 @@ def blocker(tmp_path):
     # before: the isotropic state reached and probed under both names
     (["--states", "0:100e3,1:100e3"], ["states 1 and b1_sz100000 are one state", "(100000, 100000, 100000)"]),
     (["--ids", "1", "--assembly", "clump1"], ["is a sphere specimen, not clump1"]),  # the file says what it is
-    (["--ids", "1", "--assembly", "clump3"], ["--assembly", "invalid choice"]),
+    (["--ids", "1", "--assembly", "clump3"], ["--assembly", "unknown assembly 'clump3'"]),
     # before: ran the normal probes x and y, where the help and the CSV name the shear probe xy
     (["--ids", "1", "--probes", "xy"], ["'xy' is ambiguous", "'xy,' for the shear probe alone", "'x,y'"]),
     (["--ids", "1", "--probes", "yz"], ["'yz' is ambiguous"]),

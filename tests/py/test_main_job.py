@@ -89,6 +89,10 @@ def test_adding_states_continues_the_study(first, tmp_path):
     assert summary["states"] == 3 and summary["probes"] == 9 and (out / "figures" / "K_G_vs_Zm.png").exists()
     # state 21 is Table B1's second state: its static solve is kept beside the isotropic one, and shown
     assert (out / "statics_state-21.json").exists() and "| 21 (b = 0.5" in (out / "report" / "report.md").read_text()
+    # ... and its result line, as the isotropic state's (it had none; an outside try)
+    record = json.loads((out / "statics_state-21.json").read_text())
+    assert "statics (state 21): E_free = %s MPa" % [round(e / 1e6, 1) for e in record["E_free"]] in proc.stdout
+    assert "statics (isotropic state): E_free" in proc.stdout and "this run took" in proc.stdout
     check_contrast_against_checkpoints(out, summary["zeta_contrast"])
 
 

@@ -164,6 +164,8 @@ def test_script_killed_then_rerun_writes_the_uninterrupted_specimen(tmp_path):
     assert again.returncode == 0, again.stderr
     assert "its unfinished preparation ran at 1 engine thread, so this run does too" in again.stdout
     assert "resuming the preparation from" in again.stdout
+    # the time said is this run's and the preparation's (it said only its own; an outside try)
+    assert "s (this run; " in again.stdout and "s in all, with the runs before its last checkpoint)" in again.stdout
     assert not os.path.exists(ck)
     a, _ = specimen_file.load(str(tmp_path / "whole.npz"))
     b, meta = specimen_file.load(str(out))

@@ -167,7 +167,7 @@ def test_rerun_of_a_finished_study_does_nothing(base, specimen_100, tmp_path):
     proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
     assert proc.returncode == 0, proc.stderr
     assert "probe" not in proc.stdout
-    assert "nothing to do" in proc.stdout, proc.stdout  # it used to say only that it continued the study
+    assert "no state to run" in proc.stdout, proc.stdout  # it used to say only that it continued the study
     # and changes nothing, as docs/runs.md says: before, metadata.json added the run to its runs
     after = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"}
     assert sorted(after) == sorted(before) and [p for p in before if after[p] != before[p]] == []

@@ -142,7 +142,7 @@ def test_path_rate_is_an_option_of_the_study(finished, small_specimen, tmp_path)
     proc = run("--specimen", str(small_specimen), "--ids", "5", "--probes", "z", "--out", str(tmp_path / "r20"))
     assert proc.returncode == 0, proc.stderr
     assert "--path-rate not given: its study reached its states at 20 Pa per step" in proc.stdout
-    assert "nothing to do" in proc.stdout
+    assert "no state to run" in proc.stdout
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--path-rate", "20",
                "--out", str(finished))
     assert proc.returncode == 2 and "path_rate" in proc.stderr and "the path rate (--path-rate; state.path_rate) is 2.0 there, 20.0 in this run" in proc.stderr, proc.stderr
@@ -162,4 +162,4 @@ def test_metadata_stays_standard_json_with_an_infinite_path_rate(small_specimen,
 
     meta = json.loads((out / "metadata.json").read_text(), parse_constant=strict)
     assert meta["fingerprint"]["state"]["path_rate"] == "inf"
-    assert "nothing to do" in proc.stdout
+    assert "no state to run" in proc.stdout
