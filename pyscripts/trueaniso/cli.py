@@ -343,8 +343,25 @@ class Terminated(BaseException):
     `except Exception` in the library swallows it)."""
 
 
-def _terminate(number, frame):
-    raise Terminated()
+_pending = None  # the last SIGINT or SIGTERM the handlers below raised (raise_pending)
+
+
+def _interrupt(number, frame):
+    """SIGINT as KeyboardInterrupt, SIGTERM as Terminated, remembered: Python runs a handler at the
+    next instruction, which may be inside a finalizer (an archive's or a file's __del__); there the
+    exception is printed as 'Exception ignored' and the work goes on. An outside try once saw a
+    Ctrl-C ignored, the run finishing with status 0; raise_pending() raises it again."""
+    global _pending
+    _pending = number
+    raise Terminated() if number == signal.SIGTERM else KeyboardInterrupt()
+
+
+def raise_pending():
+    """Between chunks of work (progress.Progress calls it): a signal whose exception a finalizer
+    swallowed is raised here. The script ends at the first one raised (guarded), so a remembered
+    one is never raised twice in a run."""
+    if _pending is not None:
+        raise Terminated() if _pending == signal.SIGTERM else KeyboardInterrupt()
 
 
 def release_start_guard():
@@ -436,8 +453,8 @@ def guarded(main, resumable=False):
     promises a resume only when something was saved (saves_work_in)."""
     # The scripts exit at once on Ctrl-C while they start (their first lines); from here on it
     # raises KeyboardInterrupt again, as under yade-double, so that the line below says what to do.
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    signal.signal(signal.SIGTERM, _terminate)
+    signal.signal(signal.SIGINT, _interrupt)
+    signal.signal(signal.SIGTERM, _interrupt)
     try:
         main()
         _finished()

@@ -42,6 +42,8 @@ class Progress:
         return time.monotonic() - self.last >= self.every
 
     def line(self, steps, stress_error, unbalanced, extra=""):
+        from . import cli
+        cli.raise_pending()  # after every chunk: a Ctrl-C that a finalizer swallowed ends the run here
         if not self.due():
             return
         self.last = time.monotonic()
