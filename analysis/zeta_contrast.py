@@ -101,3 +101,50 @@ def fit(path, shear_modulus, poisson, min_states=2):
     out = {k: v for k, v in result.items() if not isinstance(v, np.ndarray)}
     out["states"] = list(src["states"])
     return out
+
+
+def said(contrast):
+    """The fit as one line, with its standard errors, and said when it stopped at a bound of the
+    search: two states gave zeta_h = 0.000 (the bound), +/- 0.19, printed as a calibration (an
+    outside try). run_study.py's line and this module's command print it."""
+    bound = ("; at a bound of the search (%g-%g): not determined by these states" % zeta.ZETA_BOUNDS
+             if contrast["at_bound"] else "")
+    return ("zeta calibrated on the contrast a_i^2 (Eq. 25) over %d states, as the paper's Fig. 13: "
+            "zeta_h = %.3f +/- %.3f, zeta_v = %.3f +/- %.3f%s (rms of a_i^2 %.4f; %.4f at the paper's 0.552, "
+            "%.4f at 1)" % (contrast["n_states"], contrast["zeta_h"], contrast["se_h"], contrast["zeta_v"],
+                            contrast["se_v"], bound, contrast["rms"], contrast["rms_at_paper"], contrast["rms_at_1"]))
+
+
+def main(argv=None):
+    """python3 -m analysis.zeta_contrast DIR: the fit of a study (its directory or probes.csv), the
+    material from its metadata.json unless given. Before, the module ran nothing and exited 0,
+    --help included (an outside check)."""
+    import argparse
+    import sys
+    from .results import read_metadata, said as said_error, table_path
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("results", help="a study's directory (with probes.csv) or its probe table")
+    p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
+    p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
+    o = p.parse_args(argv)
+    try:
+        path = table_path(o.results)
+        import os
+        material = ((read_metadata(os.path.dirname(os.path.abspath(path))) or {}).get("specimen") or {}).get("material")
+        G = o.shear_modulus if o.shear_modulus is not None else (material or {}).get("shear_modulus")
+        nu = o.poisson if o.poisson is not None else (material or {}).get("poisson")
+        if G is None or nu is None:
+            raise ResultsError("%s records no particle material: give --shear-modulus and --poisson" % o.results)
+        contrast = fit(path, float(G), float(nu))
+    except (ResultsError, OSError, ValueError) as exc:
+        sys.stderr.write("error: %s\n" % said_error(exc))
+        return 2
+    if contrast is None:
+        sys.stderr.write("error: %s has fewer than 2 states probed on x, y and z: nothing to fit\n" % o.results)
+        return 2
+    print(said(contrast))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

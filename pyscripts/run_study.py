@@ -33,7 +33,7 @@ sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the an
 try:
     from analysis import figures, report, zeta_contrast
     from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, resources,
-                           specimen, statics, specimen_file, study, study_dir, triaxial, zeta)
+                           specimen, statics, specimen_file, study, study_dir, triaxial)
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
     sys.stderr.write("error: %s\n" % exc)
     os._exit(2)
@@ -228,15 +228,8 @@ def main(argv=None):
         material = specimen_file.read(path)[1]["material"]
         contrast = zeta_contrast.fit(csv_path, material["shear_modulus"], material["poisson"])
         if contrast:
-            # With its standard errors, and said when it stopped at a bound of the search: two states
-            # gave zeta_h = 0.000 (the bound), +/- 0.19, printed as a calibration (an outside try).
-            bound = ("; at a bound of the search (%g-%g): not determined by these states" % zeta.ZETA_BOUNDS
-                     if contrast["at_bound"] else "")
-            log("zeta calibrated on the contrast a_i^2 (Eq. 25) over %d states, as the paper's Fig. 13: "
-                "zeta_h = %.3f +/- %.3f, zeta_v = %.3f +/- %.3f%s (rms of a_i^2 %.4f; %.4f at the paper's 0.552, "
-                "%.4f at 1); the magnitude zeta above answers another question (docs/statics.md 7.1)"
-                % (contrast["n_states"], contrast["zeta_h"], contrast["se_h"], contrast["zeta_v"], contrast["se_v"],
-                   bound, contrast["rms"], contrast["rms_at_paper"], contrast["rms_at_1"]))
+            log("%s; the magnitude zeta above answers another question (docs/statics.md 7.1)"
+                % zeta_contrast.said(contrast))
         fig_dir = os.path.join(o.out, "figures")
         os.makedirs(fig_dir, exist_ok=True)
         rows = study.read_rows(csv_path)

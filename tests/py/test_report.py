@@ -532,3 +532,20 @@ def test_an_os_error_is_said_by_its_file_and_reason(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "analysis.figures", SMALL_TABLE, "--out", str(blocker / "figs")],
                           capture_output=True, text=True, cwd=REPO, timeout=120)
     assert proc.returncode == 2 and proc.stderr == "error: %s: Not a directory\n" % (blocker / "figs"), proc.stderr
+
+
+def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
+    """`python3 -m analysis.zeta_contrast DIR` ran nothing and exited 0, --help included (an outside
+    check). It prints run_study.py's line, the material from the study's metadata; the committed
+    4000-sphere study gives the values docs/path-fidelity.md quotes (zeta 0.116 and 0.111)."""
+    def tool(*args):
+        return subprocess.run([sys.executable, "-m", "analysis.zeta_contrast", *args], capture_output=True,
+                              text=True, cwd=REPO, timeout=120)
+    proc = tool(os.path.join("docs", "data", "spheres-4000-s1"))
+    assert proc.returncode == 0, proc.stderr
+    assert "over 39 states" in proc.stdout and "zeta_h = 0.116 +/- 0.015, zeta_v = 0.111 +/- 0.015" in proc.stdout
+    assert tool("--help").stdout.startswith("usage:")
+    bare = tmp_path / "probes.csv"
+    shutil.copy(os.path.join(REPO, "docs", "data", "spheres-4000-s1", "probes.csv"), bare)
+    proc = tool(str(bare))  # no metadata.json beside it: the material must be given
+    assert proc.returncode == 2 and "records no particle material" in proc.stderr
