@@ -440,9 +440,16 @@ def _finished():
     SIGTERM are ignored, which the interpreter's exit keeps (it resets only handlers of its own):
     the run ends with status 0, as it finished. Not in a yade-double session that stays open, where
     Ctrl-C is the user's again."""
-    if _exits_after_script() and threading.current_thread() is threading.main_thread():
+    global _pending
+    if threading.current_thread() is not threading.main_thread():
+        return
+    if _exits_after_script():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    else:  # the session's Ctrl-C is Python's own again, and no signal of this run is left to raise
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        _pending = None
 
 
 def guarded(main, resumable=False):
@@ -453,6 +460,8 @@ def guarded(main, resumable=False):
     promises a resume only when something was saved (saves_work_in)."""
     # The scripts exit at once on Ctrl-C while they start (their first lines); from here on it
     # raises KeyboardInterrupt again, as under yade-double, so that the line below says what to do.
+    global _pending
+    _pending = None  # a script run again in the same yade-double session starts with none
     signal.signal(signal.SIGINT, _interrupt)
     signal.signal(signal.SIGTERM, _interrupt)
     try:
