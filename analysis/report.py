@@ -581,12 +581,12 @@ def table_b1(results, paper):
 
 def solve_statics(results, log=print):
     """The Table B1 records of a study directory from its checkpoints (states 1 and 21)."""
-    from trueaniso import statics
+    from trueaniso import statics, study_dir
     if not os.path.isdir(os.path.join(results, "states")):
         raise ResultsError("%s: --statics needs a study directory with state checkpoints (states/*.npz)" % results)
     done = 0
     for sid in ("1", "21"):
-        if os.path.exists(os.path.join(results, "states", "%s.npz" % sid)):
+        if os.path.exists(study_dir.checkpoint_path(results, sid)):
             statics.cached_record(results, sid, log=log)
             done += 1
     if not done:

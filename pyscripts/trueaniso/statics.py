@@ -105,7 +105,7 @@ def cached_record(out, state=None, scene=None, log=print):
     if not os.path.exists(path):
         if scene is None:
             try:
-                scene, _ = specimen_file.load(os.path.join(out, "states", "%s.npz" % state))
+                scene, _ = specimen_file.load(study_dir.checkpoint_path(out, state))
             except specimen_file.SpecimenFileError as exc:
                 # A study's checkpoint, not a specimen: run_study reaches a missing one again.
                 raise specimen_file.SpecimenFileError(study_dir.checkpoint_problem(exc, state)) from None

@@ -354,7 +354,7 @@ def held_states(out, previous, asked):
     asked = {str(i) for i in asked}
     held = []
     for sid, d in ((previous or {}).get("states") or {}).items():
-        if sid not in asked and os.path.exists(os.path.join(out, "states", "%s.npz" % sid)):
+        if sid not in asked and os.path.exists(study_dir.checkpoint_path(out, sid)):
             held.append((int(sid) if sid.isdigit() else sid, float(d["b"]), float(d["sigma_z"])))
     return held
 
@@ -448,7 +448,7 @@ class _Run:
         self.done.add((str(row["state"]), row["probe"]))
 
     def checkpoint(self, sid):
-        return os.path.join(self.out, "states", "%s.npz" % sid)
+        return study_dir.checkpoint_path(self.out, sid)
 
     def wanted(self, sid):
         if self.asked is not None and str(sid) not in self.asked:  # an earlier run's state: a start only

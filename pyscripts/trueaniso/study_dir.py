@@ -24,6 +24,11 @@ METADATA = "metadata.json"
 SUPERSEDED = "superseded"
 LAYOUT = 2  # of metadata.json; 1 (before fingerprints) cannot prove what its rows were made with
 CSV_NAME = "probes.csv"  # one row per state and probe direction (trueaniso/study.py)
+
+
+def checkpoint_path(out, sid):
+    """The checkpoint of state `sid` in the study directory `out`: the scene held at that state."""
+    return os.path.join(out, "states", "%s.npz" % sid)
 WAY_OUT = "use a new --out, or --force-new to move the old study aside into %s/"
 
 
