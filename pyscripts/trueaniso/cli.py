@@ -63,7 +63,7 @@ class Parser(argparse.ArgumentParser):
 
 
 def add_threads_option(parser, study=False, continues="the study --out holds (a study continues at its own count, "
-                                                    "which its last bits depend on)"):
+                                                    "which its last bits depend on)", mpi=False):
     """--threads, as every script that runs the engines offers it (0: all cores). A script that
     continues work (study=True) leaves it None when not given, for resolve_threads; `continues`
     names the work whose count it then takes."""
@@ -72,8 +72,9 @@ def add_threads_option(parser, study=False, continues="the study --out holds (a 
                         # 0 is OpenMP's own count: OMP_NUM_THREADS when set (the MPI recipe sets it to 1),
                         # which the help said nothing of (an outside try: 'all cores' recorded 1)
                         help="OpenMP threads of the engines: 0 = OpenMP's count (OMP_NUM_THREADS when set, else "
-                             "all %d cores; one a worker under --mpi), at most %d (%d x the cores)%s"
-                             % (resources.cores(), resources.max_threads(), resources.THREADS_PER_CORE,
+                             "all %d cores%s), at most %d (%d x the cores)%s"
+                             % (resources.cores(), "; one a worker under --mpi" if mpi else "",
+                                resources.max_threads(), resources.THREADS_PER_CORE,
                                 "; when not given: the count of %s, else 0" % continues if study else ""))
 
 
@@ -98,12 +99,25 @@ def resolve_threads(o, study=True, preparation=None):
             # then refuses (a second run_study.py during the first one's preparation; an outside try).
             continued = "its unfinished preparation" if o.threads else None
     o.threads = o.threads or 0
+    if o.threads == 0:
+        _check_openmp_count()
     if continued:
         # Said as a fact about the work, not as "continuing": a check after it may still refuse the
         # run (another --mu, say), and "continuing ..." then read as the opposite (an outside try).
         print("%s: --threads not given: %s ran at %d engine thread%s, so this run does too"
               % (o.out, continued, o.threads, "" if o.threads == 1 else "s"), flush=True)
     return o.threads
+
+
+def _check_openmp_count():
+    """--threads 0 takes OMP_NUM_THREADS: held to --threads' own limit, which it passed by (an
+    outside try made a study at 16 threads on 2 cores, which no --threads could then continue)."""
+    from . import resources
+    text = os.environ.get("OMP_NUM_THREADS", "").split(",")[0].strip()
+    if text.isdigit() and int(text) > resources.max_threads():
+        raise InputError("OMP_NUM_THREADS=%s, the count --threads 0 takes, is above %d (%d x this machine's %d "
+                         "cores; more threads only slow the contact loops down): set it lower, or give --threads"
+                         % (text, resources.max_threads(), resources.THREADS_PER_CORE, resources.cores()))
 
 
 def add_path_rate_option(parser):

@@ -312,12 +312,13 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                    dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
                         damping=damping, **(probe_options or {})),
                    dict(damping=damping, **(state_options or {})), keep=checkpoints, asked=ids)
-        # The paths run over the states asked and the states of earlier runs whose checkpoints are
-        # here: a state is reached from the nearest one before it on its path, so adding states to a
-        # study in path order gives the rows of asking them all at once. Before, the paths held only
-        # the states asked: --ids 1,2,3 then --ids 5 reached 5 from the specimen, not from 3 (an
-        # outside try: 234 cells differed from one run's, E_z by 3e-6).
-        walk = states + held_states(out, previous, ids)
+        # The paths run over the states asked and the states earlier runs defined: a state is
+        # reached from the nearest one before it on its path, so adding states to a study in path
+        # order gives the rows of asking them all at once. Before, the paths held only the states
+        # asked: --ids 1,2,3 then --ids 5 reached 5 from the specimen, not from 3 (an outside try:
+        # 234 cells differed from one run's, E_z by 3e-6). An earlier state whose checkpoint is
+        # gone is reached again on the way, as it was first reached (_Run.start_of).
+        walk = states + held_states(previous, ids)
         ordered = [path for _, path in sorted(triaxial.paths(walk).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
         if not any(run.needs(sid) for path in ordered for sid, _, _ in path):  # before, a rerun said nothing of it
             log("%s: the rows of every state asked for are already there; no state to run" % out)
@@ -347,16 +348,14 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         return results_csv.read(csv_path).rows
 
 
-def held_states(out, previous, asked):
-    """[(id, b, sigma_z)] of the states earlier runs of the study in `out` defined (its
-    metadata.json, `previous`), not among `asked`, whose checkpoints are there: where a path of
-    this run continues from."""
+def held_states(previous, asked):
+    """[(id, b, sigma_z)] of the states earlier runs of the study defined (its metadata.json,
+    `previous`) that are not among `asked`: where the paths of this run continue from. Their
+    checkpoints, when missing, are reached again (an outside try removed state 3's, as a refusal
+    of a damaged one advises, and --ids 5 then started from state 2)."""
     asked = {str(i) for i in asked}
-    held = []
-    for sid, d in ((previous or {}).get("states") or {}).items():
-        if sid not in asked and os.path.exists(study_dir.checkpoint_path(out, sid)):
-            held.append((int(sid) if sid.isdigit() else sid, float(d["b"]), float(d["sigma_z"])))
-    return held
+    return [(int(sid) if sid.isdigit() else sid, float(d["b"]), float(d["sigma_z"]))
+            for sid, d in ((previous or {}).get("states") or {}).items() if sid not in asked]
 
 
 def _run_paths_on(executor, run, paths):
@@ -368,7 +367,9 @@ def _run_paths_on(executor, run, paths):
     other error stops the run (the rows of states already ended are kept)."""
     import concurrent.futures as cf
     todo = [p for p in paths if any(run.needs(sid) for sid, _, _ in p)]
-    run.log("%d loading paths with work left, on %s" % (len(todo), type(executor).__name__))
+    if todo:  # none: the run has said "no state to run"
+        run.log("%d loading path%s with work left, on %s"
+                % (len(todo), "" if len(todo) == 1 else "s", type(executor).__name__))
     running = {}
 
     def submit(path, k):
@@ -407,6 +408,7 @@ def _state_worker(job):
                job["loading"], job["probe_kw"], job["state_kw"], sink=lambda row, columns: rows.append((row, columns)),
                keep=job["keep"], asked=job["asked"])
     run.done = set(job["done"])
+    run.started = dict(job["started"])
     try:
         run.step(job["path"], job["k"])
     except triaxial.StateNotReached as exc:  # this path ends; the manager goes on with the others
@@ -423,6 +425,8 @@ class _Run:
         self.axes, self.csv_path, self.log, self.every = axes, csv_path, log, every
         self.columns = list(table.columns)
         self.done = {(r["state"], r["probe"]) for r in table.rows}
+        # Where each state with rows was reached from: a checkpoint reached again starts there too.
+        self.started = {r["state"]: r["state_from"] for r in table.rows if r.get("state_from")}
         self.probe_kw, self.state_kw = probe_kw, state_kw
         self.sink = sink or self.append
         self.keep = {str(k) for k in keep}
@@ -434,7 +438,7 @@ class _Run:
         return dict(specimen_path=self.specimen_path, spec_meta=self.spec_meta, out=self.out, fp=self.fp,
                     axes=self.axes, columns=self.columns, every=self.every, loading=self.loading, probe_kw=self.probe_kw,
                     state_kw=self.state_kw, done=sorted(self.done), path=path, k=k, keep=sorted(self.keep),
-                    asked=None if self.asked is None else sorted(self.asked))
+                    asked=None if self.asked is None else sorted(self.asked), started=self.started)
 
     def append(self, row, columns):
         """A row into probes.csv (this process holds the lock)."""
@@ -479,11 +483,23 @@ class _Run:
         sid, b, sz = path[k]
         ck = self.checkpoint(sid)
         if not os.path.exists(ck) and any(self.needs(s) for s, _, _ in path[k:]):
-            self.reach(sid, b, sz, path[k - 1][0] if k else None, ck)
+            self.reach(sid, b, sz, self.start_of(path, k), ck)
         elif self.wanted(sid):  # an earlier run reached it and was stopped before its rows (an outside try)
             self.log("state %s: reached by an earlier run; probed from its checkpoint %s" % (sid, ck))
         if self.wanted(sid):
             self.probe_state(sid, b, sz, ck)
+
+    def start_of(self, path, k):
+        """Where state k of the path is reached from: the state before it on the path (None: the
+        specimen), or, for a state whose rows are written, the start they record, so that its
+        checkpoint reached again has the bytes its rows came from (the study may have grown out of
+        path order since: --ids 1,5 then 3 reached 3 from the specimen, not from a later 2)."""
+        recorded = self.started.get(str(path[k][0]))
+        if recorded == "specimen":
+            return None
+        if recorded is not None and any(str(s) == recorded for s, _, _ in path[:k]):
+            return recorded
+        return path[k - 1][0] if k else None
 
     def load(self, path, sid=None, b=None, sz=None):
         """A scene from a file of this study: the specimen (checked against the fingerprint) or a
@@ -504,6 +520,10 @@ class _Run:
             ok = (str(p.get("state")) == str(sid) and p.get("b") == b and p.get("sigma_z") == sz
                   and p.get("specimen") == self.fp["specimen"] and p.get("path", "true-triaxial") == self.loading)
             what = "it is not state %s (b = %g, sigma_z = %g Pa) of this study's specimen" % (sid, b, sz)
+            # Checkpoints written before 2026-11-30 record no key: they pass on the checks above.
+            if ok and p.get("study", study_dir.states_key(self.fp)) != study_dir.states_key(self.fp):
+                ok, what = False, ("it was made by another study (another friction, path rate, thread count or "
+                                   "code: the study's fingerprint differs)")
         if not ok:
             raise study_dir.StudyMismatch("%s: %s; remove it and rerun" % (path, what))
         return scene, meta
@@ -523,7 +543,8 @@ class _Run:
                            parameters=dict(state=str(sid), b=b, sigma_z=sz, path=self.loading, steps=info["steps"],
                                            wall_time=info["wall_time"],
                                            start="specimen" if start is None else str(start),
-                                           specimen=self.fp["specimen"], code=self.fp["code"]))
+                                           specimen=self.fp["specimen"], code=self.fp["code"],
+                                           study=study_dir.states_key(self.fp)))
         self.log("state %s: reached in %d steps (%.1f s); principal stresses %.2f, %.2f, %.2f kPa, largest "
                  "off-diagonal %.3f kPa" % (sid, info["steps"], info["wall_time"], info["sigma_1"] / 1e3,
                                             info["sigma_2"] / 1e3, info["sigma_3"] / 1e3, info["tau_max"] / 1e3))

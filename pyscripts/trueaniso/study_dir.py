@@ -163,6 +163,16 @@ def _normal(x):
     return json.loads(json.dumps(x, default=atomic._jsonable))
 
 
+def states_key(fingerprint):
+    """What a state's checkpoint depends on, as one hash: the study's fingerprint without its probe
+    options (specimen, code, path, threads, every option of reaching a state). A checkpoint records
+    it, and one of another study is refused on load: an outside try copied a checkpoint made at
+    --mu 0.3 into a study at 0.5, and a later state started from it without a word."""
+    import hashlib
+    reach = {k: v for k, v in _normal(fingerprint).items() if k != "probe"}
+    return hashlib.sha256(json.dumps(reach, sort_keys=True).encode()).hexdigest()[:16]
+
+
 def _flat(d, prefix=""):
     out = {}
     for k, v in d.items():

@@ -13,6 +13,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 from conftest import SCRIPTS, one_line_error, run_script
 
@@ -95,6 +96,44 @@ def test_states_added_later_start_from_the_study_s_checkpoints(base, specimen_10
     finally:
         study.engines.set_threads(threads)
     assert values(pooled) == values(whole)
+    # an earlier state's checkpoint removed (as a refusal of a damaged one advises): reached again
+    # on the way, so state 5 still starts from 3 (it started from 2 in a third outside try)
+    gone = copy(base, tmp_path / "gone")
+    (gone / "states" / "3.npz").unlink()
+    proc = states(specimen_100, gone, "--ids", "5", "--probes", "zx")
+    assert proc.returncode == 0, proc.stderr
+    assert "state 3: b = 0.00, sigma_z = 120.0 kPa, from state 2" in proc.stdout and (gone / "states" / "3.npz").exists()
+    assert values(gone) == values(whole)
+
+
+def test_a_checkpoint_reached_again_starts_where_its_rows_came_from(specimen_100, tmp_path):
+    """A study grown out of path order (--ids 1,3, then 2) reached 3 from the specimen; its
+    checkpoint, lost and reached again for a later state, starts there again, not from 2, so it
+    has the bytes its rows came from."""
+    out = tmp_path / "study"
+    for ids in ("1,3", "2"):
+        assert states(specimen_100, out, "--ids", ids, "--probes", "z").returncode == 0
+    first, _ = specimen_file.read(str(out / "states" / "3.npz"))
+    (out / "states" / "3.npz").unlink()
+    proc = states(specimen_100, out, "--ids", "4", "--probes", "z")
+    assert proc.returncode == 0, proc.stderr
+    assert "state 3: b = 0.00, sigma_z = 120.0 kPa, from the specimen" in proc.stdout
+    again, _ = specimen_file.read(str(out / "states" / "3.npz"))
+    assert all(np.array_equal(first[k], again[k]) for k in first)
+    assert {r["state"]: r["state_from"] for r in rows(out)}["4"] == "3"
+
+
+def test_a_checkpoint_of_another_study_is_refused(base, specimen_100, tmp_path):
+    """A checkpoint records its study's key (the fingerprint without the probe options): one
+    copied from a study at --mu 0.3 into this one was taken up and state 5 reached from it
+    without a word (a third outside try); it is refused on load, naming the file."""
+    other = tmp_path / "mu"
+    assert states(specimen_100, other, "--ids", "2,3", "--probes", "z", "--mu", "0.3").returncode == 0
+    out = copy(base, tmp_path)
+    shutil.copy(other / "states" / "3.npz", out / "states" / "3.npz")
+    proc = states(specimen_100, out, "--ids", "5", "--probes", "zx")
+    one_line_error(proc, "3.npz", "made by another study", "remove it and rerun")
+    assert not (out / "states" / "5.npz").exists()
 
 
 def running_until_first_row(spec, out, *args):
@@ -210,6 +249,11 @@ def test_a_rerun_without_threads_continues_at_the_study_s_count(base, specimen_1
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", "--threads", "0",
                   env=dict(OMP_NUM_THREADS="2"))
     one_line_error(proc, "thread count (threads) is 1 there, 2 in this run (OMP_NUM_THREADS=2)", "--threads 1")
+    # ... held to --threads' own limit (16 on 2 cores made a study no --threads could continue)
+    fresh = tmp_path / "fresh"
+    proc = states(specimen_100, fresh, "--ids", "1", "--probes", "z", "--threads", "0", env=dict(OMP_NUM_THREADS="64"))
+    one_line_error(proc, "OMP_NUM_THREADS=64, the count --threads 0 takes, is above")
+    assert not fresh.exists()
 
 
 def test_other_specimen_is_refused(base, specimen_100, tmp_path):
