@@ -182,22 +182,22 @@ def differences(o, meta):
 
 def _kept_with(o, meta):
     """What the kept specimen was made with that this run asked otherwise, none of which changes
-    the recipe but each the last bits: a --threads or --checkpoint-every given, and the code. It
-    was kept without a word (an outside try asked for --checkpoint-every 0 and got the old file)."""
+    the recipe and each of which can change the last bits: a --threads or --checkpoint-every given,
+    and the code. It was kept without a word (an outside try asked for --checkpoint-every 0 and got
+    the old file)."""
     p, other = meta.get("parameters", {}), []
     threads = o.given["threads"] if o.given["threads"] != 0 else engines.threads()
     if o.given["threads"] is not None and p.get("threads") is not None and p["threads"] != threads:
-        other.append("it was made at %d engine thread%s, not %d" % (p["threads"], "" if p["threads"] == 1 else "s",
-                                                                     threads))
+        other.append("at %d engine thread%s (this run: %d)" % (p["threads"], "" if p["threads"] == 1 else "s", threads))
     every = o.given["checkpoint_every"]
     if every is not None and p.get("checkpoint_every") is not None and p["checkpoint_every"] != every:
         def said(k):
             return "without checkpoints" if k == 0 else "with checkpoints every %d steps" % k
-        other.append("%s, not %s" % (said(p["checkpoint_every"]), said(every)))
+        other.append("%s (this run: %s)" % (said(p["checkpoint_every"]), said(every)[5:] if every else "none"))
     code = (meta.get("versions") or {}).get("code")
     if code and code != provenance.code_version():
-        other.append("by code %s, not this %s" % (code, provenance.code_version()))
-    return "; note: %s, so its last bits are not what this run would give" % ", ".join(other) if other else ""
+        other.append("by code %s (this run: %s)" % (code, provenance.code_version()))
+    return "; note: it was made %s, each of which can change its last bits" % ", ".join(other) if other else ""
 
 
 def prepare(o, dist):

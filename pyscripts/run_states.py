@@ -72,7 +72,7 @@ def parser():
                         "--rolling-friction with it")
     p.add_argument("--rolling-friction", type=cli.non_negative, default=0.0,
                    help="rolling resistance: eta_r of the largest rolling moment eta_r rbar N; 0 = off")
-    cli.add_threads_option(p, study=True)
+    cli.add_threads_option(p, study=True, mpi=True)
     p.add_argument("--out", required=True, help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
                                                        "refusing")

@@ -45,7 +45,7 @@ SPECIMEN = "specimen.npz"
 def parser():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--assembly", type=cli.assembly, default="sphere",
-                   help="sphere (default), clump1 or clump2 (docs/specimens.md)")
+                   help="sphere, clump1 or clump2 (docs/specimens.md)")
     p.add_argument("--n", type=cli.at_least(100, "a study specimen"), default=1000,
                    help="particles in the specimen (>= 100)")
     p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
@@ -216,11 +216,14 @@ def main(argv=None):
                              checkpoints=("21",) if b1 else (), **options)
         except triaxial.StateNotReached as exc:
             cli.fail(str(exc), 1)
-        sres = statics.cached_record(o.out, scene=scene, log=log)
-        solved = [("isotropic state", sres)]
-        if "21" in {str(sid) for sid, _, _ in states}:  # Table B1's second state (its line was missing)
-            solved.append(("state 21", statics.cached_record(o.out, "21", log=log)))
-        for what, rec in solved:
+        # The isotropic state, and state 21 (Table B1's second state) when asked: each solve's
+        # result line after its own "solving" line (state 21's had none; an outside try).
+        sres = None
+        for what, state in (("isotropic state", None), ("state 21", "21")):
+            if state is not None and state not in {str(sid) for sid, _, _ in states}:
+                continue
+            rec = statics.cached_record(o.out, state, scene=scene if state is None else None, log=log)
+            sres = sres or rec
             log("statics (%s): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %s, zeta_v = %s"
                 % (what, [round(e / 1e6, 1) for e in rec["E_free"]], [round(e / 1e6, 1) for e in rec["E_blocked"]],
                    statics.said_zeta(rec["zeta_h"]), statics.said_zeta(rec["zeta_v"])))
