@@ -88,12 +88,16 @@ def parts_of(src, density="eq36"):
     return tuple(np.array([p[k] for p in src["parts"][density]]) for k in (0, 1))
 
 
-def fit(path, shear_modulus, poisson, min_states=2):
-    """zeta_h, zeta_v over the complete states of a single-rotations table (fit_contrast's dict
-    without its arrays, plus the states used), or None with fewer than `min_states` states."""
+def fit(path, shear_modulus, poisson, min_states=2, rotations=None):
+    """zeta_h, zeta_v over the complete states of a single-rotations table, or of its rows of
+    `rotations` (free, restrained) in a mixed one (fit_contrast's dict without its arrays, plus the
+    states used), or None with fewer than `min_states` states."""
     found = sources(path, shear_modulus, poisson, complete_only=True)
+    if rotations is not None:
+        found = [s for s in found if s["rotations"] == rotations]
     if len(found) > 1:
-        raise ResultsError("%s mixes rotations %s; fit them one at a time" % (path, [s["rotations"] for s in found]))
+        raise ResultsError("%s mixes rotations %s; fit them one at a time (--rotations)"
+                           % (path, [s["rotations"] for s in found]))
     if not found or len(found[0]["states"]) < min_states:
         return None
     src = found[0]
@@ -126,6 +130,8 @@ def main(argv=None):
     p.add_argument("results", help="a study's directory (with probes.csv) or its probe table")
     p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
     p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
+    p.add_argument("--rotations", choices=("free", "restrained"),
+                   help="the rows to fit in a table that holds both (one fit a rotations setting)")
     o = p.parse_args(argv)
     try:
         path = table_path(o.results)
@@ -135,12 +141,13 @@ def main(argv=None):
         nu = o.poisson if o.poisson is not None else (material or {}).get("poisson")
         if G is None or nu is None:
             raise ResultsError("%s records no particle material: give --shear-modulus and --poisson" % o.results)
-        contrast = fit(path, float(G), float(nu))
+        contrast = fit(path, float(G), float(nu), rotations=o.rotations)
     except (ResultsError, OSError, ValueError) as exc:
         sys.stderr.write("error: %s\n" % said_error(exc))
         return 2
     if contrast is None:
-        sys.stderr.write("error: %s has fewer than 2 states probed on x, y and z: nothing to fit\n" % o.results)
+        sys.stderr.write("error: %s has fewer than 2 states probed on x, y and z%s: nothing to fit\n"
+                         % (o.results, "" if o.rotations is None else " with rotations %s" % o.rotations))
         return 2
     print(said(contrast))
     return 0

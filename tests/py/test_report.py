@@ -549,3 +549,14 @@ def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
     shutil.copy(os.path.join(REPO, "docs", "data", "spheres-4000-s1", "probes.csv"), bare)
     proc = tool(str(bare))  # no metadata.json beside it: the material must be given
     assert proc.returncode == 2 and "records no particle material" in proc.stderr
+    # a table with both rotations settings: one at a time, chosen with --rotations
+    rows = list(csv.reader(open(bare)))
+    col = rows[0].index("rotations")
+    mixed = rows + [r[:col] + ["restrained"] + r[col + 1:] for r in rows[1:]]
+    with open(bare, "w", newline="") as f:
+        csv.writer(f).writerows(mixed)
+    material = ["--shear-modulus", "18e9", "--poisson", "0.15"]
+    proc = tool(str(bare), *material)
+    assert proc.returncode == 2 and "mixes rotations" in proc.stderr and "--rotations" in proc.stderr
+    proc = tool(str(bare), *material, "--rotations", "free")
+    assert proc.returncode == 0 and "zeta_h = 0.116 +/- 0.015, zeta_v = 0.111 +/- 0.015" in proc.stdout, proc.stderr
