@@ -191,9 +191,10 @@ def _kept_with(o, meta):
         other.append("at %d engine thread%s (this run: %d)" % (p["threads"], "" if p["threads"] == 1 else "s", threads))
     every = o.given["checkpoint_every"]
     if every is not None and p.get("checkpoint_every") is not None and p["checkpoint_every"] != every:
-        def said(k):
-            return "without checkpoints" if k == 0 else "with checkpoints every %d steps" % k
-        other.append("%s (this run: %s)" % (said(p["checkpoint_every"]), said(every)[5:] if every else "none"))
+        def interval(k):
+            return "checkpoints every %d steps" % k if k else None
+        made = interval(p["checkpoint_every"])
+        other.append("%s (this run: %s)" % ("with " + made if made else "without checkpoints", interval(every) or "none"))
     code = (meta.get("versions") or {}).get("code")
     if code and code != provenance.code_version():
         other.append("by code %s (this run: %s)" % (code, provenance.code_version()))

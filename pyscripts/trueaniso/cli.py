@@ -113,7 +113,7 @@ def _check_openmp_count():
     """--threads 0 takes OMP_NUM_THREADS: held to --threads' own limit, which it passed by (an
     outside try made a study at 16 threads on 2 cores, which no --threads could then continue)."""
     from . import resources
-    text = os.environ.get("OMP_NUM_THREADS", "").split(",")[0].strip()
+    text = resources.openmp_threads_env() or ""
     if text.isdigit() and int(text) > resources.max_threads():
         raise InputError("OMP_NUM_THREADS=%s, the count --threads 0 takes, is above %d (%d x this machine's %d "
                          "cores; more threads only slow the contact loops down): set it lower, or give --threads"

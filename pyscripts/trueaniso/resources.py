@@ -41,6 +41,13 @@ def cores():
         return os.cpu_count() or 1
 
 
+def openmp_threads_env():
+    """OMP_NUM_THREADS as OpenMP reads it for the outer team (the first item of a list), or None
+    when unset: the count `--threads 0` takes."""
+    text = os.environ.get("OMP_NUM_THREADS", "").split(",")[0].strip()
+    return text or None
+
+
 def max_threads():
     return THREADS_PER_CORE * cores()
 

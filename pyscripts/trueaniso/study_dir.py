@@ -17,7 +17,7 @@ import os
 import shutil
 import time
 
-from . import atomic, lock
+from . import atomic, lock, resources
 from .refusal import Refusal
 
 METADATA = "metadata.json"
@@ -256,7 +256,7 @@ def check(out, fingerprint, states):
         if field == "threads" and len(diff) == 1 and isinstance(there, int):
             # The same study on another thread count: the last bits of every sum would differ.
             way = "continue it with --threads %d (under yade-double: -j %d), or %s" % (there, there, way)
-            if os.environ.get("OMP_NUM_THREADS", "").strip() == str(here):  # --threads 0 took it from there
+            if resources.openmp_threads_env() == str(here):  # --threads 0 took it from there
                 more = " (OMP_NUM_THREADS=%s)" % os.environ["OMP_NUM_THREADS"] + more
         raise StudyMismatch("%s holds another study: %s is %s there, %s in this run%s; %s"
                             % (out, LABELS.get(field, field), _show(there), _show(here), more, way))
