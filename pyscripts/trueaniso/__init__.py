@@ -25,6 +25,11 @@ def _find_extension():
     # numpy first, from Python: the module's C initialisation imports it too, and an exception
     # there (Ctrl-C while numpy loads) crashed the interpreter (SIGSEGV) instead of raising.
     import numpy  # noqa: F401
+    import importlib.util
+    from . import buildarch
+    found = importlib.util.find_spec("_trueaniso")
+    if found is not None and found.origin:
+        buildarch.refuse_unsupported(os.path.dirname(found.origin))
     try:
         import _trueaniso  # noqa: F401
     except ImportError as exc:  # pragma: no cover - message for users, tested by hand

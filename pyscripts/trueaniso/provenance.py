@@ -6,7 +6,11 @@
   is, installed or in a build tree. In a source tree the same hash is computed from engines/ and
   compared: a module built from other sources than those beside it (edited, not rebuilt) is
   refused, because its numbers would be credited to code that did not make them;
-- the package: the .py files of trueaniso itself, wherever it is imported from.
+- the package: the .py files of trueaniso itself, wherever it is imported from;
+- the x86-64 level the module was compiled for, when it is not the portable baseline
+  (``engines.build_arch()``, CMake's TRUEANISO_ARCH): a build for x86-64-v3 fuses multiply-adds and
+  its results differ in the last bits, so its studies and specimens are another code's. The
+  baseline adds nothing, so its code versions are those of before the option.
 It changes exactly when that code changes, committed or not, in a checkout or an installation;
 edits to docs, tests, benchmarks, analysis/ (which only reads results, and is rerun on every study
 run) or the user scripts (whose options are recorded in the study's fingerprint) leave it alone.
@@ -18,7 +22,7 @@ import os
 import platform
 import sys
 
-from . import REPO_ROOT, __version__, _HERE, engines
+from . import REPO_ROOT, __version__, _HERE, buildarch, engines
 from .refusal import Refusal
 
 ENGINE_SUFFIXES = (".cpp", ".hpp", ".h", ".txt", ".cmake")
@@ -59,8 +63,10 @@ def engine_source_hash(root=REPO_ROOT):
 def code_version(root=REPO_ROOT):
     """'src-' + 16 hex digits of the SHA-256 of the engines' and the package's hashes (module doc)."""
     package = manifest_hash(os.path.dirname(_HERE), os.path.basename(_HERE), (".py",))
-    both = hashlib.sha256((engine_source_hash(root) + " " + package).encode()).hexdigest()
-    return "src-" + both[:16]
+    parts = engine_source_hash(root) + " " + package
+    if engines.build_arch() != buildarch.BASELINE:
+        parts += " " + engines.build_arch()
+    return "src-" + hashlib.sha256(parts.encode()).hexdigest()[:16]
 
 
 @functools.lru_cache(maxsize=None)
@@ -78,11 +84,12 @@ def git_commit(root=REPO_ROOT):
 
 
 def versions():
-    """Code, interpreter, libraries, machine and engine threads."""
+    """Code, interpreter, libraries, machine, the x86-64 level the engines were built for and engine threads."""
     import numpy as np
 
     out = dict(trueaniso=__version__, code=code_version(), git=git_commit(), python=platform.python_version(),
-               numpy=np.__version__, machine=platform.machine(), threads=engines.threads())
+               numpy=np.__version__, machine=platform.machine(), build=engines.build_arch(),
+               threads=engines.threads())
     if "yade" in sys.modules:
         try:
             out["yade"] = sys.modules["yade"].config.version

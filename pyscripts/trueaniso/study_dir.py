@@ -32,7 +32,7 @@ def checkpoint_path(out, sid):
 WAY_OUT = "use a new --out, or --force-new to move the old study aside into %s/"
 
 
-LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code": "the code version (code: a hash of engines/ and pyscripts/trueaniso/)",
+LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code": "the code version (code: a hash of engines/ and pyscripts/trueaniso/, and of the x86-64 level the engines were built for, TRUEANISO_ARCH)",
           "specimen": "the specimen (specimen: its checksum)", "threads": "the engine thread count (threads)",
           # The fields the scripts' options set, named by the option (an outside try read
           # "state.friction is 0.5 there, 0.3 in this run" after giving --mu 0.3).

@@ -31,6 +31,8 @@ def test_python_module_and_scripts_run_from_the_installation(prefix, tmp_path):
     out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=_env(prefix), capture_output=True,
                          text=True, check=True).stdout.split()
     assert out[0].startswith(str(prefix)) and out[1].startswith(str(prefix))  # not the build tree
+    # the level the module was built for is installed beside it (read before the module loads)
+    assert (prefix / os.path.dirname(os.path.relpath(out[0], prefix)) / "_trueaniso.arch").is_file()
     assert float(out[2]) == 1e23
     # the same sources installed are the same code: a study can be continued from the installation
     from trueaniso import provenance
