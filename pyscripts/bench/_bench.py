@@ -45,12 +45,15 @@ def reply(result):
     print("BENCH " + json.dumps(result), flush=True)
 
 
-def run_worker(script, code, threads, args, timeout=7200):
+def run_worker(script, code, threads, args, timeout=7200, build=None):
     """Runs `script --worker CODE ARGS` in its own process with `threads` OpenMP threads (ours
-    under /usr/bin/python3, "yade" under yade-double -j THREADS) and returns the dict the worker
-    printed on its line "BENCH {json}"; a failed worker stops the benchmark with its error."""
+    under /usr/bin/python3, "yade" under yade-double -j THREADS), with the engines of the build
+    tree `build` if given (TRUEANISO_BUILD), and returns the dict the worker printed on its line
+    "BENCH {json}"; a failed worker stops the benchmark with its error."""
     from trueaniso import cli
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    if build:
+        env["TRUEANISO_BUILD"] = build
     cmd = ((["yade-double", "-j", str(threads), "-n", "-x", script] if code == "yade" else ["/usr/bin/python3", script])
            + ["--worker", code] + list(args))
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout)

@@ -16,6 +16,12 @@ over the rounds, of ours against the other code in the same round (each round ru
 once, minutes apart at most), with its range: this machine's speed drifts by more than a change
 of code over an hour, and a ratio of the medians would mix runs an hour apart. With --doc the table
 between the markers <!-- stepper:begin --> and <!-- stepper:end --> of that file is replaced.
+
+--also-build DIR times ours a second time, from the build tree DIR (TRUEANISO_BUILD), in the same
+rounds: a build of the same engine sources for another x86-64 level (cmake -DTRUEANISO_ARCH=x86-64-v3,
+CMakeLists.txt), one row of its own. Its engine hash must equal this tree's, and its pressure after
+the timed steps must equal the default build's within 1e-8 relative (fused multiply-adds change
+the last bits, and 8000 steps of 4000 spheres grow them to about 1e-10), or the benchmark stops.
 """
 import os
 import statistics
@@ -59,7 +65,8 @@ def worker_ours(o):
     c.run(o.steps)
     dt = time.perf_counter() - t
     return dict(code="trueaniso", steps=o.steps, seconds=dt, n=s.num_bodies,
-                rebuilds=c.detection.rebuilds, pressure=float(engines.stress(s).trace() / 3))
+                rebuilds=c.detection.rebuilds, pressure=float(engines.stress(s).trace() / 3),
+                build=engines.build_arch(), source_hash=engines.source_hash())
 
 
 def worker_yade(o):
@@ -107,7 +114,16 @@ def options():
     p.add_argument("--yade-steps", type=int, default=0, help="timed steps of YADE (0: 2000), slower by an order")
     p.add_argument("--doc", help="Markdown file whose stepper table is replaced")
     p.add_argument("--block", default="stepper", help="name of the table's markers in --doc (one block per specimen)")
+    p.add_argument("--also-build", metavar="DIR",
+                   help="also time ours from this build tree, e.g. one configured with -DTRUEANISO_ARCH=x86-64-v3")
     o = cli.parse(p)
+    if o.also_build is not None:
+        o.also_build = os.path.abspath(o.also_build)
+        if not any(f.startswith("_trueaniso") and f.endswith(".so")
+                   for f in (os.listdir(os.path.join(o.also_build, "python"))
+                             if os.path.isdir(os.path.join(o.also_build, "python")) else ())):
+            cli.fail("--also-build: %s has no python/_trueaniso module; a build tree is what cmake -B names"
+                     % o.also_build)
     if not 1 <= o.tile <= 4:
         cli.fail("--tile must be 1 to 4, not %d" % o.tile)
     if not all(ch.isalnum() or ch == "-" for ch in o.block) or not o.block:
@@ -139,13 +155,30 @@ def options():
     return o
 
 
+ALSO = "ours (--also-build)"
+
+
 def run_worker(code, threads, o, dt):
     me = os.path.abspath(os.path.join(HERE, "bench_stepper.py"))
     steps = (o.yade_steps or 2000) if code == "yade" else (o.steps or 20000)
     if code.startswith("lammps"):
         return worker_lammps(code.split(" ", 1)[1], threads, o, dt, steps)
     args = ["--specimen", o.specimen, "--tile", str(o.tile), "--dt", repr(dt), "--steps", str(steps)]
+    if code == ALSO:
+        return _bench.run_worker(me, "ours", threads, args, timeout=3600, build=o.also_build)
     return _bench.run_worker(me, code, threads, args, timeout=3600)
+
+
+def disagreement(first, also):
+    """Why the --also-build run is not the default build's computation, or None: the same engine
+    sources, and the same pressure after the same steps within 1e-8 relative (module doc)."""
+    if also["source_hash"] != first["source_hash"]:
+        return ("--also-build: its module was built from other engine sources than this tree's; build the same "
+                "sources for another level (cmake -S . -B DIR -DTRUEANISO_ARCH=x86-64-v3)")
+    if not abs(also["pressure"] - first["pressure"]) <= 1e-8 * abs(first["pressure"]):
+        return ("--also-build: pressure %.12g Pa after the timed steps, the default build's %.12g: not the same "
+                "computation" % (also["pressure"], first["pressure"]))
+    return None
 
 
 def main():
@@ -158,32 +191,42 @@ def main():
     s = load(o)
     dt = o.dt or 0.5 * engines.TimeStepper.stiffness_bound(s)
     threads = o.thread_counts
-    rows = []
+    codes = o.codes + ([ALSO] if o.also_build else [])
+    ours = ["ours"] + ([ALSO] if o.also_build else [])
+    others = [c for c in o.codes if c != "ours"]
+    rows, level = [], {}
     for th in threads:
-        res = {c: [] for c in o.codes}
+        res = {c: [] for c in codes}
         for rep in range(o.repeats):
-            k = rep % len(o.codes)
-            for code in o.codes[k:] + o.codes[:k]:  # the order rotates, so no code always runs first
-                r = run_worker(code, th, o, dt)
+            k = rep % len(codes)
+            runs = {}
+            for code in codes[k:] + codes[:k]:  # the order rotates, so no code always runs first
+                r = runs[code] = run_worker(code, th, o, dt)
                 res[code].append(r["n"] * r["steps"] / r["seconds"])
+                level.setdefault(code, r.get("build"))
                 print("threads %d %-26s %.3f M particle-steps/s" % (th, code, res[code][-1] / 1e6), flush=True)
-        ratios = {c: [a / b for a, b in zip(res["ours"], res[c])] for c in o.codes if c != "ours"}
-        rows.append((th, {c: statistics.median(v) for c, v in res.items()}, ratios))
+            why = disagreement(runs["ours"], runs[ALSO]) if o.also_build else None
+            if why:
+                cli.fail(why, 1)
+        for mine in ours:
+            ratios = {c: [a / b for a, b in zip(res[mine], res[c])] for c in others}
+            rows.append((th, level[mine], statistics.median(res[mine]), {c: statistics.median(res[c]) for c in others},
+                         ratios))
     n = s.num_bodies
     names = {"ours": "trueaniso", "yade": "YADE Mindlin", "lammps granular": "LAMMPS granular (mindlin)",
              "lammps gran/hertz/history": "LAMMPS gran/hertz/history"}
-    others = [c for c in o.codes if c != "ours"]
     lines = ["Machine: %s. Specimen: %d spheres%s at 100 kPa (e = %.3f, Zm = %.2f), time step %.3g s, "
              "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
              "Figures in M particle-steps/s (medians); ratios: ours / theirs in the same round, median and range "
-             "over the rounds."
+             "over the rounds. Build: the x86-64 level ours was compiled for (TRUEANISO_ARCH; x86-64 is the "
+             "portable default)."
              % (_bench.machine(), n, (" (%s tiled %d x %d x %d)" % (os.path.basename(o.specimen), o.tile, o.tile, o.tile)
                                       if o.tile > 1 else ""), meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d")), "",
-             "| threads | %s |" % " | ".join(["trueaniso"] + ["%s | ratio" % names[c] for c in others]),
-             "|" + "---|" * (2 + 2 * len(others))]
-    for th, med, ratios in rows:
-        cells = ["%.2f" % (med["ours"] / 1e6)] + [
+             "| threads | build | %s |" % " | ".join(["trueaniso"] + ["%s | ratio" % names[c] for c in others]),
+             "|" + "---|" * (3 + 2 * len(others))]
+    for th, build, mine, med, ratios in rows:
+        cells = [build, "%.2f" % (mine / 1e6)] + [
             "%.3f | %.2f (%.2f-%.2f)" % (med[c] / 1e6, statistics.median(ratios[c]), min(ratios[c]), max(ratios[c]))
             for c in others]
         lines.append("| %d | %s |" % (th, " | ".join(cells)))

@@ -72,3 +72,25 @@ def test_bench_state_split_on_the_isotropic_state(specimen_100):
         proc = run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100, *args, timeout=60)
         one_line_error(proc, words)
         assert proc.stdout == ""
+
+
+def test_bench_stepper_times_a_second_build_in_the_same_rounds(specimen_100, tmp_path):
+    """--also-build DIR: ours from a second build tree (a build for another x86-64 level) gets a row
+    of its own, labelled with its level; here the same build twice, which must agree. A tree
+    without the module is refused before any run; a build of other sources, or a pressure off by
+    more than 1e-8 relative after the timed steps, stops the benchmark (not a speed-up of the same
+    computation)."""
+    from conftest import REPO, one_line_error, run_script
+    build = os.environ.get("TRUEANISO_BUILD", os.path.join(REPO, "build"))
+    proc = run_script(os.path.join("bench", "bench_stepper.py"), "--specimen", specimen_100, "--codes", "ours",
+                      "--threads", "1", "--repeats", "2", "--steps", "200", "--also-build", build, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    rows = [ln for ln in proc.stdout.splitlines() if ln.startswith("| 1 |")]
+    assert len(rows) == 2 and all(r.startswith("| 1 | x86-64 | ") for r in rows)
+    one_line_error(run_script(os.path.join("bench", "bench_stepper.py"), "--specimen", specimen_100,
+                              "--also-build", str(tmp_path), timeout=60), "has no python/_trueaniso module")
+    import bench_stepper  # on the path with _bench (above)
+    first = dict(source_hash="a", pressure=1e5)
+    assert bench_stepper.disagreement(first, dict(source_hash="a", pressure=1e5 * (1 + 5e-9))) is None
+    assert "other engine sources" in bench_stepper.disagreement(first, dict(source_hash="b", pressure=1e5))
+    assert "not the same computation" in bench_stepper.disagreement(first, dict(source_hash="a", pressure=1e5 * (1 + 2e-8)))
