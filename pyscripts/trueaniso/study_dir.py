@@ -258,6 +258,15 @@ def check(out, fingerprint, states):
             way = "continue it with --threads %d (under yade-double: -j %d), or %s" % (there, there, way)
             if resources.openmp_threads_env() == str(here):  # --threads 0 took it from there
                 more = " (OMP_NUM_THREADS=%s)" % os.environ["OMP_NUM_THREADS"] + more
+        if field == "code":
+            # A build for another x86-64 level is another code (provenance.code_version): say which,
+            # since the sources may well be the same.
+            from . import buildarch, engines
+            built = (meta.get("versions") or {}).get("build", buildarch.BASELINE)
+            if built != engines.build_arch():
+                more = " (its engines were built for %s, this run's for %s)" % (built, engines.build_arch()) + more
+                way = "continue it with a build for %s (TRUEANISO_ARCH=%s ./setup.sh, README), or %s" % (
+                    built, "" if built == buildarch.BASELINE else built, way)
         raise StudyMismatch("%s holds another study: %s is %s there, %s in this run%s; %s"
                             % (out, LABELS.get(field, field), _show(there), _show(here), more, way))
     have = meta.get("states", {})

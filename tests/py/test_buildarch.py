@@ -89,3 +89,23 @@ def test_cmake_refuses_a_level_that_is_not_a_named_x86_64_level(tmp_path, level)
                          capture_output=True, text=True)
     assert out.returncode != 0
     assert "TRUEANISO_ARCH=%s: one of x86-64-v2, x86-64-v3, x86-64-v4, or empty" % level in " ".join(out.stderr.split())
+
+
+def test_a_study_of_another_level_says_which_and_how_to_continue_it(tmp_path):
+    """A study made by a v3 build, rerun by this (baseline) build: refused as another code version,
+    and the refusal names both levels and the build that continues it (the sources may be the same)."""
+    from trueaniso import study_dir
+    there = dict(code="src-aaaa", threads=1)
+    study_dir.write_metadata(str(tmp_path), there, [(1, 0.0, 100e3)], ["z"],
+                             dict(versions=dict(code="src-aaaa", build="x86-64-v3")))
+    with pytest.raises(study_dir.StudyMismatch) as refused:
+        study_dir.check(str(tmp_path), dict(there, code="src-bbbb"), [(1, 0.0, 100e3)])
+    said = str(refused.value)
+    assert "built for x86-64-v3, this run's for %s" % engines.build_arch() in said
+    assert "continue it with a build for x86-64-v3 (TRUEANISO_ARCH=x86-64-v3 ./setup.sh" in said
+    # the same level: only the code version is named, as before
+    study_dir.write_metadata(str(tmp_path / "same"), there, [(1, 0.0, 100e3)], ["z"],
+                             dict(versions=dict(code="src-aaaa", build=engines.build_arch())))
+    with pytest.raises(study_dir.StudyMismatch) as refused:
+        study_dir.check(str(tmp_path / "same"), dict(there, code="src-bbbb"), [(1, 0.0, 100e3)])
+    assert "this run's for" not in str(refused.value) and "continue it with a build" not in str(refused.value)
