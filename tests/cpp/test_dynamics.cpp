@@ -9,6 +9,7 @@
 #endif
 
 #include "Drivers.hpp"
+#include "SameBits.hpp"
 #include "core/Parallel.hpp"
 #include "RandomGas.hpp"
 #include "dynamics/ContactRefresh.hpp"
@@ -162,9 +163,12 @@ TEST(Stress, OnePassMeasuresEqualTheThreeSums) {
     omp_set_num_threads(threads);
 #endif
     const ContactMeasures m = contactMeasures(*s);
-    EXPECT_TRUE(m.stress == loveWeberStress(*s));
-    EXPECT_TRUE(m.stiffness == affineStiffness(*s));
-    EXPECT_EQ(m.unbalanced, unbalancedForce(*s));
+    // Equal bits on the baseline build; the last digits on a build for x86-64-v3 (SameBits.hpp).
+    const Mat3 stress = loveWeberStress(*s);
+    const Vec6 stiffness = affineStiffness(*s);
+    EXPECT_LE((m.stress - stress).norm(), test::kSameBits * stress.norm());
+    EXPECT_LE((m.stiffness - stiffness).norm(), test::kSameBits * stiffness.norm());
+    EXPECT_NEAR(m.unbalanced, unbalancedForce(*s), test::kSameBits * m.unbalanced);
     EXPECT_GT(m.stress.trace(), 0.0);
 #ifdef _OPENMP
   }
