@@ -35,11 +35,19 @@ log=build/build.log
 # TRUEANISO_ARCH=x86-64-v3 ./setup.sh (or ./main.sh, ./test.sh) builds for that x86-64 level, about
 # 1.2-1.3x faster and different in the last bits (CMakeLists.txt); unset, the build keeps the level it
 # was configured with (the portable baseline unless asked), TRUEANISO_ARCH= returns to the baseline.
-if ! { cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 \
-         ${TRUEANISO_ARCH+"-DTRUEANISO_ARCH=$TRUEANISO_ARCH"} &&
-       cmake --build build -j"$(nproc)" ${targets:+--target $targets}; } >"$log" 2>&1; then
+if ! cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 \
+       ${TRUEANISO_ARCH+"-DTRUEANISO_ARCH=$TRUEANISO_ARCH"} >"$log" 2>&1; then
+  tail -n 40 "$log" >&2
+  echo "setup: CMake refused to configure the build (full log: $log)" >&2
+  exit 1
+fi
+if ! cmake --build build -j"$(nproc)" ${targets:+--target $targets} >>"$log" 2>&1; then
   tail -n 40 "$log" >&2
   echo "setup: build failed (full log: $log)" >&2
   exit 1
+fi
+level=$(sed -n 's/^TRUEANISO_ARCH_ACCEPTED:INTERNAL=//p' build/CMakeCache.txt)
+if [ -n "$level" ] && [ "$level" != x86-64 ]; then  # sticky: say so on every run
+  echo "setup: the engines are built for $level (TRUEANISO_ARCH; TRUEANISO_ARCH= ./setup.sh returns to the portable baseline)"
 fi
 grep -E "warning:" "$log" || true

@@ -37,6 +37,8 @@ def _find_extension():
             "trueaniso: the compiled module _trueaniso was not found in %s; build it first "
             "(./main.sh or ./test.sh do, or: cmake -S . -B build && cmake --build build)" % candidates
         ) from exc
+    if found is not None and found.origin:
+        buildarch.refuse_mismatch(os.path.dirname(found.origin), _trueaniso)
     return _trueaniso
 
 

@@ -52,13 +52,29 @@ def module_level(directory):
         return BASELINE
 
 
+REBUILD = ("rebuild it here for the portable baseline (in a checkout: TRUEANISO_ARCH= ./setup.sh; with CMake: "
+           "-DTRUEANISO_ARCH= and build again)")
+
+
 def refuse_unsupported(directory, flags=None):
     """ImportError, before the module is loaded, when it was compiled for a level this processor
-    lacks."""
+    lacks, or for one this code does not know (a file from elsewhere)."""
     level = module_level(directory)
+    if level != BASELINE and level not in LEVEL_FLAGS:
+        raise ImportError("trueaniso: %s says the compiled module beside it was built for %r, not a level this "
+                          "code knows (%s); %s" % (os.path.join(directory, ARCH_FILE), level,
+                                                   ", ".join([BASELINE] + sorted(LEVEL_FLAGS)), REBUILD))
     missing = missing_features(level, cpu_flags() if flags is None else flags)
     if missing:
-        raise ImportError(
-            "trueaniso: the compiled module in %s was built for %s (TRUEANISO_ARCH), and this processor "
-            "lacks %s; rebuild it here for the portable baseline: cmake -S . -B build -DTRUEANISO_ARCH= "
-            "&& cmake --build build" % (directory, level, " ".join(missing)))
+        raise ImportError("trueaniso: the compiled module in %s was built for %s (TRUEANISO_ARCH), and this "
+                          "processor lacks %s; %s" % (directory, level, " ".join(missing), REBUILD))
+
+
+def refuse_mismatch(directory, module):
+    """ImportError when the loaded module's own level differs from the file beside it: the file is
+    what the check above trusts, so a stale one must not pass unnoticed."""
+    said, built = module_level(directory), getattr(module, "build_arch", lambda: BASELINE)()
+    if said != built:
+        raise ImportError("trueaniso: the compiled module in %s was built for %s, but %s beside it says %s; "
+                          "build it again (./setup.sh, or cmake --build) so that they agree"
+                          % (directory, built, ARCH_FILE, said))

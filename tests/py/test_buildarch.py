@@ -36,6 +36,22 @@ def test_cpu_flags_are_read_from_the_first_flags_line(tmp_path):
     assert buildarch.cpu_flags(str(tmp_path / "absent")) is None
 
 
+def test_a_level_file_that_names_no_known_level_or_not_the_modules_is_refused(tmp_path):
+    (tmp_path / "_trueaniso.arch").write_text("x86-64-v5\n")
+    with pytest.raises(ImportError, match=r"built for 'x86-64-v5', not a level this code knows"):
+        buildarch.refuse_unsupported(str(tmp_path), flags=V3)
+
+    class Module:  # a module built for the baseline beside a file left by a configure for v3
+        @staticmethod
+        def build_arch():
+            return "x86-64"
+    (tmp_path / "_trueaniso.arch").write_text("x86-64-v3\n")
+    with pytest.raises(ImportError, match="was built for x86-64, but _trueaniso.arch beside it says x86-64-v3"):
+        buildarch.refuse_mismatch(str(tmp_path), Module)
+    (tmp_path / "_trueaniso.arch").write_text("x86-64\n")
+    buildarch.refuse_mismatch(str(tmp_path), Module)
+
+
 def test_a_module_built_for_a_level_the_processor_lacks_is_refused_before_loading(tmp_path):
     (tmp_path / "_trueaniso.arch").write_text("x86-64-v3\n")
     with pytest.raises(ImportError, match=r"built for x86-64-v3 .* lacks avx2 fma; rebuild it here"):
@@ -47,8 +63,10 @@ def test_a_module_built_for_a_level_the_processor_lacks_is_refused_before_loadin
 
 def test_the_package_checks_the_level_before_it_imports_the_module(tmp_path):
     """Through `trueaniso.engines`, in a fresh interpreter: the module of this build, beside a file
-    saying x86-64-v3, on a processor reported without v3's flags, is refused with the message; the
-    same with the processor's flags complete loads it."""
+    saying x86-64-v3, on a processor reported without v3's flags, is refused with the message before
+    it loads; with the processor's flags complete it loads, and the module's own level is then
+    found to differ from the file's (this build is the baseline's) and refused too; with the file
+    saying the module's own level it loads."""
     build = tmp_path / "build" / "python"
     build.mkdir(parents=True)
     os.symlink(engines.__file__, build / os.path.basename(engines.__file__))
@@ -59,7 +77,13 @@ def test_the_package_checks_the_level_before_it_imports_the_module(tmp_path):
     lacking = subprocess.run([sys.executable, "-c", probe % "{'fpu'}"], env=env, capture_output=True, text=True)
     assert lacking.returncode != 0 and "built for x86-64-v3" in lacking.stderr and "lacks abm avx" in lacking.stderr
     whole = subprocess.run([sys.executable, "-c", probe % repr(V3)], env=env, capture_output=True, text=True)
-    assert whole.returncode == 0 and whole.stdout.strip().startswith(str(build)), whole.stderr
+    if engines.build_arch() == "x86-64-v3":  # this build is v3 itself: the file is its own
+        assert whole.returncode == 0 and whole.stdout.strip().startswith(str(build)), whole.stderr
+    else:
+        assert whole.returncode != 0 and "beside it says x86-64-v3" in whole.stderr
+    (build / "_trueaniso.arch").write_text(engines.build_arch() + "\n")
+    own = subprocess.run([sys.executable, "-c", probe % repr(V3)], env=env, capture_output=True, text=True)
+    assert own.returncode == 0 and own.stdout.strip().startswith(str(build)), own.stderr
 
 
 def test_this_module_says_the_level_written_beside_it():
@@ -88,7 +112,34 @@ def test_cmake_refuses_a_level_that_is_not_a_named_x86_64_level(tmp_path, level)
     out = subprocess.run(["cmake", "-S", REPO, "-B", str(tmp_path / "b"), "-DTRUEANISO_ARCH=" + level],
                          capture_output=True, text=True)
     assert out.returncode != 0
-    assert "TRUEANISO_ARCH=%s: one of x86-64-v2, x86-64-v3, x86-64-v4, or empty" % level in " ".join(out.stderr.split())
+    said = " ".join(out.stderr.split())
+    assert 'TRUEANISO_ARCH="%s" is not a level this build knows: give one of x86-64-v2, x86-64-v3, x86-64-v4' % level in said
+    assert "This build directory keeps the portable baseline." in said
+
+
+def _cache(build, key):
+    for line in (build / "CMakeCache.txt").read_text().splitlines():
+        if line.startswith(key + ":"):
+            return line.split("=", 1)[1]
+    return None
+
+
+def test_a_refused_level_leaves_the_build_at_its_level_and_a_plain_configure_works(tmp_path):
+    """An outside try: after TRUEANISO_ARCH=native was refused, the value stayed in the cache and every
+    later plain ./setup.sh failed on it. Now the cache keeps the level the build had (here v3,
+    given as ' X86-64-V3': spaces and case are forgiven), and a plain configure succeeds at it."""
+    build = tmp_path / "b"
+    configure = ["cmake", "-S", REPO, "-B", str(build)]
+    subprocess.run(configure + ["-DTRUEANISO_ARCH= X86-64-V3"], check=True, capture_output=True)
+    assert _cache(build, "TRUEANISO_ARCH_ACCEPTED") == "x86-64-v3"
+    refused = subprocess.run(configure + ["-DTRUEANISO_ARCH=native"], capture_output=True, text=True)
+    assert refused.returncode != 0 and "This build directory keeps x86-64-v3." in " ".join(refused.stderr.split())
+    assert _cache(build, "TRUEANISO_ARCH") == "x86-64-v3"
+    plain = subprocess.run(configure, capture_output=True, text=True)
+    assert plain.returncode == 0, plain.stderr
+    assert _cache(build, "TRUEANISO_ARCH_ACCEPTED") == "x86-64-v3"
+    assert (build / "engines" / "python" / "generated" / "_trueaniso.arch").read_text() == "x86-64-v3\n"
+    assert not (build / "python" / "_trueaniso.arch").exists()  # beside the module only once it is built
 
 
 def test_a_study_of_another_level_says_which_and_how_to_continue_it(tmp_path):
