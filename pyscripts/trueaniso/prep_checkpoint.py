@@ -19,7 +19,7 @@ import json
 import os
 import time
 
-from . import engines, provenance, specimen_file, study_dir
+from . import buildarch, engines, provenance, specimen_file, study_dir
 from .refusal import Refusal
 
 EVERY = 50_000  # steps: 3 min of a 4000-sphere preparation, 11 min of clump1-4000, 30 min at 53,004
@@ -38,8 +38,10 @@ def path_for(out):
 def for_specimen(out, settings, every=EVERY, log=None, way_out="--force"):
     """The checkpoints of the preparation of specimen file `out` with `settings` (a dict of every
     option that makes the specimen: assembly, count, seed, recipe), bound also to the engine
-    threads (set them first) and the code version."""
-    recipe = dict(settings, threads=engines.threads(), code=provenance.code_version(), every=every)
+    threads (set them first) and the code version, whose x86-64 level is named (build) so that a
+    refusal can say which build continues it."""
+    recipe = dict(settings, threads=engines.threads(), code=provenance.code_version(), build=engines.build_arch(),
+                  every=every)
     return Checkpoints(path_for(out), recipe, every, log, way_out)
 
 
@@ -103,10 +105,16 @@ class Checkpoints:
         """Refuses a checkpoint on disk of another recipe (CheckpointMismatch); differences() else."""
         diff = self.differences()
         if diff:
+            built = self.saved_recipe().get("build")
+            rebuild = ""
+            if built is not None and built != self.recipe.get("build"):  # an outside try: two hashes said nothing
+                rebuild = (" (it was made by engines built for %s, this run's are for %s: TRUEANISO_ARCH=%s "
+                           "./setup.sh builds them so, README)"
+                           % (built, self.recipe.get("build"), "" if built == buildarch.BASELINE else built))
             raise CheckpointMismatch(
                 "the preparation checkpoint %s was made with other settings (%s); this run cannot go on "
-                "from it. Use the same options (and code) to resume, or %s to prepare from the start"
-                % (self.path, "; ".join(diff), self.way_out))
+                "from it. Use the same options (and code%s) to resume, or %s to prepare from the start"
+                % (self.path, "; ".join(diff), rebuild, self.way_out))
         return diff
 
     def resume(self):

@@ -273,3 +273,25 @@ def test_closed_output_is_one_line_not_a_traceback(tmp_path):
     proc.wait(timeout=120)
     assert proc.returncode == 141, err
     assert err == "error: output closed (broken pipe) before the first checkpoint; the same command starts over\n", err
+
+
+def test_a_checkpoint_of_another_build_level_says_which_build_continues_it(tmp_path, monkeypatch):
+    """An outside try: a checkpoint written by a v3 build, resumed by the baseline build, was refused
+    with two code hashes only, and offered --force (throwing away up to 82 minutes of clump
+    preparation). The recipe now names the level, and the refusal says which build goes on."""
+    path = str(tmp_path / "ck")
+    with pytest.raises(Interrupt):
+        specimen.prepare_spheres(100, seed=7, progress=_stop_after_checkpoints(path, 1),
+                                 checkpoints=prep_checkpoint.Checkpoints(path, dict(seed=7, code="src-v3", build="x86-64-v3"),
+                                                                         20_000))
+    here = prep_checkpoint.Checkpoints(path, dict(seed=7, code="src-base", build="x86-64"), 20_000)
+    with pytest.raises(prep_checkpoint.CheckpointMismatch,
+                       match=r"made by engines built for x86-64-v3, this run's are for x86-64: TRUEANISO_ARCH=x86-64-v3 "
+                             r"\./setup\.sh"):
+        specimen.prepare_spheres(100, seed=7, checkpoints=here)
+    same = prep_checkpoint.Checkpoints(path, dict(seed=8, code="src-v3", build="x86-64-v3"), 20_000)
+    with pytest.raises(prep_checkpoint.CheckpointMismatch) as refused:  # same level: no word of builds
+        specimen.prepare_spheres(100, seed=8, checkpoints=same)
+    assert "engines built for" not in str(refused.value)
+    # the real recipe names this build's level
+    assert prep_checkpoint.for_specimen(str(tmp_path / "s.npz"), dict(n=1)).recipe["build"] == engines.build_arch()
