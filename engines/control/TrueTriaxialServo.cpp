@@ -37,8 +37,11 @@ void TrueTriaxialServo::apply(Scene& s) {
 }
 
 Vec6 TrueTriaxialServo::finalStress() const {
+  // Fixed-size halves rather than the comma initialiser, whose run-time-sized blocks GCC 12 warned
+  // about on the x86-64-v3 build (a 256-bit load of a Vec3, which Eigen never executes).
   Vec6 f;
-  f << goal.stresses(), shearGoal;
+  f.head<3>() = goal.stresses();
+  f.tail<3>() = shearGoal;
   return f;
 }
 
