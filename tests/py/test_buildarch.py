@@ -143,17 +143,20 @@ def test_a_refused_level_leaves_the_build_at_its_level_and_a_plain_configure_wor
 
 
 def test_a_study_of_another_level_says_which_and_how_to_continue_it(tmp_path):
-    """A study made by a v3 build, rerun by this (baseline) build: refused as another code version,
-    and the refusal names both levels and the build that continues it (the sources may be the same)."""
+    """A study made by a build for another level (v3, or the baseline when this build is v3), rerun by
+    this build: refused as another code version, and the refusal names both levels and the build
+    that continues it (the sources may be the same)."""
     from trueaniso import study_dir
+    other = "x86-64-v3" if engines.build_arch() == buildarch.BASELINE else buildarch.BASELINE
     there = dict(code="src-aaaa", threads=1)
     study_dir.write_metadata(str(tmp_path), there, [(1, 0.0, 100e3)], ["z"],
-                             dict(versions=dict(code="src-aaaa", build="x86-64-v3")))
+                             dict(versions=dict(code="src-aaaa", build=other)))
     with pytest.raises(study_dir.StudyMismatch) as refused:
         study_dir.check(str(tmp_path), dict(there, code="src-bbbb"), [(1, 0.0, 100e3)])
     said = str(refused.value)
-    assert "built for x86-64-v3, this run's for %s" % engines.build_arch() in said
-    assert "continue it with a build for x86-64-v3 (TRUEANISO_ARCH=x86-64-v3 ./setup.sh" in said
+    assert "built for %s, this run's for %s" % (other, engines.build_arch()) in said
+    assert "continue it with a build for %s (TRUEANISO_ARCH=%s ./setup.sh" % (
+        other, "" if other == buildarch.BASELINE else other) in said
     # the same level: only the code version is named, as before
     study_dir.write_metadata(str(tmp_path / "same"), there, [(1, 0.0, 100e3)], ["z"],
                              dict(versions=dict(code="src-aaaa", build=engines.build_arch())))
