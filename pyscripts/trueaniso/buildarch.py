@@ -52,8 +52,13 @@ def module_level(directory):
         return BASELINE
 
 
-REBUILD = ("rebuild it here for the portable baseline (in a checkout: TRUEANISO_ARCH= ./setup.sh; with CMake: "
-           "-DTRUEANISO_ARCH= and build again)")
+def setup_command(level):
+    """The command of a checkout that builds the engines for `level` (README, setup.sh)."""
+    return "TRUEANISO_ARCH=%s ./setup.sh" % ("" if level == BASELINE else level)
+
+
+REBUILD = ("rebuild it here for the portable baseline (in a checkout: %s; with CMake: -DTRUEANISO_ARCH= and "
+           "build again)" % setup_command(BASELINE))
 
 
 def refuse_unsupported(directory, flags=None):

@@ -108,9 +108,8 @@ class Checkpoints:
             built = self.saved_recipe().get("build")
             rebuild = ""
             if built is not None and built != self.recipe.get("build"):  # an outside try: two hashes said nothing
-                rebuild = (" (it was made by engines built for %s, this run's are for %s: TRUEANISO_ARCH=%s "
-                           "./setup.sh builds them so, README)"
-                           % (built, self.recipe.get("build"), "" if built == buildarch.BASELINE else built))
+                rebuild = (" (it was made by engines built for %s, this run's are for %s: %s builds them so, "
+                           "README)" % (built, self.recipe.get("build"), buildarch.setup_command(built)))
             raise CheckpointMismatch(
                 "the preparation checkpoint %s was made with other settings (%s); this run cannot go on "
                 "from it. Use the same options (and code%s) to resume, or %s to prepare from the start"

@@ -265,8 +265,8 @@ def check(out, fingerprint, states):
             built = (meta.get("versions") or {}).get("build", buildarch.BASELINE)
             if built != engines.build_arch():
                 more = " (its engines were built for %s, this run's for %s)" % (built, engines.build_arch()) + more
-                way = "continue it with a build for %s (TRUEANISO_ARCH=%s ./setup.sh, README), or %s" % (
-                    built, "" if built == buildarch.BASELINE else built, way)
+                way = "continue it with a build for %s (%s, README), or %s" % (
+                    built, buildarch.setup_command(built), way)
         raise StudyMismatch("%s holds another study: %s is %s there, %s in this run%s; %s"
                             % (out, LABELS.get(field, field), _show(there), _show(here), more, way))
     have = meta.get("states", {})
