@@ -1,9 +1,12 @@
 """The dynamic stress probe converges to the exact static stiffness (issue 5), and the affine part
 of the static solve equals the micromechanical stiffness of Eq. 35 with zeta = 1 (issue 4 x 5)."""
+import os
+
 import numpy as np
 import pytest
 
-from trueaniso import dem, engines, fabric, specimen, statics, triaxial
+from conftest import REPO
+from trueaniso import dem, engines, fabric, specimen_file, statics, triaxial
 
 
 def voigt(sig):
@@ -15,8 +18,12 @@ def voigt(sig):
 def held():
     """A 300-sphere specimen and the six stresses it holds (its shear stresses are within the
     preparation's 100 Pa of zero; the probes hold them where they are, as the static solve takes
-    the state as it is)."""
-    scene, _ = specimen.prepare_spheres(300, seed=6)
+    the state as it is). The specimen is a committed file (tests/data, prepare_spheres(300, seed=6)
+    by the baseline build), not prepared here: a preparation is chaotic, and a build for
+    x86-64-v3 ends in another packing, on which the x probe with rotations free is 4.4e-4 from the
+    static solve (beyond this test's 2e-4) in both builds, where this packing gives 3e-6 in both:
+    the tolerances below belong to a packing, not to a build."""
+    scene, _ = specimen_file.load(os.path.join(REPO, "tests", "data", "spheres-300-s6.npz"))
     return scene, voigt(engines.stress(scene))
 
 
