@@ -65,7 +65,9 @@ def refuse_unsupported(directory, flags=None):
     """ImportError, before the module is loaded, when it was compiled for a level this processor
     lacks, or for one this code does not know (a file from elsewhere)."""
     level = module_level(directory)
-    if level != BASELINE and level not in LEVEL_FLAGS:
+    if level == BASELINE:  # every x86-64 processor runs it: no need to read the flags
+        return
+    if level not in LEVEL_FLAGS:
         raise ImportError("trueaniso: %s says the compiled module beside it was built for %r, not a level this "
                           "code knows (%s); %s" % (os.path.join(directory, ARCH_FILE), level,
                                                    ", ".join([BASELINE] + sorted(LEVEL_FLAGS)), REBUILD))
