@@ -11,10 +11,11 @@ update), no damping, fix nve/sphere, on N MPI ranks (the Debian build has no Ope
 data files written by lammps_peer.py. LAMMPS's pair pressure at step 0 is checked against ours
 before its time counts: the same packing and law, or the run stops. Each run is its own process;
 the figure is particle-steps per second of the timed steps only (set-up excluded); repeats
-interleave the codes (their order rotates) and the median is reported. A ratio is the median,
-over the rounds, of ours against the other code in the same round (each round runs every code
-once, minutes apart at most), with its range: this machine's speed drifts by more than a change
-of code over an hour, and a ratio of the medians would mix runs an hour apart. With --doc the table
+interleave the codes and the thread counts (both orders rotate) and the median is reported. A
+ratio is the median, over the rounds, of ours against the other code in the same round (each
+round runs every code on every thread count once, minutes apart at most), with its range: this
+machine's speed drifts by more than a change of code over an hour, and a ratio of the medians
+would mix runs an hour apart. The speed-up over the first thread count is paired the same way. With --doc the table
 between the markers <!-- stepper:begin --> and <!-- stepper:end --> of that file is replaced.
 
 --also-build DIR times ours a second time, from the build tree DIR (TRUEANISO_BUILD), in the same
@@ -181,6 +182,15 @@ def disagreement(first, also):
     return None
 
 
+def speedups(these, first):
+    """Ours on this row's thread count over ours on the first thread count, round by round: the
+    median and range as a table cell ("1" on the first count's own rows)."""
+    if these is first:
+        return "1"
+    r = [a / b for a, b in zip(these, first)]
+    return "%.2f (%.2f-%.2f)" % (statistics.median(r), min(r), max(r))
+
+
 def main():
     o = options()
     if o.worker:
@@ -194,39 +204,51 @@ def main():
     codes = o.codes + ([ALSO] if o.also_build else [])
     ours = ["ours"] + ([ALSO] if o.also_build else [])
     others = [c for c in o.codes if c != "ours"]
-    rows, level = [], {}
-    for th in threads:
-        res = {c: [] for c in codes}
-        for rep in range(o.repeats):
+    level = {}
+    # Rounds outside, thread counts inside: every thread count of a round runs within minutes of the
+    # others, so the speed-up over one thread is a ratio within a round too. Timed as separate
+    # loops over thread counts, the 2-thread runs came tens of minutes after the 1-thread ones and
+    # the speed-up took the machine's drift with it (1.57 at 16,000 spheres on 2026-11-30, where
+    # paired runs gave 1.9-2.05 that evening).
+    res = {(th, c): [] for th in threads for c in codes}
+    for rep in range(o.repeats):
+        j = rep % len(threads)
+        for th in threads[j:] + threads[:j]:  # the order of the thread counts rotates too
             k = rep % len(codes)
             runs = {}
             for code in codes[k:] + codes[:k]:  # the order rotates, so no code always runs first
                 r = runs[code] = run_worker(code, th, o, dt)
-                res[code].append(r["n"] * r["steps"] / r["seconds"])
+                res[th, code].append(r["n"] * r["steps"] / r["seconds"])
                 level.setdefault(code, r.get("build"))
-                print("threads %d %-26s %.3f M particle-steps/s" % (th, code, res[code][-1] / 1e6), flush=True)
+                print("round %d threads %d %-26s %.3f M particle-steps/s" % (rep + 1, th, code, res[th, code][-1] / 1e6),
+                      flush=True)
             why = disagreement(runs["ours"], runs[ALSO]) if o.also_build else None
             if why:
                 cli.fail(why, 1)
+    rows = []
+    for th in threads:
         for mine in ours:
-            ratios = {c: [a / b for a, b in zip(res[mine], res[c])] for c in others}
-            rows.append((th, level[mine], statistics.median(res[mine]), {c: statistics.median(res[c]) for c in others},
-                         ratios))
+            ratios = {c: [a / b for a, b in zip(res[th, mine], res[th, c])] for c in others}
+            rows.append((th, level[mine], statistics.median(res[th, mine]), {c: statistics.median(res[th, c]) for c in others},
+                         ratios, speedups(res[th, mine], res[threads[0], mine])))
     n = s.num_bodies
     names = {"ours": "trueaniso", "yade": "YADE Mindlin", "lammps granular": "LAMMPS granular (mindlin)",
              "lammps gran/hertz/history": "LAMMPS gran/hertz/history"}
+    plural = "s" * (threads[0] > 1)
     lines = ["Machine: %s. Specimen: %d spheres%s at 100 kPa (e = %.3f, Zm = %.2f), time step %.3g s, "
              "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
              "Figures in M particle-steps/s (medians); ratios: ours / theirs in the same round, median and range "
-             "over the rounds. Build: the x86-64 level ours was compiled for (TRUEANISO_ARCH; x86-64 is the "
+             "over the rounds; x %d thread%s: ours / ours on %d thread%s in the same round, median and range. "
+             "Build: the x86-64 level ours was compiled for (TRUEANISO_ARCH; x86-64 is the "
              "portable default)."
              % (_bench.machine(), n, (" (%s tiled %d x %d x %d)" % (os.path.basename(o.specimen), o.tile, o.tile, o.tile)
                                       if o.tile > 1 else ""), meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
-                time.strftime("%Y-%m-%d")), "",
-             "| threads | build | %s |" % " | ".join(["trueaniso"] + ["%s | ratio" % names[c] for c in others]),
-             "|" + "---|" * (3 + 2 * len(others))]
-    for th, build, mine, med, ratios in rows:
-        cells = [build, "%.2f" % (mine / 1e6)] + [
+                time.strftime("%Y-%m-%d"), threads[0], plural, threads[0], plural), "",
+             "| threads | build | %s |" % " | ".join(["trueaniso", "x %d thread%s" % (threads[0], plural)]
+                                                     + ["%s | ratio" % names[c] for c in others]),
+             "|" + "---|" * (4 + 2 * len(others))]
+    for th, build, mine, med, ratios, up in rows:
+        cells = [build, "%.2f" % (mine / 1e6), up] + [
             "%.3f | %.2f (%.2f-%.2f)" % (med[c] / 1e6, statistics.median(ratios[c]), min(ratios[c]), max(ratios[c]))
             for c in others]
         lines.append("| %d | %s |" % (th, " | ".join(cells)))

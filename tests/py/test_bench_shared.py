@@ -95,3 +95,24 @@ def test_bench_stepper_times_a_second_build_in_the_same_rounds(specimen_100, tmp
     assert bench_stepper.disagreement(first, dict(source_hash="a", pressure=1e5 * (1 + 5e-9))) is None
     assert "other engine sources" in bench_stepper.disagreement(first, dict(source_hash="b", pressure=1e5))
     assert "not the same computation" in bench_stepper.disagreement(first, dict(source_hash="a", pressure=1e5 * (1 + 2e-8)))
+
+
+def test_bench_stepper_speed_up_is_paired_within_rounds(specimen_100):
+    """The speed-up over one thread is ours / ours on one thread in the same round (median and range),
+    not a ratio of medians taken from loops over thread counts minutes apart: every thread count
+    runs in every round, and the table has the column."""
+    from conftest import run_script
+    proc = run_script(os.path.join("bench", "bench_stepper.py"), "--specimen", specimen_100, "--codes", "ours",
+                      "--threads", "1,2", "--repeats", "2", "--steps", "100", timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    rounds = [ln.split()[:4] for ln in proc.stdout.splitlines() if ln.startswith("round ")]
+    assert sorted(rounds) == [["round", "1", "threads", "1"], ["round", "1", "threads", "2"],
+                              ["round", "2", "threads", "1"], ["round", "2", "threads", "2"]]
+    assert rounds[0][1] == rounds[1][1] == "1"  # both thread counts of round 1 before round 2
+    assert "| threads | build | trueaniso | x 1 thread |" in proc.stdout
+    assert [ln.rstrip(" |").split(" | ")[3] == "1" for ln in proc.stdout.splitlines() if ln.startswith("| 1 |")] == [True]
+    import bench_stepper
+    # Round by round: 4/2 and 1/1, median 1.5; the ratio of the medians would be 2.5 / 1.5 = 1.67.
+    assert bench_stepper.speedups([4.0, 1.0], [2.0, 1.0]) == "1.50 (1.00-2.00)"
+    same = [3.0, 2.0]
+    assert bench_stepper.speedups(same, same) == "1"
