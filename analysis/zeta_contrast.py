@@ -20,10 +20,13 @@ NEEDED = (["state", "probe", "E", "rotations", "Np", "sigma_x", "sigma_y", "sigm
           + ["M_" + "".join(AXES[k] for k in idx) for idx in fabric.M_COLUMNS] + ["mic_E_" + a for a in AXES])
 
 
-def read_probe_table(path, complete_only=False):
+def read_probe_table(path, complete_only=False, notes=None):
     """{(rotations, state): {axis: row}} in file order. A state without all three probes is an
-    error, or left out with complete_only (a study still running, or resumed with fewer axes)."""
+    error, or left out with complete_only (a study still running, or resumed with fewer axes).
+    What was left out of the file (a torn last row) is appended to `notes` if given."""
     rows = read_probes(path, NEEDED)
+    if rows.note and notes is not None:
+        notes.append(rows.note)
     states = collections.OrderedDict()
     for r in rows:
         if r["probe"] in SHEAR_PROBES:  # shear probes (G_ij) take no part in the E_i contrast
@@ -67,10 +70,11 @@ def check_rebuild(path, state, f, r, shear_modulus, poisson):
                            "the row's mic_E = %s" % (path, state, shear_modulus, poisson, p["E"], mic))
 
 
-def sources(path, shear_modulus, poisson, complete_only=False):
-    """One source per rotations value of the table: states, E (n, 3), parts per Nc/V, stresses."""
+def sources(path, shear_modulus, poisson, complete_only=False, notes=None):
+    """One source per rotations value of the table: states, E (n, 3), parts per Nc/V, stresses;
+    `notes` as read_probe_table's."""
     out = collections.OrderedDict()
-    for (rot, state), per_axis in read_probe_table(path, complete_only).items():
+    for (rot, state), per_axis in read_probe_table(path, complete_only, notes).items():
         r = per_axis["z"]
         f = fabric_of_row(r)
         check_rebuild(path, state, f, r, shear_modulus, poisson)
@@ -91,8 +95,10 @@ def parts_of(src, density="eq36"):
 def fit(path, shear_modulus, poisson, min_states=2, rotations=None):
     """zeta_h, zeta_v over the complete states of a single-rotations table, or of its rows of
     `rotations` (free, restrained) in a mixed one (fit_contrast's dict without its arrays, plus the
-    states used), or None with fewer than `min_states` states."""
-    found = sources(path, shear_modulus, poisson, complete_only=True)
+    states used, and "notes": what was left out of the file, a torn last row), or None with fewer
+    than `min_states` states."""
+    notes = []
+    found = sources(path, shear_modulus, poisson, complete_only=True, notes=notes)
     if rotations is not None:
         found = [s for s in found if s["rotations"] == rotations]
     if len(found) > 1:
@@ -104,6 +110,7 @@ def fit(path, shear_modulus, poisson, min_states=2, rotations=None):
     result = zeta.fit_contrast(np.array(src["E"], dtype=float), *parts_of(src), min_states=min_states)
     out = {k: v for k, v in result.items() if not isinstance(v, np.ndarray)}
     out["states"] = list(src["states"])
+    out["notes"] = notes
     return out
 
 
@@ -149,6 +156,8 @@ def main(argv=None):
         sys.stderr.write("error: %s has fewer than 2 states probed on x, y and z%s: nothing to fit\n"
                          % (o.results, "" if o.rotations is None else " with rotations %s" % o.rotations))
         return 2
+    for note in contrast["notes"]:  # a fit that left a row out says so (it was silent)
+        sys.stderr.write("note: %s\n" % note)
     print(said(contrast))
     return 0
 

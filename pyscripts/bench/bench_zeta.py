@@ -193,9 +193,11 @@ BAND_HEADER = [
 
 def main(o):
     t0 = time.time()
-    sources = []
+    sources, notes = [], []
     for path in o.csv:  # read and check every table before the (slower) static solves
-        sources += zeta_contrast.sources(path, o.shear_modulus, o.poisson)
+        sources += zeta_contrast.sources(path, o.shear_modulus, o.poisson, notes=notes)
+    for note in notes:  # a torn last row is left out: say so
+        sys.stderr.write("note: %s\n" % note)
     if o.states:
         sources = static_sources(o.states) + sources
     lines, bands, shifts = list(MAIN_HEADER), list(BAND_HEADER), []

@@ -560,3 +560,10 @@ def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
     assert proc.returncode == 2 and "mixes rotations" in proc.stderr and "--rotations" in proc.stderr
     proc = tool(str(bare), *material, "--rotations", "free")
     assert proc.returncode == 0 and "zeta_h = 0.116 +/- 0.015, zeta_v = 0.111 +/- 0.015" in proc.stdout, proc.stderr
+    # a torn last row (a run killed mid-write) is left out of the fit, and the command says so (it was silent)
+    torn = tmp_path / "torn.csv"
+    text = open(os.path.join(REPO, "docs", "data", "spheres-4000-s1", "probes.csv")).read()
+    torn.write_text(text + text.splitlines()[1][:40])
+    proc = tool(str(torn), *material)
+    assert proc.returncode == 0 and "zeta_h = 0.116 +/- 0.015" in proc.stdout, proc.stderr
+    assert proc.stderr.startswith("note: %s: the last row was cut short" % torn), proc.stderr
