@@ -104,6 +104,9 @@ void NewtonIntegrator::integrate(Scene& s) const {
   const Vec3 stretch = map.diagonal();
   const int nb = B.size();
   const Real damp = damping;
+  // Single spheres: each member position is its body's, copied where the body moves, on the team
+  // (a copy of the whole array after the loop was serial work the second thread waited through).
+  Vec3* const memberPos = !Clumps && s.members.size() == nb ? s.members.pos.data() : nullptr;
 #pragma omp parallel if (worthThreads(nb))
   {
     int waiting[kClumpLanes];  // this thread's clumps whose rotation is still to do
@@ -114,6 +117,7 @@ void NewtonIntegrator::integrate(Scene& s) const {
       if (damp != 0) dampLocal(acc, B.vel[b], dt, damp);
       B.vel[b] += dt * acc;
       B.pos[b] = (sheared ? Vec3(map * B.pos[b]) : Vec3(B.pos[b].cwiseProduct(stretch))) + dt * B.vel[b];
+      if (!Clumps && memberPos) memberPos[b] = B.pos[b];
       if (!Rotations) continue;
       if (!Clumps || B.memberCount(b) == 1) {
         // A sphere's inertia is isotropic: no orientation to track, nothing reads it.
@@ -132,7 +136,7 @@ void NewtonIntegrator::integrate(Scene& s) const {
   }
   s.cell.hSize = sheared ? Mat3(map * s.cell.hSize) : Mat3(stretch.asDiagonal() * s.cell.hSize);
   if (Clumps) s.refreshMembers();
-  else s.members.pos = B.pos;  // kept equal for engines that read member positions
+  else if (!memberPos) s.members.pos = B.pos;  // kept equal for engines that read member positions
 }
 
 void NewtonIntegrator::checkStability(const Scene& s) {
