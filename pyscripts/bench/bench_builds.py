@@ -6,10 +6,11 @@ TREE is a checkout of trueaniso, built (./setup.sh), e.g. `git worktree add ../b
 Each run is a process of its own that imports that tree's engines and steps the specimen (tiled
 K x K x K times and numbered in grid rows, as a prepared specimen of that size is; before
 2026-11-30 a tiled scene kept its tiles' order, each tile's bodies together) with
-ContactDetection, ContactForces and NewtonIntegrator on one engine thread, as bench_stepper.py
-does; before and after alternate, the first of the pair alternating too.
+ContactDetection, ContactForces and NewtonIntegrator on one engine thread (--threads N: N), as
+bench_stepper.py does; before and after alternate, the first of the pair alternating too.
 Figure: particle-steps per CPU second of the timed steps (CPU time, the figure other jobs on the
-machine disturb least). The two builds must step the packing to the same bits (a checksum of the
+machine disturb least); with --threads above 1, per second of wall time, since a team's CPU time
+counts the threads' waits at its barriers, which is what a change for threads removes. The two builds must step the packing to the same bits (a checksum of the
 positions and contact forces after the timed steps is compared): a change that alters results is not a speed-up
 of the same computation, and the benchmark refuses to time it as one.
 With --state ID the two builds run a whole Table C1 state with its three probes instead
@@ -49,28 +50,28 @@ s.dt = 2.9e-8
 c = dem.Chain(s, damping=0.2)
 c.timestep.dead = True
 c.run(50)
-t = time.process_time()
+t, w = time.process_time(), time.perf_counter()
 c.run(steps)
-cpu = time.process_time() - t
+cpu, wall = time.process_time() - t, time.perf_counter() - w
 d = s.contact_arrays()
 h = hashlib.sha256()
 for a in (s.positions, d["normal_force"], d["shear_force"], d["overlap"]):
     h.update(np.ascontiguousarray(np.asarray(a, dtype=float)).tobytes())
-print("BENCH " + json.dumps(dict(n=s.num_bodies, steps=steps, cpu=cpu, checksum=h.hexdigest()[:16])))
+print("BENCH " + json.dumps(dict(n=s.num_bodies, steps=steps, cpu=cpu, wall=wall, checksum=h.hexdigest()[:16])))
 """
 
 
-def child_env():
-    """One engine thread, and the tree's own compiled module: TRUEANISO_BUILD would give both trees
-    the same one."""
-    env = dict(os.environ, OMP_NUM_THREADS="1")
+def child_env(threads=1):
+    """`threads` engine threads (one unless --threads), and the tree's own compiled module:
+    TRUEANISO_BUILD would give both trees the same one."""
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
     env.pop("TRUEANISO_BUILD", None)
     return env
 
 
-def run(tree, specimen, tile, steps):
+def run(tree, specimen, tile, steps, threads=1):
     out = subprocess.run(["/usr/bin/python3", "-c", WORKER, tree, specimen, str(tile), str(steps)],
-                         capture_output=True, text=True, env=child_env())
+                         capture_output=True, text=True, env=child_env(threads))
     line = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
     if out.returncode != 0 or not line:
         cli.fail("stepping with %s failed:\n%s" % (tree, out.stderr[-2000:]), 1)
@@ -127,17 +128,21 @@ def paired(before, after, fmt):
 
 
 def stepper_table(o, names):
-    """The bare stepper on the specimen tiled K x K x K, particle-steps per CPU second."""
-    lines = ["Machine: %s; %s. %s: %s (before) against %s (after), one engine thread, %d interleaved runs "
+    """The bare stepper on the specimen tiled K x K x K, particle-steps per CPU second (per wall
+    second on a team of threads)."""
+    team = o.threads > 1
+    lines = ["Machine: %s; %s. %s: %s (before) against %s (after), %s, %d interleaved runs "
              "of each, medians; time step 2.9e-8 s, damping 0.2; both builds step to the same bits."
-             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after], o.repeats), "",
-             "| spheres | before (M particle-steps per CPU s) | after | after / before | paired ratios (min - max) |",
+             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after],
+                "%d engine threads, wall time" % o.threads if team else "one engine thread", o.repeats), "",
+             "| spheres | before (M particle-steps per %s s) | after | after / before | paired ratios (min - max) |"
+             % ("wall" if team else "CPU"),
              "|---|---|---|---|---|"]
     for k in o.tiles:
         steps = max(50, int(o.particle_steps / (4000 * k ** 3)))
-        runs = alternating(o, names, lambda tree: run(tree, o.specimen, k, steps),
+        runs = alternating(o, names, lambda tree: run(tree, o.specimen, k, steps, o.threads),
                            "step the packing to different results")
-        rate = {t: [x["n"] * x["steps"] / x["cpu"] / 1e6 for x in xs] for t, xs in runs.items()}
+        rate = {t: [x["n"] * x["steps"] / x["wall" if team else "cpu"] / 1e6 for x in xs] for t, xs in runs.items()}
         lines.append("| %d | %s |" % (runs[o.after][-1]["n"], paired(rate[o.before], rate[o.after], "%.2f")))
     return lines
 
@@ -167,6 +172,8 @@ def options():
     p.add_argument("--particle-steps", type=float, default=1.2e7, help="particle-steps per timed run")
     p.add_argument("--state", help="time a whole Table C1 state with its probes (run_states.py --ids STATE) "
                                    "instead of the bare stepper; CPU seconds")
+    p.add_argument("--threads", type=int, default=1,
+                   help="engine threads of the bare stepper (above 1: timed in wall seconds)")
     p.add_argument("--change", default="the change", help="what the change is, for the table")
     p.add_argument("--doc", help="Markdown file whose block is replaced")
     p.add_argument("--block", default="stepper-builds", help="marker name of the block in --doc")
@@ -177,6 +184,13 @@ def options():
         cli.fail("--tiles takes whole numbers separated by commas, not %r" % o.tiles)
     if o.repeats < 1 or min(o.tiles) < 1 or max(o.tiles) > 4:
         cli.fail("--repeats must be >= 1 and --tiles between 1 and 4")
+    if o.threads < 1 or (o.threads > 1 and o.state):
+        cli.fail("--threads must be >= 1, and 1 with --state (run_states.py --threads 1)")
+    from trueaniso import resources
+    try:
+        resources.check_threads(o.threads)
+    except cli.InputError as exc:
+        cli.fail(str(exc))
     if not os.path.isfile(o.specimen):
         cli.fail("no specimen file %s (prepare it first, docs/benchmarks.md)" % o.specimen)
     for tree in (o.before, o.after):

@@ -54,3 +54,17 @@ def test_refuses_a_folder_that_is_not_a_checkout_or_not_built(tmp_path, specimen
     unbuilt = tmp_path / "unbuilt"
     shutil.copytree(os.path.join(REPO, "pyscripts"), unbuilt / "pyscripts", ignore=shutil.ignore_patterns("__pycache__"))
     one_line_error(bench(REPO, unbuilt, specimen_100), "not built")
+
+
+def test_a_team_of_threads_is_timed_in_wall_seconds(tmp_path, specimen_100):
+    """--threads 2: a change for threads removes the waits at a team's barriers, which CPU time
+    counts as work; the table says wall time. Refused before any run: 0 threads, more than the
+    machine allows, and a team with --state (run_states.py runs at 1)."""
+    proc = bench(REPO, REPO, specimen_100, "--threads", "2")
+    assert proc.returncode == 0, proc.stderr
+    assert "2 engine threads, wall time" in proc.stdout and "M particle-steps per wall s" in proc.stdout
+    for args, words in ((["--threads", "0"], "--threads must be >= 1"), (["--threads", "999"], "--threads 999"),
+                        (["--threads", "2", "--state", "5"], "1 with --state")):
+        proc = bench(REPO, REPO, specimen_100, *args)
+        one_line_error(proc, words)
+        assert proc.stdout == ""
