@@ -46,7 +46,8 @@ if ! cmake --build build -j"$(nproc)" ${targets:+--target $targets} >>"$log" 2>&
   echo "setup: build failed (full log: $log)" >&2
   exit 1
 fi
-level=$(sed -n 's/^TRUEANISO_ARCH_ACCEPTED:INTERNAL=//p' build/CMakeCache.txt)
+# The level of the module just linked (written beside it when it is linked), not CMake's cache.
+level=$(cat build/python/_trueaniso.arch 2>/dev/null || true)
 if [ -n "$level" ] && [ "$level" != x86-64 ]; then  # sticky: say so on every run
   echo "setup: the engines are built for $level (TRUEANISO_ARCH; TRUEANISO_ARCH= ./setup.sh returns to the portable baseline)"
 fi
