@@ -25,8 +25,9 @@ def machine():
 
 
 def replace_block(path, name, body, heading=None):
-    """Put `body` between the NAME markers of the Markdown file `path` (created if missing;
-    without markers the block is appended, after `heading` if given). The file is replaced
+    """Put `body` between the NAME markers of the Markdown file `path` (created if missing).
+    Without markers the block is added at the end of the section `heading` (a line of the file),
+    or appended after a new `heading` line when the file has none. The file is replaced
     atomically: a benchmark interrupted while writing leaves the old file whole."""
     from trueaniso import atomic
     begin, end = "<!-- %s:begin -->" % name, "<!-- %s:end -->" % name
@@ -34,6 +35,22 @@ def replace_block(path, name, body, heading=None):
     text = open(path).read() if os.path.exists(path) else ""
     if begin in text:
         text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: block, text, flags=re.S)
+    elif heading and heading in text.split("\n"):
+        # Into the heading's own section, before the next heading of its level or above: a second
+        # copy of the heading at the end of the file, as this did, split one section in two.
+        lines = text.split("\n")
+        start = lines.index(heading)
+        level = heading.split(" ", 1)[0]
+        end, fenced = len(lines), False
+        for k in range(start + 1, len(lines)):
+            fenced ^= lines[k].startswith("```")  # a '# comment' in a code block is no heading
+            if not fenced and lines[k].startswith("#") and len(lines[k].split(" ", 1)[0]) <= len(level):
+                end = k
+                break
+        while end > start + 1 and lines[end - 1] == "":
+            end -= 1
+        lines[end:end] = ["", block]  # the blank lines that ended the section follow it
+        text = "\n".join(lines)
     else:
         text += "\n" + ("%s\n\n" % heading if heading else "") + block + "\n"
     with atomic.atomic_open(path) as f:

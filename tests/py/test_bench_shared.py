@@ -1,6 +1,7 @@
 """The one writer of benchmark tables (pyscripts/bench/_bench.py): a block between markers is
 replaced and nothing else in the document changes; a document without the markers gets the block
-appended (after a heading if given); a new document is created."""
+at the end of its heading's section, or appended (after a new heading if given); a new document is
+created."""
 import os
 import sys
 
@@ -25,6 +26,20 @@ def test_block_is_replaced_in_place_and_appended_when_missing(tmp_path):
     assert new.read_text() == "\n<!-- t:begin -->\nx\n<!-- t:end -->\n"
     assert not [p for p in os.listdir(tmp_path) if p.startswith(".tmp-")]  # no temporary left behind
 
+
+def test_a_new_block_goes_into_its_headings_section(tmp_path):
+    """A block whose heading the document already has goes at the end of that section, before the
+    next heading of its level or above (a '#' comment in a code block is none); it appended a second
+    copy of the heading at the end of the file (docs/benchmarks.md had two "Stepper changes")."""
+    doc = tmp_path / "bench.md"
+    doc.write_text("# T\n\n## Changes\n\n<!-- a:begin -->\nA\n<!-- a:end -->\n\n### Sub\n\n```\n# not a heading\n```\n\n"
+                   "## Next\n\ntext\n")
+    _bench.replace_block(str(doc), "b", "B", heading="## Changes")
+    assert doc.read_text() == ("# T\n\n## Changes\n\n<!-- a:begin -->\nA\n<!-- a:end -->\n\n### Sub\n\n```\n# not a heading\n```\n\n"
+                               "<!-- b:begin -->\nB\n<!-- b:end -->\n\n## Next\n\ntext\n")
+    _bench.replace_block(str(doc), "c", "C", heading="## Next")  # the last section: at the end of the file
+    assert doc.read_text().endswith("## Next\n\ntext\n\n<!-- c:begin -->\nC\n<!-- c:end -->\n")
+    assert doc.read_text().count("## Changes") == 1
 
 def test_machine_names_cpu_and_cores():
     line = _bench.machine()
