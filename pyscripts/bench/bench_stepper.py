@@ -149,6 +149,8 @@ def options():
             if t < 1:
                 raise ValueError
             resources.check_threads(t)
+        if len(set(o.thread_counts)) < len(o.thread_counts):  # a round times each count once
+            cli.fail("--threads: name each thread count once, not %r" % o.threads)
     except cli.InputError as exc:  # (a ValueError too: first)
         cli.fail(str(exc))
     except ValueError:
