@@ -210,8 +210,8 @@ def main():
     # Rounds outside, thread counts inside: every thread count of a round runs within minutes of the
     # others, so the speed-up over one thread is a ratio within a round too. Timed as separate
     # loops over thread counts, the 2-thread runs came tens of minutes after the 1-thread ones and
-    # the speed-up took the machine's drift with it (1.57 at 16,000 spheres on 2026-11-30, where
-    # paired runs gave 1.9-2.05 that evening).
+    # the speed-up took the machine's drift with it (1.57 at 16,000 spheres on 2026-11-30; paired
+    # within rounds, 1.66 and 1.87 in two runs that evening, single rounds 1.37-2.29).
     res = {(th, c): [] for th in threads for c in codes}
     for rep in range(o.repeats):
         j = rep % len(threads)
