@@ -57,6 +57,38 @@ def replace_block(path, name, body, heading=None):
         f.write(text)
 
 
+def sphere_specimen(path):
+    """The number of spheres of the sphere specimen file `path`, checked before any run: a file
+    that is not a specimen failed inside a worker, with its traceback, and a clump specimen was
+    stepped and labelled as spheres, or failed on its array lengths (an outside try). Exits with
+    one line of error otherwise."""
+    from trueaniso import cli, specimen_file
+    try:
+        arrays, meta = specimen_file.read(path)
+    except specimen_file.SpecimenFileError as exc:
+        cli.fail(str(exc))
+    assembly = (meta.get("parameters") or {}).get("assembly", "sphere")
+    if assembly != "sphere" or len(arrays["radii"]) != len(arrays["positions"]):
+        cli.fail("%s is a %s specimen: this benchmark steps sphere specimens only (bench_clumps.py times clumps)"
+                 % (path, assembly))
+    return len(arrays["positions"])
+
+
+def writable_doc(path):
+    """Exits with one line of error unless the Markdown file `path` can be written (its folder
+    exists and takes a new file): a read-only one failed after the timing, in a traceback."""
+    import tempfile
+    from trueaniso import cli
+    folder = os.path.dirname(os.path.abspath(path))
+    try:  # the way replace_block writes: a new file beside it, then a rename
+        if os.path.isdir(path):
+            raise OSError("a directory")
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".tmp-check-"):
+            pass
+    except OSError as exc:
+        cli.fail("--doc %s: cannot write a file there (%s)" % (path, exc.strerror or exc))
+
+
 def reply(result):
     """A worker's answer to run_worker: one line "BENCH {json}" on standard output."""
     print("BENCH " + json.dumps(result), flush=True)

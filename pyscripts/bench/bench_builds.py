@@ -107,13 +107,15 @@ def run_state(tree, specimen, state):
 def alternating(o, names, measure, differ):
     """measure(tree) o.repeats times for each build, before and after alternating which goes first;
     the two runs of a pair must give the same checksum (else: 'the two builds DIFFER')."""
-    runs = {o.before: [], o.after: []}
+    # Keyed by side, not by tree: a tree timed against itself (an A/A check of the noise) kept both
+    # sides' runs in one list and printed a ratio of 1.000 (an outside try).
+    runs = {"before": [], "after": []}
+    tree = {"before": o.before, "after": o.after}
     for r in range(o.repeats):
-        pair = (o.before, o.after) if r % 2 == 0 else (o.after, o.before)
-        for tree in pair:
-            runs[tree].append(measure(tree))
-            print("  %s %s" % (names[tree], runs[tree][-1]), flush=True)
-        a, b = runs[o.before][-1]["checksum"], runs[o.after][-1]["checksum"]
+        for side in (("before", "after") if r % 2 == 0 else ("after", "before")):
+            runs[side].append(measure(tree[side]))
+            print("  %s %s %s" % (side, names[side], runs[side][-1]), flush=True)
+        a, b = runs["before"][-1]["checksum"], runs["after"][-1]["checksum"]
         if a != b:
             cli.fail("the two builds %s (checksums %s and %s): not the same computation" % (differ, a, b), 1)
     return runs
@@ -133,17 +135,17 @@ def stepper_table(o, names):
     team = o.threads > 1
     lines = ["Machine: %s; %s. %s: %s (before) against %s (after), %s, %d interleaved runs "
              "of each, medians; time step 2.9e-8 s, damping 0.2; both builds step to the same bits."
-             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after],
+             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names["before"], names["after"],
                 "%d engine threads, wall time" % o.threads if team else "one engine thread", o.repeats), "",
              "| spheres | before (M particle-steps per %s s) | after | after / before | paired ratios (min - max) |"
              % ("wall" if team else "CPU"),
              "|---|---|---|---|---|"]
     for k in o.tiles:
-        steps = max(50, int(o.particle_steps / (4000 * k ** 3)))
+        steps = max(50, int(round(o.particle_steps / (o.spheres * k ** 3))))  # the asked particle-steps
         runs = alternating(o, names, lambda tree: run(tree, o.specimen, k, steps, o.threads),
                            "step the packing to different results")
         rate = {t: [x["n"] * x["steps"] / x["wall" if team else "cpu"] / 1e6 for x in xs] for t, xs in runs.items()}
-        lines.append("| %d | %s |" % (runs[o.after][-1]["n"], paired(rate[o.before], rate[o.after], "%.2f")))
+        lines.append("| %d | %s |" % (runs["after"][-1]["n"], paired(rate["before"], rate["after"], "%.2f")))
     return lines
 
 
@@ -151,14 +153,14 @@ def state_table(o, names):
     """--state: the whole state (servo, measures, probes) as run_states.py runs it, CPU seconds."""
     lines = ["Machine: %s; %s. %s: %s (before) against %s (after): run_states.py --ids %s --threads 1 on %s, "
              "%d alternating runs of each, medians; both builds give the same probe table (wall times aside)."
-             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names[o.before], names[o.after], o.state,
+             % (_bench.machine(), time.strftime("%Y-%m-%d"), o.change, names["before"], names["after"], o.state,
                 os.path.basename(o.specimen), o.repeats), "",
              "| state | steps (state and probes) | before (CPU s) | after (CPU s) | after / before | paired ratios (min - max) |",
              "|---|---|---|---|---|---|"]
     runs = alternating(o, names, lambda tree: run_state(tree, o.specimen, o.state),
                        "give different probe tables for state %s" % o.state)
     cpu = {t: [x["cpu"] for x in xs] for t, xs in runs.items()}
-    lines.append("| %s | %d | %s |" % (o.state, runs[o.after][-1]["steps"], paired(cpu[o.before], cpu[o.after], "%.1f")))
+    lines.append("| %s | %d | %s |" % (o.state, runs["after"][-1]["steps"], paired(cpu["before"], cpu["after"], "%.1f")))
     return lines
 
 
@@ -169,7 +171,8 @@ def options():
     p.add_argument("--specimen", required=True, help="sphere specimen (.npz)")
     p.add_argument("--tiles", default="1", help="tilings K (K^3 copies of the specimen), comma separated")
     p.add_argument("--repeats", type=int, default=5, help="runs of each build, interleaved")
-    p.add_argument("--particle-steps", type=float, default=1.2e7, help="particle-steps per timed run")
+    p.add_argument("--particle-steps", type=float, default=1.2e7,
+                   help="particle-steps per timed run (steps: this over the spheres of the tiled specimen, at least 50)")
     p.add_argument("--state", help="time a whole Table C1 state with its probes (run_states.py --ids STATE) "
                                    "instead of the bare stepper; CPU seconds")
     p.add_argument("--threads", type=int, default=1,
@@ -184,15 +187,21 @@ def options():
         cli.fail("--tiles takes whole numbers separated by commas, not %r" % o.tiles)
     if o.repeats < 1 or min(o.tiles) < 1 or max(o.tiles) > 4:
         cli.fail("--repeats must be >= 1 and --tiles between 1 and 4")
-    if o.threads < 1 or (o.threads > 1 and o.state):
-        cli.fail("--threads must be >= 1, and 1 with --state (run_states.py --threads 1)")
     from trueaniso import resources
-    try:
-        resources.check_threads(o.threads)
-    except cli.InputError as exc:
-        cli.fail(str(exc))
+    if not 1 <= o.threads <= resources.max_threads() or (o.threads > 1 and o.state):
+        cli.fail("--threads must be 1 to %d, and 1 with --state (run_states.py --threads 1)" % resources.max_threads())
+    import math
+    if not (math.isfinite(o.particle_steps) and o.particle_steps > 0):
+        cli.fail("--particle-steps must be a number > 0, not %r" % o.particle_steps)
     if not os.path.isfile(o.specimen):
         cli.fail("no specimen file %s (prepare it first, docs/benchmarks.md)" % o.specimen)
+    o.spheres = _bench.sphere_specimen(o.specimen)
+    if o.state is not None:
+        from trueaniso import triaxial
+        if o.state not in {str(i) for i, _, _ in triaxial.table_c1_states()}:
+            cli.fail("--state: a state of Table C1 (1-39), not %r" % o.state)
+    if o.doc:
+        _bench.writable_doc(o.doc)
     for tree in (o.before, o.after):
         if not os.path.isfile(os.path.join(tree, "pyscripts", "trueaniso", "dem.py")):
             cli.fail("%s is not a trueaniso checkout (no pyscripts/trueaniso/dem.py)" % tree)
@@ -209,7 +218,7 @@ def revision(tree):
 
 def main():
     o = options()
-    names = {o.before: revision(o.before), o.after: revision(o.after)}
+    names = {"before": revision(o.before), "after": revision(o.after)}
     lines = state_table(o, names) if o.state else stepper_table(o, names)
     lines += ["", "Reproduce: `/usr/bin/python3 pyscripts/bench/bench_builds.py %s`"
               % " ".join(shlex.quote(a if not os.path.exists(a) else os.path.relpath(a)) for a in sys.argv[1:])]

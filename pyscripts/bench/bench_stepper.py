@@ -133,6 +133,8 @@ def options():
     for c in o.codes:
         if c not in CODES:
             cli.fail("--codes: %r is not one of %s" % (c, ", ".join(CODES)))
+    if len(set(o.codes)) < len(o.codes):  # as --threads: a round times each code once
+        cli.fail("--codes: name each code once, not %r" % ",".join(o.codes))
     if "ours" not in o.codes:
         cli.fail("--codes must include ours (every ratio is against it)")
     # Before any work (an outside try: --dt -1 was printed as the table's time step, --threads 99 was
@@ -151,10 +153,14 @@ def options():
             resources.check_threads(t)
         if len(set(o.thread_counts)) < len(o.thread_counts):  # a round times each count once
             cli.fail("--threads: name each thread count once, not %r" % o.threads)
-    except cli.InputError as exc:  # (a ValueError too: first)
-        cli.fail(str(exc))
+    except cli.InputError:  # (a ValueError too: first). Its message offers 0, which is refused here.
+        cli.fail("--threads: thread counts 1 to %d, comma separated, not %r" % (resources.max_threads(), o.threads))
     except ValueError:
-        cli.fail("--threads: thread counts >= 1, comma separated, not %r" % o.threads)
+        cli.fail("--threads: thread counts 1 to %d, comma separated, not %r" % (resources.max_threads(), o.threads))
+    if not o.worker:
+        _bench.sphere_specimen(o.specimen)
+        if o.doc:
+            _bench.writable_doc(o.doc)
     return o
 
 
@@ -202,6 +208,10 @@ def main():
     _, meta = specimen_file.load(o.specimen)
     s = load(o)
     dt = o.dt or 0.5 * engines.TimeStepper.stiffness_bound(s)
+    limit = engines.TimeStepper.critical_pair_step(s)
+    if dt >= limit:  # before any run: a worker refused it, after the others had been timed
+        cli.fail("--dt %g s: unstable on this packing (the two-body limit of its stiffest contact is %.3g s)"
+                 % (dt, limit))
     threads = o.thread_counts
     codes = o.codes + ([ALSO] if o.also_build else [])
     ours = ["ours"] + ([ALSO] if o.also_build else [])

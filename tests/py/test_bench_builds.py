@@ -63,8 +63,48 @@ def test_a_team_of_threads_is_timed_in_wall_seconds(tmp_path, specimen_100):
     proc = bench(REPO, REPO, specimen_100, "--threads", "2")
     assert proc.returncode == 0, proc.stderr
     assert "2 engine threads, wall time" in proc.stdout and "M particle-steps per wall s" in proc.stdout
-    for args, words in ((["--threads", "0"], "--threads must be >= 1"), (["--threads", "999"], "--threads 999"),
+    for args, words in ((["--threads", "0"], "--threads must be 1 to"), (["--threads", "999"], "--threads must be 1 to"),
                         (["--threads", "2", "--state", "5"], "1 with --state")):
         proc = bench(REPO, REPO, specimen_100, *args)
+        one_line_error(proc, words)
+        assert proc.stdout == ""
+
+
+def test_a_tree_against_itself_keeps_two_sides_and_the_asked_particle_steps(specimen_100):
+    """A/A (the same tree as before and after, a check of the noise): the two sides' runs were kept
+    in one list keyed by the tree, so the table said 1.000 (1.000 - 1.000) whatever the runs gave;
+    and --particle-steps was divided by 4000 spheres whatever the specimen (an outside try: 50 steps
+    of 200 spheres for 2e5 asked). The ratios must be the printed runs' own, and the steps n / 100."""
+    import ast
+    import statistics
+    proc = bench(REPO, REPO, specimen_100, "--particle-steps", "3e4", "--repeats", "3")
+    assert proc.returncode == 0, proc.stderr
+    runs = {"before": [], "after": []}
+    for ln in proc.stdout.splitlines():
+        words = ln.split(None, 2)
+        if words and words[0] in runs:
+            runs[words[0]].append(ast.literal_eval(words[2]))
+    assert [len(runs["before"]), len(runs["after"])] == [3, 3]
+    assert all(r["steps"] == 300 for side in runs.values() for r in side)  # 3e4 particle-steps / 100 spheres
+    ratios = [(a["n"] * a["steps"] / a["cpu"]) / (b["n"] * b["steps"] / b["cpu"]) for a, b in zip(runs["after"], runs["before"])]
+    row = [ln for ln in proc.stdout.splitlines() if ln.startswith("| 100 |")][0].rstrip(" |").split(" | ")
+    assert row[3] == "%.3f" % statistics.median(ratios) and row[4] == "%.3f - %.3f" % (min(ratios), max(ratios))
+
+
+def test_bad_input_is_one_line_before_any_run(tmp_path, specimen_100):
+    """Each failed inside a worker after starting, with a traceback, or was timed (an outside try)."""
+    from trueaniso import specimen_file
+    scene, _ = specimen_file.load(specimen_100)
+    clumps = tmp_path / "c.npz"
+    specimen_file.save(str(clumps), scene, parameters=dict(assembly="clump1"))
+    notes = tmp_path / "notes.json"
+    notes.write_text("{}")
+    for specimen, args, words in ((str(notes), [], "is not a specimen file"),
+                                  (str(clumps), [], "sphere specimens only"),
+                                  (specimen_100, ["--state", "99"], "a state of Table C1"),
+                                  (specimen_100, ["--particle-steps", "0"], "--particle-steps must be"),
+                                  (specimen_100, ["--particle-steps", "nan"], "--particle-steps must be"),
+                                  (specimen_100, ["--doc", str(tmp_path / "no" / "b.md")], "cannot write a file there")):
+        proc = bench(REPO, REPO, specimen, *args)
         one_line_error(proc, words)
         assert proc.stdout == ""

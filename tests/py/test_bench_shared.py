@@ -65,8 +65,10 @@ def test_bench_stepper_refuses_bad_input_before_any_run(specimen_100):
     try). Each is one line and exit 2 now, at once."""
     from conftest import one_line_error, run_script
     for args, words in ((["--dt", "-1"], "--dt must be"), (["--dt", "nan"], "--dt must be"),
-                        (["--threads", "99"], "at most"), (["--threads", "0"], "thread counts >= 1"),
+                        (["--threads", "99"], "thread counts 1 to"), (["--threads", "0"], "thread counts 1 to"),
                         (["--threads", "1,1"], "name each thread count once"),
+                        (["--codes", "ours,ours"], "name each code once"),
+                        (["--codes", "ours", "--dt", "1"], "unstable on this packing"),
                         (["--repeats", "0"], "--repeats >= 1"), (["--steps", "-1"], "--steps")):
         one_line_error(run_script(os.path.join("bench", "bench_stepper.py"), "--specimen", specimen_100, *args,
                                   timeout=60), words)
