@@ -403,7 +403,10 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
              "Made by `analysis/report.py` from `%s` on %s. Material: G = %.4g Pa, nu = %.3g (%s; checked "
              "against the table's micromechanical moduli). Each table gives the paper's number beside ours."
              % (csv_path, time.strftime("%Y-%m-%d"), material["shear_modulus"], material["poisson"], where), ""]
-    for line in (_study_line(results, rows), _missing_states_line(results, rows)):
+    # A torn last row is left out: said in the report itself, not only on the terminal (an outside
+    # try: the report counted one complete state fewer and did not say why).
+    left_out = "Left out: %s." % rows.note if getattr(rows, "note", None) else None
+    for line in (_study_line(results, rows), _missing_states_line(results, rows), left_out):
         if line:
             lines += [line, ""]
     os.makedirs(out, exist_ok=True)
@@ -618,6 +621,14 @@ def main(argv=None):
     if o.assembly is not None and o.assembly not in chain.PAPER:
         sys.stderr.write("error: --assembly %s: the paper's assemblies are %s\n"
                          % (o.assembly, ", ".join(sorted(chain.PAPER))))
+        sys.exit(2)
+    # Before the output directory is made: refused later, they left it behind empty (an outside try).
+    import math
+    if o.shear_modulus is not None and not (math.isfinite(o.shear_modulus) and o.shear_modulus > 0):
+        sys.stderr.write("error: --shear-modulus must be > 0 (Pa), not %r\n" % o.shear_modulus)
+        sys.exit(2)
+    if o.poisson is not None and not -1 < o.poisson < 0.5:
+        sys.stderr.write("error: --poisson must lie in (-1, 0.5), not %r\n" % o.poisson)
         sys.exit(2)
     try:
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,
