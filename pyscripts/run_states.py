@@ -21,9 +21,14 @@ import sys
 
 # Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
 # and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
-# crash; cli.guarded gives both signals their meaning for the work when it starts.
+# crash; cli.guarded gives both signals their meaning for the work when it starts. An MPI worker
+# (a rank other than 0: mpi4py.futures' master is rank 0) ends silently, as it does once loaded
+# (cli.release_start_guard): a Ctrl-C on mpiexec within its first second printed this line once a
+# worker beside the master's (an outside try, 4 times in 12).
+_WORKER = next((os.environ[v] for v in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK") if v in os.environ), "0") != "0"
 for _signal in (signal.SIGINT, signal.SIGTERM):
-    signal.signal(_signal, lambda number, _: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
+    signal.signal(_signal, lambda number, _: ((_WORKER or sys.stderr.write("error: interrupted while starting; nothing "
+                                                                           "was done\n")),
                                               os._exit(128 + number)))
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
