@@ -142,6 +142,7 @@ def main(argv=None):
     o = p.parse_args(argv)
     try:
         path = table_path(o.results)
+        read_probes(path, NEEDED)  # a file that is no probe table says so before the material is asked for
         import os
         material = ((read_metadata(os.path.dirname(os.path.abspath(path))) or {}).get("specimen") or {}).get("material")
         G = o.shear_modulus if o.shear_modulus is not None else (material or {}).get("shear_modulus")

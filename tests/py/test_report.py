@@ -549,6 +549,11 @@ def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
     shutil.copy(os.path.join(REPO, "docs", "data", "spheres-4000-s1", "probes.csv"), bare)
     proc = tool(str(bare))  # no metadata.json beside it: the material must be given
     assert proc.returncode == 2 and "records no particle material" in proc.stderr
+    # a file that is no probe table is named as such first (it was asked for the material, then refused)
+    spec = tmp_path / "spec.npz"
+    spec.write_bytes(b"PK\x03\x04" + bytes(range(200, 256)))
+    proc = tool(str(spec))
+    assert proc.returncode == 2 and "is not a readable probe table" in proc.stderr, proc.stderr
     # a table with both rotations settings: one at a time, chosen with --rotations
     rows = list(csv.reader(open(bare)))
     col = rows[0].index("rotations")
