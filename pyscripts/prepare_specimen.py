@@ -67,7 +67,10 @@ def options(argv=None):
     p.add_argument("--checkpoint-every", type=cli.count, default=None,
                    help="steps between checkpoints of the preparation, from which an interrupted run resumes; "
                         "default %d, or an interrupted preparation's own (0: none; the specimen is then bit for "
-                        "bit what versions before checkpoints made)" % prep_checkpoint.EVERY)
+                        "bit what versions before checkpoints made). A checkpoint is written between the stages' "
+                        "chunks of %d steps (%d in a clump preparation's first stages), at the first chunk's end "
+                        "at least this many steps after the last" % (prep_checkpoint.EVERY, prep_checkpoint.CHUNK,
+                                                                     prep_checkpoint.FIRST_STAGES_CHUNK))
     p.add_argument("--out", required=True, help="specimen file (.npz); a .json summary is written beside it")
     p.add_argument("--force", action="store_true",
                    help="prepare again even if --out is a valid specimen (an interrupted preparation with these "
@@ -159,6 +162,12 @@ def main():
         if o.checkpoint_every is None:
             saved = prep_checkpoint.Checkpoints(prep_checkpoint.path_for(o.out), {}).saved_recipe() or {}
             o.checkpoint_every = saved.get("every", prep_checkpoint.EVERY)
+            if "every" in saved:  # said as the threads are (cli.resolve_threads); it was silent (an outside try)
+                print("%s: --checkpoint-every not given: its unfinished preparation wrote %s, so this run does too"
+                      % (o.out, prep_checkpoint.interval_said(o.checkpoint_every)), flush=True)
+        rounded = prep_checkpoint.rounding_said(o.checkpoint_every, o.assembly != "sphere")
+        if rounded:
+            print("%s: %s" % (o.out, rounded), flush=True)
         if o.threads:
             engines.set_threads(o.threads)
         prepare(o, dist)

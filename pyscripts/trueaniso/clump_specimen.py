@@ -297,7 +297,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
             st.place["grown_scale"] *= st.controller.scale
 
     st = _checkpointed.Stages(scene, place, checkpoints, build, fold)
-    if not st.run("gas", 500, lambda: st.controller.pressure >= 0.01 * pressure, max_steps, progress,
+    first = _checkpointed.FIRST_STAGES_CHUNK
+    if not st.run("gas", first, lambda: st.controller.pressure >= 0.01 * pressure, max_steps, progress,
                   "expansion (gas)", check_first=True):  # long specimens spend minutes here: say so
         raise PreparationError("the loose packing did not take 1 %% of the pressure within %d steps" % max_steps)
     if st.at("gas"):
@@ -308,7 +309,7 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
     # fabric densifies). Waiting for balance at stage1_pressure with rotations blocked only let the
     # blocked packing creep (470,000 steps at 300 clumps for e 0.78 -> 0.71), and the creep is
     # undone by the free stage anyway.
-    if not st.run("stage 1", 500, lambda: st.controller.pressure >= r["stage1_pressure"],
+    if not st.run("stage 1", first, lambda: st.controller.pressure >= r["stage1_pressure"],
                   max_steps - st.steps("gas"), progress, "stage 1 (rotations %s)" % r["stage1_rotations"],
                   check_first=True):
         raise PreparationError("stage 1 did not reach %.4g Pa within %d steps" % (r["stage1_pressure"], max_steps))
@@ -317,7 +318,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         st.advance("expansion", new_engines=False)
     if st.at("expansion"):
         label = "expansion (free)" if r["stage1_pressure"] < pressure else "expansion"
-        if not st.run("expansion", 2000, lambda: st.controller.reached, max_steps, progress, label):
+        if not st.run("expansion", _checkpointed.CHUNK, lambda: st.controller.reached, max_steps, progress,
+                      label):
             raise PreparationError("%s did not converge within %d steps (p or unbalanced force off target)"
                                    % (label, max_steps))
         fold(st)
@@ -328,7 +330,7 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         st.scene.block_rotations = False
         st.scene.friction = r["mu_final"]
         st.advance("consolidation")
-    if not st.run("consolidation", 2000,
+    if not st.run("consolidation", _checkpointed.CHUNK,
                   lambda: st.controller.reached and engines.unbalanced_torque(st.scene) < unbalanced,
                   max_steps, progress):
         raise PreparationError("consolidation did not converge within %d steps (p or unbalanced force off target)"

@@ -23,6 +23,30 @@ from . import buildarch, engines, provenance, specimen_file, study_dir
 from .refusal import Refusal
 
 EVERY = 50_000  # steps: 3 min of a 4000-sphere preparation, 11 min of clump1-4000, 30 min at 53,004
+# Steps a stage runs between its checks (of its goal, then of a checkpoint due): the expansion and
+# consolidation of every assembly, and a clump preparation's gas stage and stage 1.
+CHUNK = 2000
+FIRST_STAGES_CHUNK = 500
+
+
+def interval_said(every):
+    return "checkpoints every %d steps" % every if every else "no checkpoints"
+
+
+def rounding_said(every, clumps):
+    """What an interval that is no multiple of the chunks becomes, in words; None when it is one
+    (or 0). A checkpoint is due only where a chunk ends (Stages.run), so 100 wrote one every 500 or
+    2000 steps without a word (an outside try)."""
+    if every == 0 or every % CHUNK == 0:
+        return None
+    def after(chunk):
+        return -(-every // chunk) * chunk
+    said = ("a checkpoint is written where a chunk of %d steps ends, so --checkpoint-every %d writes one every %d steps"
+            % (CHUNK, every, after(CHUNK)))
+    if clumps:
+        said += " (every %d in the first stages, whose chunks are %d steps)" % (after(FIRST_STAGES_CHUNK),
+                                                                                FIRST_STAGES_CHUNK)
+    return said
 
 
 class CheckpointMismatch(Refusal):

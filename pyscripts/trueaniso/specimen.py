@@ -163,7 +163,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
 
     st = _checkpointed.Stages(scene, place, checkpoints, build, fold)
     if st.at("expansion"):
-        if not st.run("expansion", 2000, lambda: st.controller.reached, max_steps, progress):
+        if not st.run("expansion", _checkpointed.CHUNK, lambda: st.controller.reached, max_steps, progress):
             raise PreparationError("expansion did not converge within %d steps (p or unbalanced force off target)"
                                    % max_steps)
         fold(st)
@@ -172,7 +172,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
         st.scene.cell_ref = st.scene.cell
         st.scene.friction = mu_final
         st.advance("consolidation")
-    if not st.run("consolidation", 2000, lambda: st.controller.reached, max_steps, progress):
+    if not st.run("consolidation", _checkpointed.CHUNK, lambda: st.controller.reached, max_steps, progress):
         raise PreparationError("consolidation did not converge within %d steps (p or unbalanced force off target)"
                                % max_steps)
     scene = st.scene

@@ -227,6 +227,28 @@ def test_force_resumes_a_checkpoint_of_its_own_settings_and_adopts_its_interval(
     assert again.returncode == 0, again.stderr
     assert "resuming the preparation from" in again.stdout and not os.path.exists(ck)
     assert specimen_file.read(str(out))[1]["parameters"]["checkpoint_every"] == 20000
+    # and says so, as it says the thread count it took (it was silent; an outside try)
+    assert ("--checkpoint-every not given: its unfinished preparation wrote checkpoints every 20000 steps, so this "
+            "run does too") in again.stdout
+    assert "where a chunk of" not in again.stdout  # 20000 is a multiple of the chunks: nothing to explain
+
+
+def test_an_interval_between_chunks_is_said_as_the_one_that_runs(tmp_path):
+    """A checkpoint falls where a chunk of steps ends: --checkpoint-every 3000 wrote one every 4000
+    steps of an expansion without a word (an outside try asked for 100 and got 500 or 2000)."""
+    proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 3000,
+                      "--progress-every", 0, "--out", tmp_path / "s.npz")
+    assert proc.returncode == 0, proc.stderr
+    assert ("a checkpoint is written where a chunk of 2000 steps ends, so --checkpoint-every 3000 writes one every "
+            "4000 steps\n") in proc.stdout
+    assert "checkpoint: expansion, step 4000 of it" in proc.stdout  # what it said is what ran
+    assert "step 3000 of it" not in proc.stdout
+    # A clump preparation's first stages run chunks of 500 steps: 3000 there is 3000.
+    said = prep_checkpoint.rounding_said(3000, clumps=True)
+    assert said.endswith("every 4000 steps (every 3000 in the first stages, whose chunks are 500 steps)")
+    assert prep_checkpoint.rounding_said(100, clumps=True).endswith(
+        "every 2000 steps (every 500 in the first stages, whose chunks are 500 steps)")
+    assert prep_checkpoint.rounding_said(0, clumps=True) is None and prep_checkpoint.rounding_said(4000, False) is None
 
 
 def _running(out, every, *extra):
