@@ -156,18 +156,23 @@ def main():
         for stray in os.listdir(directory):
             if stray.startswith(".tmp-") and stray.endswith(("-" + name, "-" + name[:-4] + ".json", "-" + checkpoint)):
                 os.unlink(os.path.join(directory, stray))
-        # An interrupted preparation goes on at its own thread count and checkpoint interval (its
-        # bits depend on both) unless they are given.
-        cli.resolve_threads(o, study=False, preparation=prep_checkpoint.path_for(o.out))
+        # An interrupted preparation of these settings goes on at its own thread count and
+        # checkpoint interval (its bits depend on both) unless they are given; one of other settings
+        # lends neither (it is refused, or removed by --force), nor does one beside a specimen kept.
+        ck = prep_checkpoint.Checkpoints(prep_checkpoint.path_for(o.out), {})
+        broken = ck.unusable()
+        if broken and o.force:  # its refusal says "or use --force", which then refused too (an outside try)
+            ck.remove()
+            print("removed the unusable checkpoint %s (%s) (--force)" % (ck.path, broken), flush=True)
+        own = None
+        if o.force or not os.path.exists(o.out):
+            own = ck.of_settings(settings(o))  # refuses a broken one without --force
+        cli.resolve_threads(o, study=False, preparation=ck.path if own else None)
         if o.checkpoint_every is None:
-            saved = prep_checkpoint.Checkpoints(prep_checkpoint.path_for(o.out), {}).saved_recipe() or {}
-            o.checkpoint_every = saved.get("every", prep_checkpoint.EVERY)
-            if "every" in saved:  # said as the threads are (cli.resolve_threads); it was silent (an outside try)
+            o.checkpoint_every = (own or {}).get("every", prep_checkpoint.EVERY)
+            if own and "every" in own and not o.quiet:  # said as the threads are; it was silent (an outside try)
                 print("%s: --checkpoint-every not given: its unfinished preparation wrote %s, so this run does too"
                       % (o.out, prep_checkpoint.interval_said(o.checkpoint_every)), flush=True)
-        rounded = prep_checkpoint.rounding_said(o.checkpoint_every, o.assembly != "sphere")
-        if rounded:
-            print("%s: %s" % (o.out, rounded), flush=True)
         if o.threads:
             engines.set_threads(o.threads)
         prepare(o, dist)
@@ -249,6 +254,9 @@ def prepare(o, dist):
         print("preparing %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s"
               % (clump_specimen.particles(o.n, o.assembly), o.seed, o.d50, o.cu, o.pressure / 1e3,
                  resources.human_bytes(memory), resources.human_seconds(seconds)), flush=True)
+        rounded = prep_checkpoint.rounding_said(o.checkpoint_every, o.assembly != "sphere")
+        if rounded:
+            print(rounded, flush=True)
     t0 = time.time()
     if stale and o.force:  # (one of these settings resumes; another one is refused before any work)
         checkpoints.remove()

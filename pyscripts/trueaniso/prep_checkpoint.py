@@ -30,7 +30,7 @@ FIRST_STAGES_CHUNK = 500
 
 
 def interval_said(every):
-    return "checkpoints every %d steps" % every if every else "no checkpoints"
+    return ("checkpoints every %d step%s" % (every, "" if every == 1 else "s")) if every else "no checkpoints"
 
 
 def rounding_said(every, clumps):
@@ -41,11 +41,15 @@ def rounding_said(every, clumps):
         return None
     def after(chunk):
         return -(-every // chunk) * chunk
-    said = ("a checkpoint is written where a chunk of %d steps ends, so --checkpoint-every %d writes one every %d steps"
-            % (CHUNK, every, after(CHUNK)))
+    # "At least": the chunk that ends a stage is not counted, so across a stage's end the gap is
+    # longer (an outside try measured 6000 between the stages of a 3000 run).
+    smallest = FIRST_STAGES_CHUNK if clumps else CHUNK
+    where = ("after every chunk of steps" if every <= smallest else
+             "where a chunk of steps ends, at least %d steps apart" % every)
+    said = ("%s are written %s: every %d steps within the expansion or the consolidation (chunks of %d)"
+            % (interval_said(every), where, after(CHUNK), CHUNK))
     if clumps:
-        said += " (every %d in the first stages, whose chunks are %d steps)" % (after(FIRST_STAGES_CHUNK),
-                                                                                FIRST_STAGES_CHUNK)
+        said += ", every %d within the first stages (chunks of %d)" % (after(FIRST_STAGES_CHUNK), FIRST_STAGES_CHUNK)
     return said
 
 
@@ -114,16 +118,40 @@ class Checkpoints:
                 _read[key] = meta["parameters"]["checkpoint"]["recipe"]
             return dict(_read[key])
         except (specimen_file.SpecimenFileError, KeyError, TypeError) as exc:
-            raise CheckpointMismatch("the preparation checkpoint %s is unusable (%s); remove it, or use %s "
-                                     "to prepare from the start" % (self.path, exc, self.way_out)) from None
+            refusal = CheckpointMismatch("the preparation checkpoint %s is unusable (%s); remove it, or use %s "
+                                         "to prepare from the start" % (self.path, exc, self.way_out))
+            refusal.reason = str(exc)
+            raise refusal from None
 
     def differences(self):
         """What differs between the checkpoint on disk and this run ("seed: 7 there, 8 here"), []
-        when it is this run's, None when there is none."""
+        when it is this run's, None when there is none. The interval is named by its option
+        ("every: 3000 there" named the file's field; an outside try)."""
         saved = self.saved_recipe()
         if saved is None:
             return None
-        return study_dir.said(study_dir.differences(saved, self.recipe))
+        diff = study_dir.differences(saved, self.recipe)
+        return study_dir.said([("checkpoint-every" if k == "every" else k, x, y) for k, x, y in diff])
+
+    def of_settings(self, settings):
+        """The checkpoint's recipe when it was written by a preparation of these `settings` (the
+        options that make the specimen), whatever its threads, interval and code; else None (none
+        on disk, or another preparation's, which this run refuses or, with --force, removes). Only
+        then may a run take the threads and interval it was written with: --force --seed 2 took
+        them from a seed-1 checkpoint it then removed (an outside try)."""
+        saved = self.saved_recipe()
+        if saved is None:
+            return None
+        mine = _normal(settings)
+        return None if study_dir.differences({k: saved.get(k) for k in mine}, mine) else saved
+
+    def unusable(self):
+        """Why the checkpoint on disk cannot be read ("File is not a zip file"), or None."""
+        try:
+            self.saved_recipe()
+        except CheckpointMismatch as exc:
+            return exc.reason
+        return None
 
     def refuse_other(self):
         """Refuses a checkpoint on disk of another recipe (CheckpointMismatch); differences() else."""

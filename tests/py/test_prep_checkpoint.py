@@ -239,16 +239,48 @@ def test_an_interval_between_chunks_is_said_as_the_one_that_runs(tmp_path):
     proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 3000,
                       "--progress-every", 0, "--out", tmp_path / "s.npz")
     assert proc.returncode == 0, proc.stderr
-    assert ("a checkpoint is written where a chunk of 2000 steps ends, so --checkpoint-every 3000 writes one every "
-            "4000 steps\n") in proc.stdout
+    assert ("checkpoints every 3000 steps are written where a chunk of steps ends, at least 3000 steps apart: every "
+            "4000 steps within the expansion or the consolidation (chunks of 2000)\n") in proc.stdout
     assert "checkpoint: expansion, step 4000 of it" in proc.stdout  # what it said is what ran
     assert "step 3000 of it" not in proc.stdout
     # A clump preparation's first stages run chunks of 500 steps: 3000 there is 3000.
     said = prep_checkpoint.rounding_said(3000, clumps=True)
-    assert said.endswith("every 4000 steps (every 3000 in the first stages, whose chunks are 500 steps)")
-    assert prep_checkpoint.rounding_said(100, clumps=True).endswith(
-        "every 2000 steps (every 500 in the first stages, whose chunks are 500 steps)")
+    assert said.endswith("every 4000 steps within the expansion or the consolidation (chunks of 2000), every 3000 "
+                         "within the first stages (chunks of 500)")
+    assert prep_checkpoint.rounding_said(100, clumps=True).startswith(
+        "checkpoints every 100 steps are written after every chunk of steps: every 2000 steps")
     assert prep_checkpoint.rounding_said(0, clumps=True) is None and prep_checkpoint.rounding_said(4000, False) is None
+    quiet = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 3000,
+                       "--quiet", "--force", "--out", tmp_path / "s.npz")
+    assert quiet.returncode == 0 and "chunk" not in quiet.stdout, quiet.stderr  # --quiet is quiet (an outside try)
+
+
+def test_force_takes_nothing_from_a_checkpoint_it_removes_nor_is_refused_by_a_broken_one(tmp_path):
+    """--force --seed 2 took the threads and interval of a seed-1 checkpoint it then removed, so
+    one command made different specimens by what lay beside it; a damaged checkpoint was refused
+    with "or use --force", and --force refused it too (both found by an outside try)."""
+    out = tmp_path / "s.npz"
+    ck = prep_checkpoint.path_for(str(out))
+    with pytest.raises(Interrupt):
+        specimen.prepare_spheres(100, seed=1, progress=_stop_after_checkpoints(ck, 1),
+                                 checkpoints=prep_checkpoint.for_specimen(str(out), dict(seed=1), 3000))
+    forced = run_script("prepare_specimen.py", "--n", 100, "--seed", 2, "--threads", 1, "--force", "--out", out)
+    assert forced.returncode == 0, forced.stderr
+    assert "removed the checkpoint of an earlier preparation" in forced.stdout
+    assert "--checkpoint-every not given" not in forced.stdout and "chunk" not in forced.stdout
+    assert specimen_file.read(str(out))[1]["parameters"]["checkpoint_every"] == prep_checkpoint.EVERY
+
+    broken = tmp_path / "b.npz"
+    ck = prep_checkpoint.path_for(str(broken))
+    with open(ck, "wb") as f:
+        f.write(b"PK\x03\x04 a checkpoint cut short")
+    refused = run_script("prepare_specimen.py", "--n", 100, "--seed", 2, "--threads", 1, "--out", broken)
+    one_line_error(refused, "is unusable", "--force")
+    assert os.path.exists(ck)  # nothing removed without --force
+    forced = run_script("prepare_specimen.py", "--n", 100, "--seed", 2, "--threads", 1, "--force", "--out", broken)
+    assert forced.returncode == 0, forced.stderr
+    assert "removed the unusable checkpoint %s (" % ck in forced.stdout and "(--force)" in forced.stdout
+    assert broken.exists() and not os.path.exists(ck)
 
 
 def _running(out, every, *extra):
