@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/Parallel.hpp"
 #include "measure/Stress.hpp"
 
 namespace trueaniso {
@@ -31,9 +32,15 @@ void RadiusExpansion::apply(Scene& s) {
   rate = std::clamp(rate, -maxGrowthRate, maxGrowthRate);
   const Real grow = 1.0 + rate * s.dt;
   scale *= grow;
+  // The clumps' loops and the contacts' below set each item from its own values: on the team,
+  // the same bits. Serial, they were work the second thread of a preparation waited through every
+  // step. Not the spheres': setSphereRadius checks its input, and an exception cannot leave a team.
   if (clumps) growClumps(s);
   else for (int b = 0; b < nb; ++b) s.setSphereRadius(b, scale * base_[b]);
-  for (Real& r : s.contacts.rbar) r *= grow;  // Eq. (7) is homogeneous in the radii
+  Real* const rbar = s.contacts.rbar.data();
+  const int nc = s.contacts.size();
+#pragma omp parallel for schedule(static) if (worthThreads(nc))
+  for (int c = 0; c < nc; ++c) rbar[c] *= grow;  // Eq. (7) is homogeneous in the radii
   unbalanced = measured.unbalanced;
   reached = std::abs(err) < stressTolerance && unbalanced < unbalancedTolerance;
   if (reached && stopWhenReached) done = true;
@@ -46,10 +53,12 @@ namespace trueaniso {
 void RadiusExpansion::growClumps(Scene& s) const {
   const Real f3 = scale * scale * scale, f5 = f3 * scale * scale;
   const int nm = s.members.size(), nb = s.bodies.size();
+#pragma omp parallel for schedule(static) if (worthThreads(nm))
   for (int m = 0; m < nm; ++m) {
     s.members.radius[m] = scale * base_[m];
     s.members.offset[m] = scale * baseOffset_[m];
   }
+#pragma omp parallel for schedule(static) if (worthThreads(nb))
   for (int b = 0; b < nb; ++b) {
     s.bodies.mass[b] = f3 * baseMass_[b];
     s.bodies.inertia[b] = f5 * baseInertia_[b];
