@@ -229,7 +229,8 @@ def prepare(o, dist):
                                  "again (it is replaced only when the new one is complete), or another --out"
                                  % (o.out, "; ".join(diff)))
         print("kept existing specimen %s (use --force to prepare again)%s" % (o.out, _kept_with(o, meta)))
-        pending = checkpoints.differences()
+        # This run took no threads or interval from the checkpoint (main): a kept specimen runs nothing.
+        pending = checkpoints.differences(ignore=("threads", "every"))
         if pending == []:
             checkpoints.remove()  # of a run killed after its save
         elif pending:

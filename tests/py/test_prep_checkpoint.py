@@ -255,6 +255,40 @@ def test_an_interval_between_chunks_is_said_as_the_one_that_runs(tmp_path):
     assert quiet.returncode == 0 and "chunk" not in quiet.stdout, quiet.stderr  # --quiet is quiet (an outside try)
 
 
+def test_a_checkpoint_of_the_kept_specimen_is_removed_whatever_its_threads_and_interval(tmp_path, specimen_100):
+    """A run killed between its save and its checkpoint's removal leaves both; the rerun keeps the
+    specimen and removes the checkpoint, and says nothing of the threads and interval it would
+    have taken, as it prepares nothing."""
+    import shutil
+    out = tmp_path / "s.npz"
+    shutil.copy(specimen_100, out)  # 100 spheres, seed 3
+    ck = prep_checkpoint.path_for(str(out))
+    before = engines.threads()
+    engines.set_threads(1)
+    try:
+        with pytest.raises(Interrupt):
+            specimen.prepare_spheres(100, seed=3, progress=_stop_after_checkpoints(ck, 1),
+                                     checkpoints=prep_checkpoint.for_specimen(str(out), _settings_of(100, 3), 3000))
+    finally:
+        engines.set_threads(before)
+    kept = run_script("prepare_specimen.py", "--n", 100, "--seed", 3, "--out", out, env=dict(OMP_NUM_THREADS="2"))
+    assert kept.returncode == 0 and "kept existing specimen" in kept.stdout, kept.stderr
+    assert "not given" not in kept.stdout and "kept the checkpoint" not in kept.stdout, kept.stdout
+    assert not os.path.exists(ck)
+
+
+def _settings_of(n, seed):
+    """prepare_specimen.py's settings for a sphere specimen of its defaults."""
+    sys.path.insert(0, SCRIPTS)
+    try:
+        import prepare_specimen
+    finally:
+        sys.path.remove(SCRIPTS)
+    o = prepare_specimen.options(["--n", str(n), "--seed", str(seed), "--out", "x.npz"])
+    prepare_specimen.validate(o)
+    return prepare_specimen.settings(o)
+
+
 def test_force_takes_nothing_from_a_checkpoint_it_removes_nor_is_refused_by_a_broken_one(tmp_path):
     """--force --seed 2 took the threads and interval of a seed-1 checkpoint it then removed, so
     one command made different specimens by what lay beside it; a damaged checkpoint was refused
