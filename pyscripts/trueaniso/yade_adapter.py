@@ -73,7 +73,14 @@ def attach(controller, stiffness, O=None, label="trueanisoController"):
     newton = [k for k, e in enumerate(engines) if type(e).__name__ == "NewtonIntegrator"]
     if not newton:
         raise ValueError("the YADE scene needs a NewtonIntegrator")
-    engines.insert(newton[0], PyRunner(command="%s()" % name, iterPeriod=1, label=label))
+    # A controller is no part of a YADE scene file: a scene saved (O.save) with it attached and
+    # loaded in another process runs a command whose name is gone, which said only "NameError:
+    # name '_trueaniso_adapter_...' is not defined" (an outside try). The command says why.
+    missing = ("the PyRunner %r calls a trueaniso controller, which a YADE scene file does not keep: this scene "
+               "was saved (O.save) with it attached and loaded without it. Attach a new one after O.load "
+               "(yade_adapter.attach replaces it), or yade_adapter.detach(O) before O.save" % label)
+    command = "if %r not in globals(): raise RuntimeError(%r)\n%s()" % (name, missing, name)
+    engines.insert(newton[0], PyRunner(command=command, iterPeriod=1, label=label))
     O.engines = engines
     return adapter
 

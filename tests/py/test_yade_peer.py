@@ -173,6 +173,10 @@ def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json,
     assert r["linear_positions_only"] is True
     assert "not periodic" in r["write_not_periodic"] and "yade_scene_from" in r["write_not_periodic"]
     assert "betan" in refusals["damped"] and "determinant 0" in refusals["singular_trsf"]
+    # saved with our controller attached, loaded without it: O.run says why (a bare NameError before)
+    said = r["loaded_without_controller"]
+    assert said is not None and "a YADE scene file does not keep" in said and "yade_adapter.attach" in said, said
+    assert r["reattached_steps"] >= 2
     assert "is a Wall" in refusals["wall"] and "free it" not in refusals["wall"]
     assert "bodies #4 and #" in refusals["coincident"] and "one point" in refusals["coincident"]
     assert "young 0" in refusals["young_zero"] and "shear modulus must be > 0" in refusals["young_zero"]

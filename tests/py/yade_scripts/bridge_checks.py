@@ -211,6 +211,28 @@ try:
     res["write_missing_bodies"] = None
 except yade_bridge.BridgeError as exc:
     res["write_missing_bodies"] = str(exc)
+# A scene saved with our controller attached, loaded where the controller is gone (a new process:
+# here its name removed from __main__): O.run says why, where it said only NameError.
+from trueaniso import yade_adapter  # noqa: E402
+import __main__  # noqa: E402
+yade_bridge.yade_scene_from(ours, O, import_contacts=False)
+servo = engines.TrueTriaxialServo()
+servo.set_goal(0.5, 100e3)
+yade_adapter.attach(servo, engines.cell_stiffness(ours), O)
+saved_with = os.path.join(os.path.dirname(os.path.abspath(out)), "with_controller.yade.gz")
+O.save(saved_with)
+for name in [k for k in vars(__main__) if k.startswith("_trueaniso_adapter_")]:
+    delattr(__main__, name)
+O.load(saved_with)
+try:
+    O.run(3, True)  # a PyRunner of iterPeriod 1 first runs at the second step
+    res["loaded_without_controller"] = None
+except RuntimeError as exc:
+    res["loaded_without_controller"] = str(exc)
+yade_adapter.attach(servo, engines.cell_stiffness(ours), O)  # the way out it names
+start = O.iter
+O.run(3, True)
+res["reattached_steps"] = O.iter - start
 # write_to_yade into an O that is not periodic: one BridgeError (an AttributeError traceback before).
 O.reset()
 try:
