@@ -252,9 +252,10 @@ def prepare(o, dist):
     if not o.quiet:
         members = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
         memory, seconds = resources.preparation_estimate(members, o.threads or resources.cores(), o.assembly)
-        print("preparing %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s"
+        print("preparing %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s%s"
               % (clump_specimen.particles(o.n, o.assembly), o.seed, o.d50, o.cu, o.pressure / 1e3,
-                 resources.human_bytes(memory), resources.human_seconds(seconds)), flush=True)
+                 resources.human_bytes(memory), resources.human_seconds(seconds),
+                 resources.preparation_caveat(o.assembly, o.n)), flush=True)
         rounded = prep_checkpoint.rounding_said(o.checkpoint_every, o.assembly != "sphere")
         if rounded:
             print(rounded, flush=True)

@@ -157,9 +157,9 @@ def prepare(o, log):
     path = os.path.join(o.out, SPECIMEN)
     memory, seconds = resources.preparation_estimate(o.n * members(o.assembly), o.threads or resources.cores(),
                                                      o.assembly)
-    log("specimen: preparing %s (seed %d): about %s of memory and %s ..."
+    log("specimen: preparing %s (seed %d): about %s of memory and %s%s ..."
         % (clump_specimen.particles(o.n, o.assembly), o.seed, resources.human_bytes(memory),
-           resources.human_seconds(seconds)))
+           resources.human_seconds(seconds), resources.preparation_caveat(o.assembly, o.n)))
     t0 = time.time()
     bar = progress.Progress("specimen", log, o.progress_every)
     # Checkpoints every so many steps: a run killed while it prepares resumes (prep_checkpoint).
