@@ -170,7 +170,7 @@ def main():
         cli.resolve_threads(o, study=False, preparation=ck.path if own else None)
         if o.checkpoint_every is None:
             o.checkpoint_every = (own or {}).get("every", prep_checkpoint.EVERY)
-            if own and "every" in own and not o.quiet:  # said as the threads are; it was silent (an outside try)
+            if own and "every" in own:  # said as the threads are, --quiet too; it was silent (an outside try)
                 print("%s: --checkpoint-every not given: its unfinished preparation wrote %s, so this run does too"
                       % (o.out, prep_checkpoint.interval_said(o.checkpoint_every)), flush=True)
         if o.threads:
@@ -215,6 +215,34 @@ def _kept_with(o, meta):
     return "; note: it was made %s, each of which can change its last bits" % ", ".join(other) if other else ""
 
 
+def _checkpoint_beside_kept(o, meta, checkpoints):
+    """A checkpoint beside a specimen this run keeps: removed when it is the leftover of the run
+    that saved the specimen (killed between its save and the removal: the same settings, threads,
+    interval and code as the specimen's own), else kept and named. Compared with this run, as it
+    was, the checkpoint of an interrupted --force remake with other threads was taken for such a
+    leftover and removed; and a damaged one beside a good specimen ended the run with an error
+    whose advice, --force, replaced the specimen (both an outside try)."""
+    try:
+        saved = checkpoints.saved_recipe()
+    except prep_checkpoint.CheckpointMismatch as exc:
+        print("kept the unusable checkpoint %s beside it (%s); remove it (the specimen is complete)"
+              % (checkpoints.path, getattr(exc, "reason", exc)))
+        return
+    if saved is None:
+        return
+    p = meta.get("parameters", {})
+    made = dict(threads=p.get("threads"), every=p.get("checkpoint_every"), code=(meta.get("versions") or {}).get("code"))
+    if checkpoints.of_settings(settings(o)) is not None and all(saved.get(k) == v for k, v in made.items()):
+        checkpoints.remove()
+        return
+    if saved.get("code") != provenance.code_version():
+        way = "it was made by other code, which alone can resume it (remove it if that is not wanted)"
+    else:
+        way = "running with those settings and --force resumes it"
+    print("kept the checkpoint %s of an interrupted preparation with other settings (%s): %s"
+          % (checkpoints.path, "; ".join(checkpoints.differences()), way))
+
+
 def prepare(o, dist):
     checkpoints = prep_checkpoint.for_specimen(o.out, settings(o), o.checkpoint_every,
                                                log=None if o.quiet else progress.say)
@@ -229,13 +257,7 @@ def prepare(o, dist):
                                  "again (it is replaced only when the new one is complete), or another --out"
                                  % (o.out, "; ".join(diff)))
         print("kept existing specimen %s (use --force to prepare again)%s" % (o.out, _kept_with(o, meta)))
-        # This run took no threads or interval from the checkpoint (main): a kept specimen runs nothing.
-        pending = checkpoints.differences(ignore=("threads", "every"))
-        if pending == []:
-            checkpoints.remove()  # of a run killed after its save
-        elif pending:
-            print("kept the checkpoint %s of an interrupted preparation with other settings (%s): running with "
-                  "those settings and --force resumes it" % (checkpoints.path, "; ".join(pending)))
+        _checkpoint_beside_kept(o, meta, checkpoints)
         if specimen_file.ensure_summary(o.out, meta):
             print("wrote the missing summary %s from the specimen" % specimen_file.summary_path(o.out))
         report(scene, meta.get("parameters", {}), o, meta.get("summary"))
@@ -251,7 +273,8 @@ def prepare(o, dist):
     bar = progress.Progress("  preparation", progress.say, o.progress_every)
     if not o.quiet:
         members = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
-        memory, seconds = resources.preparation_estimate(members, o.threads or resources.cores(), o.assembly)
+        # The engines' own count (set by main): "or cores()" said 16 s for 31 s under OMP_NUM_THREADS=1 (an outside try).
+        memory, seconds = resources.preparation_estimate(members, engines.threads(), o.assembly)
         print("preparing %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s%s"
               % (clump_specimen.particles(o.n, o.assembly), o.seed, o.d50, o.cu, o.pressure / 1e3,
                  resources.human_bytes(memory), resources.human_seconds(seconds),

@@ -155,8 +155,8 @@ def check_recipe(o, log):
 
 def prepare(o, log):
     path = os.path.join(o.out, SPECIMEN)
-    memory, seconds = resources.preparation_estimate(o.n * members(o.assembly), o.threads or resources.cores(),
-                                                     o.assembly)
+    # The engines' own count (set by main): "or cores()" said 16 s for 31 s under OMP_NUM_THREADS=1 (an outside try).
+    memory, seconds = resources.preparation_estimate(o.n * members(o.assembly), engines.threads(), o.assembly)
     log("specimen: preparing %s (seed %d): about %s of memory and %s%s ..."
         % (clump_specimen.particles(o.n, o.assembly), o.seed, resources.human_bytes(memory),
            resources.human_seconds(seconds), resources.preparation_caveat(o.assembly, o.n)))

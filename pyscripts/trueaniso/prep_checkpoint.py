@@ -108,6 +108,11 @@ class Checkpoints:
             st = os.stat(self.path)
         except FileNotFoundError:
             return None
+        if os.path.isdir(self.path):  # "or use --force" was no way out: --force cannot remove it
+            refusal = CheckpointMismatch("%s should be a preparation checkpoint but is a directory; move it away"
+                                         % self.path)
+            refusal.reason = "a directory"
+            raise refusal
         # Read once per version of the file: a run asks for it up to four times before it resumes
         # (threads, interval, comparison), each a full read and check (20 MB at 53,004 spheres).
         key = (self.path, st.st_mtime_ns, st.st_size, st.st_ino)

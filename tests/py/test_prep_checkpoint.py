@@ -255,26 +255,65 @@ def test_an_interval_between_chunks_is_said_as_the_one_that_runs(tmp_path):
     assert quiet.returncode == 0 and "chunk" not in quiet.stdout, quiet.stderr  # --quiet is quiet (an outside try)
 
 
-def test_a_checkpoint_of_the_kept_specimen_is_removed_whatever_its_threads_and_interval(tmp_path, specimen_100):
+def test_the_leftover_checkpoint_of_the_kept_specimen_is_removed_quietly(tmp_path):
     """A run killed between its save and its checkpoint's removal leaves both; the rerun keeps the
-    specimen and removes the checkpoint, and says nothing of the threads and interval it would
-    have taken, as it prepares nothing."""
-    import shutil
+    specimen and removes the checkpoint (its recipe is the specimen's own: settings, threads,
+    interval, code), and says nothing of threads and interval it would have taken, as it prepares
+    nothing. A rerun without the options took the checkpoint for another run's and kept it."""
     out = tmp_path / "s.npz"
-    shutil.copy(specimen_100, out)  # 100 spheres, seed 3
+    made = run_script("prepare_specimen.py", "--n", 100, "--seed", 3, "--threads", 1, "--checkpoint-every", 2000,
+                      "--quiet", "--out", out)
+    assert made.returncode == 0, made.stderr
     ck = prep_checkpoint.path_for(str(out))
     before = engines.threads()
     engines.set_threads(1)
-    try:
+    try:  # the checkpoint that run wrote: the same recipe
         with pytest.raises(Interrupt):
             specimen.prepare_spheres(100, seed=3, progress=_stop_after_checkpoints(ck, 1),
-                                     checkpoints=prep_checkpoint.for_specimen(str(out), _settings_of(100, 3), 3000))
+                                     checkpoints=prep_checkpoint.for_specimen(str(out), _settings_of(100, 3), 2000))
     finally:
         engines.set_threads(before)
     kept = run_script("prepare_specimen.py", "--n", 100, "--seed", 3, "--out", out, env=dict(OMP_NUM_THREADS="2"))
     assert kept.returncode == 0 and "kept existing specimen" in kept.stdout, kept.stderr
     assert "not given" not in kept.stdout and "kept the checkpoint" not in kept.stdout, kept.stdout
     assert not os.path.exists(ck)
+
+
+def test_beside_a_kept_specimen_a_remake_checkpoint_and_a_broken_one_are_kept(tmp_path, specimen_100):
+    """The checkpoint of an interrupted --force remake with other threads and interval was taken for
+    the leftover of the specimen's own run and removed; a damaged one ended the run with an error
+    whose advice, --force, replaced the good specimen (both an outside try)."""
+    import shutil
+    out = tmp_path / "s.npz"
+    shutil.copy(specimen_100, out)  # 100 spheres, seed 3, 1 thread, made without checkpoints
+    ck = prep_checkpoint.path_for(str(out))
+    with pytest.raises(Interrupt):  # the remake: the same settings, 3000 steps a checkpoint
+        specimen.prepare_spheres(100, seed=3, progress=_stop_after_checkpoints(ck, 1),
+                                 checkpoints=prep_checkpoint.for_specimen(str(out), _settings_of(100, 3), 3000))
+    kept = run_script("prepare_specimen.py", "--n", 100, "--seed", 3, "--threads", 1, "--out", out)
+    assert kept.returncode == 0 and "kept existing specimen" in kept.stdout, kept.stderr
+    assert "kept the checkpoint %s" % ck in kept.stdout and "checkpoint-every: 3000 there" in kept.stdout, kept.stdout
+    assert os.path.exists(ck)
+
+    with open(ck, "wb") as f:
+        f.write(b"PK\x03\x04 cut short")
+    before = open(out, "rb").read()
+    kept = run_script("prepare_specimen.py", "--n", 100, "--seed", 3, "--threads", 1, "--out", out)
+    assert kept.returncode == 0, kept.stderr
+    assert "kept existing specimen" in kept.stdout and "kept the unusable checkpoint %s" % ck in kept.stdout
+    assert "--force" not in kept.stdout.split("kept the unusable")[1]  # no advice that replaces the specimen
+    assert open(out, "rb").read() == before and os.path.exists(ck)
+
+
+def test_the_time_estimate_is_for_the_threads_that_run(tmp_path):
+    """Without --threads the engines run OMP_NUM_THREADS threads; the estimate divided by all the
+    cores (an outside try: 16 s said for 31 s under OMP_NUM_THREADS=1 on 2 cores)."""
+    from trueaniso import resources
+    proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--checkpoint-every", 0, "--out",
+                      tmp_path / "s.npz", env=dict(OMP_NUM_THREADS="1"))
+    assert proc.returncode == 0, proc.stderr
+    _, seconds = resources.preparation_estimate(100, 1)
+    assert "of memory and %s\n" % resources.human_seconds(seconds) in proc.stdout, proc.stdout
 
 
 def _settings_of(n, seed):
