@@ -59,7 +59,10 @@ class CellAdapter:
         self.was_done = self.controller.done
 
 
-def attach(controller, stiffness, O=None, label="trueanisoController"):
+DEFAULT_LABEL = "trueanisoController"
+
+
+def attach(controller, stiffness, O=None, label=DEFAULT_LABEL):
     """Insert a PyRunner calling `controller` every step, just before YADE's NewtonIntegrator."""
     from yade import PyRunner
     if O is None:
@@ -76,16 +79,18 @@ def attach(controller, stiffness, O=None, label="trueanisoController"):
     # A controller is no part of a YADE scene file: a scene saved (O.save) with it attached and
     # loaded in another process runs a command whose name is gone, which said only "NameError:
     # name '_trueaniso_adapter_...' is not defined" (an outside try). The command says why.
+    named = "" if label == DEFAULT_LABEL else ", label=%r" % label  # the fix for its own label (an outside try)
     missing = ("the PyRunner %r calls a trueaniso controller, which a YADE scene file does not keep: this scene "
                "was saved (O.save) with it attached and loaded without it. Attach a new one after O.load "
-               "(yade_adapter.attach replaces it), or yade_adapter.detach(O) before O.save" % label)
+               "(yade_adapter.attach(controller, stiffness%s) replaces it), or yade_adapter.detach(O%s) before "
+               "O.save" % (label, named, named))
     command = "if %r not in globals(): raise RuntimeError(%r)\n%s()" % (name, missing, name)
     engines.insert(newton[0], PyRunner(command=command, iterPeriod=1, label=label))
     O.engines = engines
     return adapter
 
 
-def detach(O=None, label="trueanisoController"):
+def detach(O=None, label=DEFAULT_LABEL):
     if O is None:
         from yade import O
     O.engines = [e for e in O.engines if getattr(e, "label", "") != label]

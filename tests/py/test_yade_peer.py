@@ -177,6 +177,9 @@ def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json,
     said = r["loaded_without_controller"]
     assert said is not None and "a YADE scene file does not keep" in said and "yade_adapter.attach" in said, said
     assert r["reattached_steps"] >= 2
+    said = r["loaded_without_labelled"]
+    assert said is not None and "label='servoX'" in said and "yade_adapter.detach(O, label='servoX')" in said, said
+    assert r["detached_steps"] == 3
     assert "is a Wall" in refusals["wall"] and "free it" not in refusals["wall"]
     assert "bodies #4 and #" in refusals["coincident"] and "one point" in refusals["coincident"]
     assert "young 0" in refusals["young_zero"] and "shear modulus must be > 0" in refusals["young_zero"]

@@ -233,6 +233,22 @@ yade_adapter.attach(servo, engines.cell_stiffness(ours), O)  # the way out it na
 start = O.iter
 O.run(3, True)
 res["reattached_steps"] = O.iter - start
+# Under a label of the user's: the way out names that label (without it, it did not work).
+yade_adapter.detach(O)
+yade_adapter.attach(servo, engines.cell_stiffness(ours), O, label="servoX")
+O.save(saved_with)
+for name in [k for k in vars(__main__) if k.startswith("_trueaniso_adapter_")]:
+    delattr(__main__, name)
+O.load(saved_with)
+try:
+    O.run(3, True)
+    res["loaded_without_labelled"] = None
+except RuntimeError as exc:
+    res["loaded_without_labelled"] = str(exc)
+yade_adapter.detach(O, label="servoX")
+start = O.iter
+O.run(3, True)
+res["detached_steps"] = O.iter - start
 # write_to_yade into an O that is not periodic: one BridgeError (an AttributeError traceback before).
 O.reset()
 try:
