@@ -224,9 +224,9 @@ def _checkpoint_beside_kept(o, meta, checkpoints):
     whose advice, --force, replaced the specimen (both an outside try)."""
     try:
         saved = checkpoints.saved_recipe()
-    except prep_checkpoint.CheckpointMismatch as exc:
+    except prep_checkpoint.CheckpointMismatch:
         print("kept the unusable checkpoint %s beside it (%s); remove it (the specimen is complete)"
-              % (checkpoints.path, getattr(exc, "reason", exc)))
+              % (checkpoints.path, checkpoints.unusable()))
         return
     if saved is None:
         return

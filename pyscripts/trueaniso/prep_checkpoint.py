@@ -128,14 +128,14 @@ class Checkpoints:
             refusal.reason = str(exc)
             raise refusal from None
 
-    def differences(self, ignore=()):
+    def differences(self):
         """What differs between the checkpoint on disk and this run ("seed: 7 there, 8 here"), []
-        when it is this run's, None when there is none; fields in `ignore` are not compared. The
-        interval is named by its option ("every: 3000 there" named the file's field; an outside try)."""
+        when it is this run's, None when there is none. The interval is named by its option
+        ("every: 3000 there" named the file's field; an outside try)."""
         saved = self.saved_recipe()
         if saved is None:
             return None
-        diff = [d for d in study_dir.differences(saved, self.recipe) if d[0] not in ignore]
+        diff = study_dir.differences(saved, self.recipe)
         return study_dir.said([("checkpoint-every" if k == "every" else k, x, y) for k, x, y in diff])
 
     def of_settings(self, settings):
