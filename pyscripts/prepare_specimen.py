@@ -222,12 +222,12 @@ def _checkpoint_beside_kept(o, meta, checkpoints):
     was, the checkpoint of an interrupted --force remake with other threads was taken for such a
     leftover and removed; and a damaged one beside a good specimen ended the run with an error
     whose advice, --force, replaced the specimen (both an outside try)."""
-    try:
-        saved = checkpoints.saved_recipe()
-    except prep_checkpoint.CheckpointMismatch:
+    broken = checkpoints.unusable()
+    if broken:
         print("kept the unusable checkpoint %s beside it (%s); remove it (the specimen is complete)"
-              % (checkpoints.path, checkpoints.unusable()))
+              % (checkpoints.path, broken))
         return
+    saved = checkpoints.saved_recipe()
     if saved is None:
         return
     p = meta.get("parameters", {})
