@@ -22,3 +22,4 @@ html_title = "trueaniso manual"
 
 autodoc_member_order = "bysource"
 autodoc_mock_imports = ["yade"]
+autodoc_preserve_defaults = True  # defaults as written (REPO_ROOT), not this checkout's path

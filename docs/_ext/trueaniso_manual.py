@@ -5,7 +5,8 @@ A page holding a line ``<!-- generated: KIND -->`` gets Markdown in its place (`
 * ``scripts``: every user script's ``--help`` (pyscripts/*.py);
 * ``analysis-tools``: the ``--help`` of every analysis module that runs as a tool;
 * ``bench``: the ``--help`` of every benchmark script (pyscripts/bench/*.py);
-* ``python-api``: an autodoc section per module of the ``trueaniso`` and ``analysis`` packages.
+* ``python-api``: an autodoc section per module of the ``trueaniso`` and ``analysis`` packages,
+  whose docstrings (plain text) are shown as written.
 
 The lists are discovered from the files, so a new script or module has its page without an edit.
 """
@@ -58,6 +59,7 @@ def machine_independent(text):
     text = text.replace(REPO + os.sep, "").replace(REPO, ".")
     text = re.sub(r"\ball %d cores\b" % cores, "all cores", text)
     text = re.sub(r"\b%d cores\b" % cores, "N cores", text)
+    text = re.sub(r"at most \d+ \(4 x the cores\)", "at most 4 x the cores", text)
     return text
 
 
@@ -91,10 +93,21 @@ def generate(kind):
     raise ValueError("unknown generated section %r" % kind)
 
 
+def plain_docstring(app, what, name, obj, options, lines):
+    """The package's docstrings are plain text (equations, tables, indented examples), not
+    reStructuredText: shown as written, in a literal block, they need no markup and warn of none."""
+    if any(line.strip() for line in lines):
+        text = [line.rstrip() for line in lines]
+        while text and not text[-1]:
+            text.pop()
+        lines[:] = ["::", ""] + ["   " + line if line else "" for line in text] + [""]
+
+
 def on_source_read(app, docname, source):
     source[0] = MARKER.sub(lambda m: generate(m.group(1)), source[0])
 
 
 def setup(app):
     app.connect("source-read", on_source_read)
+    app.connect("autodoc-process-docstring", plain_docstring)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
