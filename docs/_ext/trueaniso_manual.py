@@ -57,9 +57,10 @@ def machine_independent(text):
     """The help as it reads on any machine: core counts and the repository's place are not printed."""
     cores = os.cpu_count() or 1
     text = text.replace(REPO + os.sep, "").replace(REPO, ".")
-    text = re.sub(r"\ball %d cores\b" % cores, "all cores", text)
-    text = re.sub(r"\b%d cores\b" % cores, "N cores", text)
-    text = re.sub(r"at most \d+ \(4 x the cores\)", "at most 4 x the cores", text)
+    # argparse may wrap a line anywhere: match the words across the wrap and keep its whitespace
+    text = re.sub(r"\ball(\s+)%d(\s+)cores\b" % cores, r"all\1the\2cores", text)
+    text = re.sub(r"\b%d(\s+)cores\b" % cores, r"N\1cores", text)
+    text = re.sub(r"at most %d(\s+)\(4 x the(\s+)cores\)" % (4 * cores), r"at most\g<1>4 x the\g<2>cores", text)
     return text
 
 
