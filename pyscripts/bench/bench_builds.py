@@ -225,7 +225,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _bench.replace_block(o.doc, o.block, table, heading="## Stepper changes (issue 15)")
+        _bench.replace_block(o.doc, o.block, table, heading="## Stepper changes")
 
 
 if __name__ == "__main__":

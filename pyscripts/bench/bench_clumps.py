@@ -110,7 +110,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _bench.replace_block(o.doc, "clumps", table, heading="## Clump assemblies (issue 13)")
+        _bench.replace_block(o.doc, "clumps", table, heading="## Clump assemblies")
 
 
 if __name__ == "__main__" or cli.in_yade():
