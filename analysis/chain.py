@@ -17,7 +17,7 @@ Everything here reads numbers already in the table; nothing is simulated.
 import numpy as np
 
 from . import hyperelastic, zeta_contrast
-from trueaniso import zeta as _zeta  # noqa: E402 - analysis.results put pyscripts/ on the path
+from trueaniso import zeta as _zeta
 
 AXES = "xyz"
 PAPER_VOID_RATIO = dict(spheres=0.584, clump1=0.445, clump2=0.636)  # section 2.1, at isotropic 100 kPa

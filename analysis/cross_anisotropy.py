@@ -15,8 +15,10 @@ import math
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from analysis.results import SHEAR_PROBES, ResultsError, number, read_probes  # noqa: E402
+if __package__ in (None, ""):  # run as a file: imported as analysis.cross_anisotropy all the same (PEP 366)
+    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    __package__ = "analysis"
+from .results import SHEAR_PROBES, ResultsError, number, read_probes  # noqa: E402
 
 NORMAL = ("x", "y", "z")
 SHEAR = SHEAR_PROBES

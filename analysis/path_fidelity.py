@@ -18,8 +18,8 @@ Zm, E at the isotropic state, and the cost (steps, wall time).
 """
 import sys
 
-from .results import ResultsError, number, read_metadata, read_probes  # sets the path to pyscripts/ as well
-from trueaniso import triaxial  # noqa: E402  (after .results)
+from .results import ResultsError, number, read_metadata, read_probes
+from trueaniso import triaxial
 
 NORMAL = ("x", "y", "z")
 

@@ -6,12 +6,8 @@ wrong with the file is one ``ResultsError`` line, never a traceback.
 """
 import math
 import os
-import sys
 
-_PYSCRIPTS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "pyscripts")
-if _PYSCRIPTS not in sys.path:
-    sys.path.insert(0, _PYSCRIPTS)
-from trueaniso import results_csv  # noqa: E402
+from trueaniso import results_csv
 
 
 class ResultsError(ValueError):

@@ -11,7 +11,7 @@ import collections
 import numpy as np
 
 from .results import SHEAR_PROBES, ResultsError, read_probes
-from trueaniso import fabric, zeta  # noqa: E402 - results.py put pyscripts/ on the path
+from trueaniso import fabric, zeta
 
 AXES = "xyz"
 DENSITIES = ("eq36", "count")
