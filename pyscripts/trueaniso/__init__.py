@@ -53,5 +53,9 @@ def __getattr__(name):
     raise AttributeError("module 'trueaniso' has no attribute %r" % name)
 
 
-__version__ = "0.1.0"
+# The version of trueaniso: one home, the file VERSION beside this one, which CMake reads for the
+# engines (engines.version()) and a study records in metadata.json (versions.trueaniso).
+with open(os.path.join(_HERE, "VERSION")) as _f:
+    __version__ = _f.read().strip()
+del _f
 FORMAT_VERSION = 4  # specimen files; 2: the checksum covers the metadata; 3: the full cell matrix; 4: the bodies' volumes (docs/specimens.md)
