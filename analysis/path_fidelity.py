@@ -1,4 +1,4 @@
-"""Path fidelity of a Table C1 study (issue 14): how far Zm (and Zm with a gap tolerance) moves over
+"""Path fidelity of a Table C1 study: how far Zm (and Zm with a gap tolerance) moves over
 the states, and where the stiffness trend reverses.
 
 A reversal is a step along one loading path where a modulus E_i falls while its own stress

@@ -16,7 +16,7 @@ class ResultsError(ValueError):
 
 def said(exc):
     """An error as the tools' one line: an OSError by its file and its reason ('/x/report: Read-only
-    file system'), not Python's '[Errno 30] Read-only file system: ...' (an outside try)."""
+    file system'), not Python's '[Errno 30] Read-only file system: ...'."""
     if isinstance(exc, OSError) and exc.strerror:
         return "%s: %s" % (exc.filename, exc.strerror) if exc.filename else exc.strerror
     return str(exc)
@@ -45,7 +45,7 @@ def table_path(path):
 
 def _state_key(text):
     """A state's text as one key: a Table C1 number written '1.0' or ' 1' (a table edited by hand or
-    by a spreadsheet) is state 1, so its second row is found as a repeat (an outside try)."""
+    by a spreadsheet) is state 1, so its second row is found as a repeat."""
     try:
         value = float(text)
     except (TypeError, ValueError):

@@ -14,7 +14,7 @@
 // paper's frictionless walls transmit no shear, so the cell's axes are the principal axes), and
 // move along the path with the normal stresses. A state is reached when the principal stresses
 // and the shear stresses are all within `stressTolerance` (StressGap). With controlShear off the
-// cell keeps its shear strains (the orthorhombic cell of before, whose shear stresses nothing
+// cell keeps its shear strains (an orthorhombic cell, whose shear stresses nothing
 // holds); a shear goal on such a path is refused.
 #include <string>
 

@@ -387,8 +387,8 @@ def contacts_problem(scene, a):
 
 
 def _float_problem(x, name):
-    """An array that is not of finite floating-point numbers, named (an integer array was called
-    non-finite, an outside try)."""
+    """An array that is not of finite floating-point numbers, named as what it is (an integer
+    array is not called non-finite)."""
     if not np.issubdtype(x.dtype, np.floating):
         return "%s must hold floating-point numbers, not %s" % (name, x.dtype)
     if not np.all(np.isfinite(x)):

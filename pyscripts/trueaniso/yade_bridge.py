@@ -27,9 +27,9 @@ from .yade_convert import (MATERIAL_FIELDS, BridgeError, _cell, _check_homo_defo
 
 def scene_from_yade(O=None, import_contacts=True):
     """Our Scene from YADE's spheres (or clumps), periodic cell, material and (optionally) contact
-    history, with its contacts evaluated by our law at YADE's positions (dem.refresh): before,
-    the scene came back unevaluated, and its stress, unbalanced force and stiffness read exactly
-    zero until the caller refreshed it (a servo given that stiffness never converged).
+    history, with its contacts evaluated by our law at YADE's positions (dem.refresh): unevaluated,
+    its stress, unbalanced force and stiffness would read exactly zero until the caller refreshed
+    it (a servo given that stiffness never converges).
 
     Returns (scene, ids): ids[k] is the YADE body id of our body k.
     """
@@ -47,9 +47,9 @@ def scene_from_yade(O=None, import_contacts=True):
 
 
 def _check_apart(s, ids):
-    """Two bodies at one point (distance 0) have a contact without a normal: the import returned
-    and the stress read NaN until specimen_file.save refused 'non-finite values in c_normal' (an
-    outside try). Refused here, naming them."""
+    """Two bodies at one point (distance 0) have a contact without a normal: imported, the stress
+    would read NaN until specimen_file.save refused 'non-finite values in c_normal'. Refused here,
+    naming them."""
     c = s.contact_arrays()
     apart = ~np.isfinite(c["normal"]).all(axis=1)
     if not s.has_clumps:  # a sphere on another's image (a cell vector away) has a round-off branch, not NaN
@@ -71,7 +71,7 @@ def _check_free(bodies):
         if b.isClumpMember:
             continue  # its clump carries its state
         if not b.isClump and not isinstance(b.shape, Sphere):
-            # Named first: a wall (fixed) was told to be freed, then refused as not a sphere (an outside try).
+            # Named first: a wall (fixed) is no sphere, and telling it to be freed would be no help.
             raise BridgeError("body #%d is a %s; the bridge imports spheres and clumps of spheres only: erase it "
                               "before the import" % (b.id, type(b.shape).__name__))
         if not b.dynamic or b.state.blockedDOFs:
@@ -117,7 +117,7 @@ def _spheres_from_yade(O, bodies, import_contacts):
     s.add_spheres(pos, radii)
     motion = np.array([[*b.state.vel, *b.state.angVel] for b in spheres])
     bad = np.flatnonzero(~np.isfinite(motion).all(axis=1))
-    if bad.size:  # before: imported, then specimen_file.save refused 'non-finite values in velocities'
+    if bad.size:  # here, naming the body, not at specimen_file.save ('non-finite values in velocities')
         b = spheres[int(bad[0])]
         raise BridgeError("body #%d has velocity %s and angular velocity %s: not finite (%d such bodies)"
                           % (b.id, tuple(b.state.vel), tuple(b.state.angVel), bad.size))
@@ -144,9 +144,9 @@ def write_to_yade(scene, O=None, ids=None):
 
     Each body is written at the image of its position nearest YADE's own: our detection wraps
     bodies into the cell, YADE never does, and a body written one cell vector away made YADE's
-    collider miss contacts later (an outside try: 2 of 314 after 1500 steps). Our shear forces go
-    onto YADE's interactions of the same pairs: before, YADE went on with its shear history from
-    before our run (0.44 % off in stress after 2000 of our steps). A contact YADE does not have yet
+    collider miss contacts later (2 of 314 after 1500 steps). Our shear forces go onto YADE's
+    interactions of the same pairs, or YADE would go on with its shear history from before our run
+    (0.44 % off in stress after 2000 of our steps). A contact YADE does not have yet
     starts at its next step with no shear force.
 
     YADE adopts a new velGrad only at its next step, and then adds the jump of the affine field,
@@ -164,7 +164,7 @@ def write_to_yade(scene, O=None, ids=None):
     if len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
     missing = [i for i in ids if not 0 <= i < len(O.bodies) or O.bodies[i] is None]
-    if missing:  # an IndexError ('Body id out of range') from deep inside before (a second outside try)
+    if missing:  # said here, not as an IndexError ('Body id out of range') from deep inside
         raise BridgeError("write_to_yade writes into the YADE bodies the scene came from; O has no body #%d (%d of "
                           "the %d missing): build the scene in YADE with yade_scene_from(scene)"
                           % (missing[0], len(missing), len(ids)))
@@ -224,7 +224,7 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     O.dt = scene.dt if scene.dt > 0 else 1e-8
     if import_contacts:
         contacts_made_at_rest(scene, O, ids, ids)  # steps YADE at rest: before the strain rate is set
-    # Our strain rate, scheduled for YADE's next step (as write_to_yade; before, it was dropped). The
+    # Our strain rate, scheduled for YADE's next step (as write_to_yade). The
     # velocities written are fluctuations, the total ones while YADE's current field is zero.
     O.cell.velGrad = _yade_matrix(scene.velocity_gradient)
     return ids

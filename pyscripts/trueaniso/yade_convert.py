@@ -46,7 +46,7 @@ def _reference_cell(O, h):
     trsf = _matrix(O.cell.trsf)
     det = np.linalg.det(trsf) if np.all(np.isfinite(trsf)) else float("nan")
     if not det > 1e-6:  # NaN, singular, a reflection or a volume shrunk a millionfold: no motion of a cell
-        # Before, strains then counted from now without a word (an outside try set trsf by hand).
+        # Refused, not taken as strains counted from now without a word (a trsf set by hand).
         raise BridgeError("YADE's cell.trsf (determinant %g) is no motion of the cell, so its strain is undefined; "
                           "set O.cell.trsf (the identity counts strains from now)" % det)
     return np.linalg.solve(trsf, h)
@@ -74,7 +74,7 @@ def _contact_rows(O, index):
                               "(import_contacts=False) to evaluate them with ours" % (I.id1, I.id2, type(I.phys).__name__))
         # MindlinPhys also carries the Mindlin variants the paper's law has not: viscous damping
         # (betan, betas), adhesion (gamma), rolling and twisting moments (krot, ktwist). Their forces
-        # passed the class check (adhesion: 4.8 kPa in YADE read 97 kPa here; an outside try).
+        # pass the class check (adhesion: 4.8 kPa in YADE would read 97 kPa here).
         extras = [a for a in ("betan", "betas", "adhesionForce", "kr", "ktw") if float(getattr(I.phys, a, 0.0)) != 0.0]
         if extras:
             raise BridgeError("interaction %d-%d has YADE's Mindlin law with %s != 0 (damping, adhesion or moments the "
@@ -180,8 +180,8 @@ def _keep_interaction_images(O, before):
     its branch: cellDist = round(hSize^-1 (branch - (pos2 - pos1))). Bodies are written at the
     images nearest YADE's (nearest_image_shifts), so this changes cellDist where our detection
     flipped the cell (hSize M, the same periodic medium, core/Cell.hpp) and where a body crossed
-    the cell in our run. Before, bodies were written wrapped and only a flip was remapped: 313
-    contacts became 251 on a scene imported and written straight back (an outside try). Our motion
+    the cell in our run (bodies written wrapped, with only a flip remapped, turned 313 contacts into
+    251 on a scene imported and written straight back). Our motion
     since (far below half a cell) does not change the rounding."""
     if not before:
         return
@@ -199,7 +199,7 @@ def _keep_interaction_images(O, before):
 def contacts_made_at_rest(scene, O, bodies, yade_of_member):
     """YADE's interactions for our contacts, made by its own collider and law in a step at rest,
     then our shear forces on them (write_shear_history) and a second step at rest that puts those
-    forces into O.forces (before it, YADE's unbalanced force read 0.086 against our 1.7e-5).
+    forces into O.forces (without it, YADE's unbalanced force reads 0.086 against our 1.7e-5).
     `bodies`: YADE ids of our bodies (held still meanwhile); `yade_of_member`: of our members.
 
     At rest: every body's DOFs blocked and its velocity zero, the integrator running. (A step with
