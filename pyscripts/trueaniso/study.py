@@ -521,7 +521,7 @@ class _Run:
             ok = (str(p.get("state")) == str(sid) and p.get("b") == b and p.get("sigma_z") == sz
                   and p.get("specimen") == self.fp["specimen"] and p.get("path", "true-triaxial") == self.loading)
             what = "it is not state %s (b = %g, sigma_z = %g Pa) of this study's specimen" % (sid, b, sz)
-            # Checkpoints written before 2026-11-30 record no key: they pass on the checks above.
+            # A checkpoint that records no study key (an older layout) passes on the checks above.
             if ok and p.get("study", study_dir.states_key(self.fp)) != study_dir.states_key(self.fp):
                 ok, what = False, ("it was made by another study (another friction, path rate, thread count or "
                                    "code: the study's fingerprint differs)")
