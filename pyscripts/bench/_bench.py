@@ -59,8 +59,8 @@ def replace_block(path, name, body, heading=None):
 
 def sphere_specimen(path):
     """The number of spheres of the sphere specimen file `path`, checked before any run: a file
-    that is not a specimen failed inside a worker, with its traceback, and a clump specimen was
-    stepped and labelled as spheres, or failed on its array lengths (an outside try). Exits with
+    that is not a specimen would fail inside a worker, with its traceback, and a clump specimen be
+    stepped and labelled as spheres, or fail on its array lengths. Exits with
     one line of error otherwise."""
     from trueaniso import cli, specimen_file
     try:

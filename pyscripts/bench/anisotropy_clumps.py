@@ -1,5 +1,5 @@
-"""Inherent anisotropy of clump specimens at their isotropic state, beside the paper's numbers
-(issue 13): void ratio, Zm, the fabric R and H (Eqs. 15-16) and the clumps' long-axis fabric, and
+"""Inherent anisotropy of clump specimens at their isotropic state, beside the paper's numbers:
+void ratio, Zm, the fabric R and H (Eqs. 15-16) and the clumps' long-axis fabric, and
 E_x, E_y, E_z with particle rotations restrained and free, from the exact static solve
 (docs/statics.md) and from the dynamic stress probes (Eq. 10, gamma = 1e-6, the study's settings).
 

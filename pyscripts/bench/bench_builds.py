@@ -4,8 +4,7 @@
 
 TREE is a checkout of trueaniso, built (./setup.sh), e.g. `git worktree add ../before HEAD~1`.
 Each run is a process of its own that imports that tree's engines and steps the specimen (tiled
-K x K x K times and numbered in grid rows, as a prepared specimen of that size is; before
-2026-11-30 a tiled scene kept its tiles' order, each tile's bodies together) with
+K x K x K times and numbered in grid rows, as a prepared specimen of that size is) with
 ContactDetection, ContactForces and NewtonIntegrator on one engine thread (--threads N: N), as
 bench_stepper.py does; before and after alternate, the first of the pair alternating too.
 Figure: particle-steps per CPU second of the timed steps (CPU time, the figure other jobs on the
@@ -107,8 +106,8 @@ def run_state(tree, specimen, state):
 def alternating(o, names, measure, differ):
     """measure(tree) o.repeats times for each build, before and after alternating which goes first;
     the two runs of a pair must give the same checksum (else: 'the two builds DIFFER')."""
-    # Keyed by side, not by tree: a tree timed against itself (an A/A check of the noise) kept both
-    # sides' runs in one list and printed a ratio of 1.000 (an outside try).
+    # Keyed by side, not by tree: a tree timed against itself (an A/A check of the noise) keeps its
+    # two sides' runs apart, where one list would print a ratio of 1.000.
     runs = {"before": [], "after": []}
     tree = {"before": o.before, "after": o.after}
     for r in range(o.repeats):
@@ -225,7 +224,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _bench.replace_block(o.doc, o.block, table, heading="## Stepper changes (issue 15)")
+        _bench.replace_block(o.doc, o.block, table, heading="## Stepper changes")
 
 
 if __name__ == "__main__":

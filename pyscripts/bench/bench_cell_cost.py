@@ -1,4 +1,4 @@
-"""What the fully deformable cell costs (issue 12): steps per second of the sheared force loop and
+"""What the fully deformable cell costs: steps per second of the sheared force loop and
 detection against the orthorhombic fast path on the same packing, and the steps to reach a state
 with six-component control against three (from docs/data/cell-states-*.csv, bench_cell_states.py).
 

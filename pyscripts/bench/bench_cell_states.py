@@ -1,5 +1,5 @@
 """The isotropic state and the 39 states of Table C1 reached in the fully deformable cell: every
-principal stress against its goal and every off-diagonal stress against zero (issue 12).
+principal stress against its goal and every off-diagonal stress against zero.
 
     /usr/bin/python3 pyscripts/bench/bench_cell_states.py --specimen specimens/spheres-1000-s1.npz
     /usr/bin/python3 pyscripts/bench/bench_cell_states.py --specimen S.npz --control three
@@ -8,7 +8,7 @@ principal stress against its goal and every off-diagonal stress against zero (is
 Each loading path starts from the specimen and reaches its states in order, each from the one
 before it, as run_states.py does; the isotropic state (b = 0, sigma_z = 100 kPa) is reached from
 the specimen. --control six holds the shear stresses at zero (the full cell); --control three
-holds the cell's shear strains (the orthorhombic servo of before), for the steps and the shear
+holds the cell's shear strains (an orthorhombic servo), for the steps and the shear
 stress it leaves. One row per state is appended to docs/data/cell-states-N-CONTROL.csv as it
 comes (the file is rewritten from the start by each run). With --doc, the tables between
 <!-- cell-states:begin --> and <!-- cell-states:end --> of that file are rebuilt from every

@@ -1,5 +1,5 @@
 """Cost of clump assemblies: the stepper on clumps against YADE's clumps on the same packing, and
-the preparation time of each assembly (issue 13 benchmark).
+the preparation time of each assembly.
 
     /usr/bin/python3 pyscripts/bench/bench_clumps.py --specimen specimens/clump1-4000-s1.npz \
         --specimen specimens/clump2-4000-s1.npz [--doc docs/benchmarks.md]
@@ -110,7 +110,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _bench.replace_block(o.doc, "clumps", table, heading="## Clump assemblies (issue 13)")
+        _bench.replace_block(o.doc, "clumps", table, heading="## Clump assemblies")
 
 
 if __name__ == "__main__" or cli.in_yade():

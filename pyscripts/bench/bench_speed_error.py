@@ -1,4 +1,4 @@
-"""Speed against error of the ways to get E_i and nu_ij at a held state (issue 5).
+"""Speed against error of the ways to get E_i and nu_ij at a held state.
 
     /usr/bin/python3 pyscripts/bench/bench_speed_error.py --specimens A.npz B.npz ... \
         --doc docs/speed-vs-error.md --plot docs/speed-vs-error.png

@@ -1,4 +1,4 @@
-"""What each stepper change of issue 15 bought, measured on our own stepper alone.
+"""What each stepper change bought, measured on our own stepper alone.
 
     /usr/bin/python3 pyscripts/bench/bench_stepper_changes.py --specimen S.npz [--small T.npz] [--doc docs/benchmarks.md]
 
@@ -8,7 +8,7 @@
    Morton curve (Scene.order_in_space), one engine thread. Figure: particle-steps per CPU second of the timed
    steps (CPU time, not wall time: the figure the machine's other jobs disturb least).
 2. Parallel threshold. The small specimen (--small) stepped on two threads with every loop in a
-   team (engines.set_parallel_minimum(0), the former behaviour) and with the default threshold;
+   team (engines.set_parallel_minimum(0)) and with the default threshold;
    wall time per step, which is what a team's waits cost.
 Each variant runs in its own process; repeats interleave the variants and the median is reported.
 With --doc the tables between <!-- stepper-changes:begin --> and <!-- stepper-changes:end -->
@@ -126,7 +126,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     if o.doc:
-        _bench.replace_block(o.doc, "stepper-changes", table, heading="## Stepper changes (issue 15)")
+        _bench.replace_block(o.doc, "stepper-changes", table, heading="## Stepper changes")
 
 
 if __name__ == "__main__":
