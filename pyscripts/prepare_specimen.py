@@ -264,11 +264,11 @@ def prepare(o, dist):
         return
 
     # The code version goes into the file; taken now, so that sources edited (and a module rebuilt)
-    # while a preparation of an hour runs cannot make its save refuse (a 16,000-sphere run was lost
-    # so), and a module built from other sources is refused before any work.
+    # while a preparation of an hour runs cannot make its save refuse (and lose a 16,000-sphere
+    # run), and a module built from other sources is refused before any work.
     provenance.versions()
     stale = checkpoints.differences()
-    if stale and not o.force:  # refused before the estimate line, which read as the start of the work
+    if stale and not o.force:  # refused before the estimate line, which would read as the start of the work
         checkpoints.refuse_other()
     bar = progress.Progress("  preparation", progress.say, o.progress_every)
     if not o.quiet:

@@ -37,7 +37,7 @@ def replace_block(path, name, body, heading=None):
         text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: block, text, flags=re.S)
     elif heading and heading in text.split("\n"):
         # Into the heading's own section, before the next heading of its level or above: a second
-        # copy of the heading at the end of the file, as this did, split one section in two.
+        # copy of the heading at the end of the file would split one section in two.
         lines = text.split("\n")
         start = lines.index(heading)
         level = heading.split(" ", 1)[0]

@@ -497,7 +497,7 @@ def guarded(main, resumable=False):
         fail(_interrupted_line() if resumable else "interrupted", status)
     except BrokenPipeError:
         # The reader of the output went away (`| head`, a closed terminal): a Unix tool ends
-        # quietly on SIGPIPE; this ended in a traceback. Output to nowhere from here on, then the
+        # quietly on SIGPIPE, not with a traceback. Output to nowhere from here on, then the
         # line that says what was kept (on stderr, if it is still open).
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         what = "output closed (broken pipe)"
