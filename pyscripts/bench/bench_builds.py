@@ -25,18 +25,16 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE)]
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-import _bench  # noqa: E402
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 # Run in a fresh interpreter with the tree's pyscripts first on the path: it uses only what both
 # builds have (specimen_file.load, dem.Chain, Scene.contact_arrays), so it can time an older tree.
 WORKER = r"""
 import hashlib, json, sys, time
 tree, specimen, tile, steps = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
-sys.path[:0] = [tree + "/pyscripts", tree + "/pyscripts/bench"]
 import numpy as np
 from trueaniso import dem, specimen_file
 s, _ = specimen_file.load(specimen)
@@ -180,10 +178,7 @@ def options():
     p.add_argument("--doc", help="Markdown file whose block is replaced")
     p.add_argument("--block", default="stepper-builds", help="marker name of the block in --doc")
     o = cli.parse(p)
-    try:
-        o.tiles = [int(k) for k in str(o.tiles).split(",")]
-    except ValueError:
-        cli.fail("--tiles takes whole numbers separated by commas, not %r" % o.tiles)
+    o.tiles = _bench.tile_counts(o.tiles)
     if o.repeats < 1 or min(o.tiles) < 1 or max(o.tiles) > 4:
         cli.fail("--repeats must be >= 1 and --tiles between 1 and 4")
     from trueaniso import resources

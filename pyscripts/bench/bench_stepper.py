@@ -31,11 +31,10 @@ import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 
 def load(o):
@@ -55,15 +54,9 @@ def load(o):
 
 
 def worker_ours(o):
-    from trueaniso import dem, engines
+    from trueaniso import engines
     s = load(o)
-    s.dt = o.dt
-    c = dem.Chain(s, damping=0.2)
-    c.timestep.dead = True
-    c.run(100)
-    t = time.perf_counter()
-    c.run(o.steps)
-    dt = time.perf_counter() - t
+    c, dt = _bench.time_ours(s, o.dt, o.steps)
     return dict(code="trueaniso", steps=o.steps, seconds=dt, n=s.num_bodies,
                 rebuilds=c.detection.rebuilds, pressure=float(engines.stress(s).trace() / 3),
                 build=engines.build_arch(), source_hash=engines.source_hash())
