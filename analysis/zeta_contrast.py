@@ -156,7 +156,7 @@ def main(argv=None):
         sys.stderr.write("error: %s has fewer than 2 states probed on x, y and z%s: nothing to fit\n"
                          % (o.results, "" if o.rotations is None else " with rotations %s" % o.rotations))
         return 2
-    for note in contrast["notes"]:  # a fit that left a row out says so (it was silent)
+    for note in contrast["notes"]:  # a fit that left a row out says so
         sys.stderr.write("note: %s\n" % note)
     print(said(contrast))
     return 0

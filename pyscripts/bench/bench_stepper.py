@@ -199,7 +199,7 @@ def main():
     s = load(o)
     dt = o.dt or 0.5 * engines.TimeStepper.stiffness_bound(s)
     limit = engines.TimeStepper.critical_pair_step(s)
-    if dt >= limit:  # before any run: a worker refused it, after the others had been timed
+    if dt >= limit:  # before any run, not in a worker after the others have been timed
         cli.fail("--dt %g s: unstable on this packing (the two-body limit of its stiffest contact is %.3g s)"
                  % (dt, limit))
     threads = o.thread_counts

@@ -195,7 +195,7 @@ def read(path):
 def volumes_problem(a):
     """A stored clump volume that disagrees with its members' union (CGAL, cached once per shape),
     or None. Checked when a file is read, so that a study refuses such a specimen before it writes
-    anything (it was checked only when the scene was built, after the study had begun)."""
+    anything, not when the scene is built, after the study has begun."""
     if "volumes" not in a:
         return None
     mb = a["member_begin"]

@@ -99,7 +99,7 @@ def _shared_material(spheres):
     for b in spheres:
         m = b.material
         # FrictMat itself: its subclasses (ViscElMat, CohFrictMat, ...) carry the same fields for
-        # other laws, and were converted without a word (ViscEl's 50 kPa read 226 kPa here).
+        # other laws, and would be converted without a word (ViscEl's 50 kPa would read 226 kPa here).
         if type(m).__name__ != "FrictMat":
             raise BridgeError("body %d has a %s material; the bridge converts FrictMat (young, poisson, density, "
                               "frictionAngle) to the paper's Hertz-Mindlin law only" % (b.id, type(m).__name__))
