@@ -8,8 +8,10 @@ import sys
 # The package below, trueaniso, lives in pyscripts/ beside this folder: the one place that makes it
 # importable, whether the analysis runs as `python3 -m analysis.report` from the repository root,
 # is imported by a script that put the root on the path, or runs as a file (cross_anisotropy.py).
+# Installed (cmake --install), both packages sit side by side in site-packages and there is no
+# pyscripts/ to add.
 _PYSCRIPTS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "pyscripts")
-if _PYSCRIPTS not in sys.path:
+if os.path.isdir(_PYSCRIPTS) and _PYSCRIPTS not in sys.path:
     sys.path.insert(0, _PYSCRIPTS)
 
 
