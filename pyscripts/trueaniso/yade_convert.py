@@ -10,7 +10,7 @@ import numpy as np
 
 
 class BridgeError(ValueError):
-    pass
+    """A YADE scene, body, material or interaction the bridge cannot convert; the message names it."""
 
 
 def _yade():
