@@ -170,7 +170,7 @@ def fabric_parts(path, tab, shear_modulus, poisson, rotations):
 
 def zeta_per_state(tab, parts, reference):
     """One zeta (zeta_h = zeta_v) per state, fitted on that state's a_i^2 divided by those of the
-    reference state (Appendix B's reference point), as the issue's zeta-against-Zm analysis does:
+    reference state (Appendix B's reference point), as the zeta-against-Zm analysis needs:
     {state: zeta, or None where it is not determined: the contrast does not depend on zeta, or the
     fit stops at a bound of its range: bound zetas (clump2's 1e-20 to 1e-19) ranked against Zm
     would be a correlation of round-off}."""

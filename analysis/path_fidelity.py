@@ -12,7 +12,7 @@ isotropic state (sigma_z = p) outwards by distance from it, as in docs/study-tab
 
 The second form recounts Zm with other gap tolerances on the study's state checkpoints
 (states/<id>.npz), which the table's single Zm_gap1e-3 column cannot give. The third prints the
-issue's path-fidelity table (markdown), one row per study: variant (spheres, seed, rolling
+path-fidelity table (markdown), one row per study: variant (spheres, seed, rolling
 resistance), Zm and Zm_gap1e-3 ranges, reversals, the fitted zeta and how the per-state zeta follows
 Zm, E at the isotropic state, and the cost (steps, wall time).
 """

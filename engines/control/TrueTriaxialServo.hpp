@@ -41,7 +41,7 @@ class TrueTriaxialServo : public Engine {
   Real loadingFriction = kLoadingFriction;
   Real pathRate = 2.0;             // Pa per step: the fastest the goal moves along the path
   Real followTolerance = 1000.0;   // Pa
-  Real stressTolerance = 500.0;    // Pa: principal and shear stresses, the 0.5 kPa
+  Real stressTolerance = 500.0;    // Pa: principal and shear stresses, within 0.5 kPa
   Real unbalancedTolerance = 1e-4;  // as reach_state and docs/triaxial.md
   long settleSteps = 200;          // the hold criterion must be met this many steps in a row
   Real maxStrain = 0.05;           // failure: |cell strain since start| on any axis beyond it

@@ -31,7 +31,7 @@ DATA = os.path.join(ROOT, "docs", "data")
 COLUMNS = ["n", "control", "state", "b", "sigma_z_goal", "goal_1", "goal_2", "goal_3", "sigma_x", "sigma_y",
            "sigma_z", "sigma_1", "sigma_2", "sigma_3", "sigma_yz", "sigma_xz", "sigma_xy", "principal_error",
            "tau_max", "unbalanced", "steps", "wall_time", "start"]
-TOLERANCE = 500.0  # Pa: the acceptance, 0.5 kPa
+TOLERANCE = 500.0  # Pa: a state's acceptance, 0.5 kPa
 
 
 def data_path(n, control):
