@@ -35,6 +35,7 @@ from trueaniso import cli  # noqa: E402
 WORKER = r"""
 import hashlib, json, sys, time
 tree, specimen, tile, steps = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+sys.path[:0] = [tree + "/pyscripts", tree + "/pyscripts/bench"]
 import numpy as np
 from trueaniso import dem, specimen_file
 s, _ = specimen_file.load(specimen)
