@@ -5,10 +5,19 @@ uses the engines' fabric and micromechanics."""
 import os
 import sys
 
+# The package below, trueaniso, lives in pyscripts/ beside this folder: the one place that makes it
+# importable, whether the analysis runs as `python3 -m analysis.report` from the repository root,
+# is imported by a script that put the root on the path, or runs as a file (cross_anisotropy.py).
+# Installed (cmake --install), both packages sit side by side in site-packages and there is no
+# pyscripts/ to add.
+_PYSCRIPTS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "pyscripts")
+if os.path.isdir(_PYSCRIPTS) and _PYSCRIPTS not in sys.path:
+    sys.path.insert(0, _PYSCRIPTS)
+
 
 def _one_line_when_unbuilt(kind, value, tb, _default=sys.excepthook):
-    """`python3 -m analysis.report` on a machine without the build ended in a 20-line traceback
-    whose last line said what to do (an outside try); that line alone, as the scripts give it."""
+    """A tool of this folder run on a machine without the build ends with the one line that says
+    what to do, as the scripts give it, not a traceback that ends with it."""
     if issubclass(kind, ImportError) and "compiled module _trueaniso" in str(value):
         sys.stderr.write("error: %s\n" % value)
         sys.stderr.flush()

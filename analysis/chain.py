@@ -17,7 +17,7 @@ Everything here reads numbers already in the table; nothing is simulated.
 import numpy as np
 
 from . import hyperelastic, zeta_contrast
-from trueaniso import zeta as _zeta  # noqa: E402 - analysis.results put pyscripts/ on the path
+from trueaniso import zeta as _zeta
 
 AXES = "xyz"
 PAPER_VOID_RATIO = dict(spheres=0.584, clump1=0.445, clump2=0.636)  # section 2.1, at isotropic 100 kPa
@@ -170,10 +170,10 @@ def fabric_parts(path, tab, shear_modulus, poisson, rotations):
 
 def zeta_per_state(tab, parts, reference):
     """One zeta (zeta_h = zeta_v) per state, fitted on that state's a_i^2 divided by those of the
-    reference state (Appendix B's reference point), as the issue's zeta-against-Zm analysis does:
+    reference state (Appendix B's reference point), as the zeta-against-Zm analysis needs:
     {state: zeta, or None where it is not determined: the contrast does not depend on zeta, or the
-    fit stops at a bound of its range. Reported as values, clump2's bound zetas (1e-20 to 1e-19)
-    were ranked against Zm, a correlation of round-off (an outside try)}."""
+    fit stops at a bound of its range: bound zetas (clump2's 1e-20 to 1e-19) ranked against Zm
+    would be a correlation of round-off}."""
     A_n, A_s = parts
     ref = (tab["E"][reference], A_n[reference], A_s[reference])
     out = {}

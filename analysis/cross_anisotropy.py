@@ -15,8 +15,10 @@ import math
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from analysis.results import SHEAR_PROBES, ResultsError, number, read_probes  # noqa: E402
+if __package__ in (None, ""):  # run as a file: imported as analysis.cross_anisotropy all the same (PEP 366)
+    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    __package__ = "analysis"
+from .results import SHEAR_PROBES, ResultsError, number, read_probes  # noqa: E402
 
 NORMAL = ("x", "y", "z")
 SHEAR = SHEAR_PROBES
@@ -66,8 +68,8 @@ def states(path):
         r = probes["z"]
         sx, sy = number(r, "sigma_x", path), number(r, "sigma_y", path)
         if abs(sx - sy) > HORIZONTAL_TOLERANCE * 0.5 * abs(sx + sy):
-            # A true-triaxial state (21: 60 and 100 kPa) was shown as Fig. 16 with sigma_h their mean
-            # (an outside try): its x and y are not one horizontal direction.
+            # A true-triaxial state (21: 60 and 100 kPa) is no point of Fig. 16, sigma_h their mean:
+            # its x and y are not one horizontal direction.
             raise ResultsError("%s: state %s is not cross-anisotropic: sigma_x %.1f and sigma_y %.1f kPa differ (Fig. 16 "
                                "needs sigma_x = sigma_y: run_states.py --path cross-anisotropic)"
                                % (path, sid, sx / 1e3, sy / 1e3))
@@ -115,7 +117,7 @@ def main(argv=None):
     o = p.parse_args(argv)
     from trueaniso import atomic, cli
     try:
-        # Where the outputs go, before any work: before, a missing directory was a traceback at the end.
+        # Where the outputs go, checked before any work: a missing directory is refused at once, not at the end.
         for option, path in (("--out", o.out), ("--figure", o.figure)):
             problem = path is not None and cli.output_problem(path, directory=False, option=option)
             if problem:

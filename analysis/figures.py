@@ -192,7 +192,7 @@ def main(argv=None):
         rows = read_probes(o.csv, need=("state", "probe", "E", "sigma_x", "sigma_y", "sigma_z", "Zm", "b", "q",
                                         "nu_1", "nu_2", "nu_1_name", "nu_2_name"))
         # The figures are of the normal probes (E, Poisson ratios); a shear probe's row (yz, xz, xy:
-        # G, no E) is a valid row they do not use. Before, its empty E refused the whole table.
+        # G, no E) is a valid row they do not use, and its empty E must not refuse the whole table.
         normal = [r for r in rows if r["probe"] in ("x", "y", "z")]
         if not normal:
             raise ResultsError("%s has no rows of normal probes (x, y, z), which the figures plot" % o.csv)

@@ -1,4 +1,4 @@
-"""Path fidelity of a Table C1 study (issue 14): how far Zm (and Zm with a gap tolerance) moves over
+"""Path fidelity of a Table C1 study: how far Zm (and Zm with a gap tolerance) moves over
 the states, and where the stiffness trend reverses.
 
 A reversal is a step along one loading path where a modulus E_i falls while its own stress
@@ -12,14 +12,14 @@ isotropic state (sigma_z = p) outwards by distance from it, as in docs/study-tab
 
 The second form recounts Zm with other gap tolerances on the study's state checkpoints
 (states/<id>.npz), which the table's single Zm_gap1e-3 column cannot give. The third prints the
-issue's path-fidelity table (markdown), one row per study: variant (spheres, seed, rolling
+path-fidelity table (markdown), one row per study: variant (spheres, seed, rolling
 resistance), Zm and Zm_gap1e-3 ranges, reversals, the fitted zeta and how the per-state zeta follows
 Zm, E at the isotropic state, and the cost (steps, wall time).
 """
 import sys
 
-from .results import ResultsError, number, read_metadata, read_probes  # sets the path to pyscripts/ as well
-from trueaniso import triaxial  # noqa: E402  (after .results)
+from .results import ResultsError, number, read_metadata, read_probes
+from trueaniso import triaxial
 
 NORMAL = ("x", "y", "z")
 

@@ -184,8 +184,8 @@ def _study_line(results, rows=()):
                else "states reached at the default 2 Pa per step" if float(rate) == 2.0
                else "states reached at %s Pa per step" % rate)
     seed = spec.get("seed")
-    # The probes' settings: a study run with --skip-detection or rotations restrained read like any
-    # other in its report (a second outside try).
+    # The probes' settings, so that a study run with --skip-detection or rotations restrained does
+    # not read like any other in its report.
     probe = fp.get("probe") or {}
     probes = "" if not probe else "; probes of strain %s, rotations %s, contact detection %s" % (
         _fmt(probe.get("gamma"), "%g"),
@@ -204,8 +204,8 @@ def _states(n):
 
 def _missing_states_line(results, rows):
     """The states the study defines (metadata.json) that have no row in the table: not reached (a
-    specimen near its strength creeps; docs/runs.md) or not run yet. Before, the report counted the
-    states it had and said nothing of the others. None when there are none, or no metadata."""
+    specimen near its strength creeps; docs/runs.md) or not run yet, named so that the report does
+    not pass for the whole study. None when there are none, or no metadata."""
     meta = read_metadata(results)
     if meta is None:
         return None
@@ -214,7 +214,7 @@ def _missing_states_line(results, rows):
     if not missing:
         return None
     missing.sort(key=lambda sid: (0, int(sid), "") if sid.isdigit() else (1, 0, sid))
-    # "States ...: 9" read as a count of nine (an outside try): the ids are named as states.
+    # The ids are named as states: "States ...: 9" would read as a count of nine.
     one = len(missing) == 1
     named = missing[0] if one else ", ".join(missing[:-1]) + " and " + missing[-1]
     return ("State%s %s of this study ha%s no row in its table (not reached, or not run yet: the run that asked for "
@@ -366,14 +366,14 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     csv_path = table_path(results)
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     # A study's probes.csv given as the file: its directory's metadata (assembly, material, the
-    # states asked) still applies. Before, clump1's table so given was reported as spheres against
-    # the paper's default material (an outside try).
+    # states asked) still applies: a clump1 table given so is a clump1 study, not spheres against
+    # the paper's default material.
     beside = os.path.dirname(os.path.abspath(csv_path))
     if not os.path.isdir(results) and os.path.basename(csv_path) == "probes.csv" and \
             os.path.exists(os.path.join(beside, "metadata.json")):
         results = beside
-    # The study's own assembly unless told: before, every report compared with the paper's spheres,
-    # also run_study.py's on clump1 (its sphere fit read 36,627 MPa at clump1's Zm 10.3; an outside try).
+    # The study's own assembly unless told: a clump1 study against the paper's spheres would read
+    # its sphere fit far outside its range (36,627 MPa at clump1's Zm 10.3).
     own = study_assembly(results)
     if own == "clumps":  # clumps saved without an assembly: only the user can say which paper's to compare with
         if assembly is None:
@@ -622,7 +622,7 @@ def main(argv=None):
         sys.stderr.write("error: --assembly %s: the paper's assemblies are %s\n"
                          % (o.assembly, ", ".join(sorted(chain.PAPER))))
         sys.exit(2)
-    # Before the output directory is made: refused later, they left it behind empty (an outside try).
+    # Before the output directory is made, so that a refusal leaves no empty directory behind.
     import math
     if o.shear_modulus is not None and not (math.isfinite(o.shear_modulus) and o.shear_modulus > 0):
         sys.stderr.write("error: --shear-modulus must be > 0 (Pa), not %r\n" % o.shear_modulus)

@@ -6,12 +6,8 @@ wrong with the file is one ``ResultsError`` line, never a traceback.
 """
 import math
 import os
-import sys
 
-_PYSCRIPTS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "pyscripts")
-if _PYSCRIPTS not in sys.path:
-    sys.path.insert(0, _PYSCRIPTS)
-from trueaniso import results_csv  # noqa: E402
+from trueaniso import results_csv
 
 
 class ResultsError(ValueError):
@@ -20,7 +16,7 @@ class ResultsError(ValueError):
 
 def said(exc):
     """An error as the tools' one line: an OSError by its file and its reason ('/x/report: Read-only
-    file system'), not Python's '[Errno 30] Read-only file system: ...' (an outside try)."""
+    file system'), not Python's '[Errno 30] Read-only file system: ...'."""
     if isinstance(exc, OSError) and exc.strerror:
         return "%s: %s" % (exc.filename, exc.strerror) if exc.filename else exc.strerror
     return str(exc)
@@ -49,7 +45,7 @@ def table_path(path):
 
 def _state_key(text):
     """A state's text as one key: a Table C1 number written '1.0' or ' 1' (a table edited by hand or
-    by a spreadsheet) is state 1, so its second row is found as a repeat (an outside try)."""
+    by a spreadsheet) is state 1, so its second row is found as a repeat."""
     try:
         value = float(text)
     except (TypeError, ValueError):

@@ -11,7 +11,7 @@ import collections
 import numpy as np
 
 from .results import SHEAR_PROBES, ResultsError, read_probes
-from trueaniso import fabric, zeta  # noqa: E402 - results.py put pyscripts/ on the path
+from trueaniso import fabric, zeta
 
 AXES = "xyz"
 DENSITIES = ("eq36", "count")
@@ -116,8 +116,8 @@ def fit(path, shear_modulus, poisson, min_states=2, rotations=None):
 
 def said(contrast):
     """The fit as one line, with its standard errors, and said when it stopped at a bound of the
-    search: two states gave zeta_h = 0.000 (the bound), +/- 0.19, printed as a calibration (an
-    outside try). run_study.py's line and this module's command print it."""
+    search (two states can give zeta_h = 0.000, the bound, +/- 0.19: no calibration).
+    run_study.py's line and this module's command print it."""
     bound = ("; at a bound of the search (%g-%g): not determined by these states" % zeta.ZETA_BOUNDS
              if contrast["at_bound"] else "")
     return ("zeta calibrated on the contrast a_i^2 (Eq. 25) over %d states, as the paper's Fig. 13: "
@@ -128,8 +128,7 @@ def said(contrast):
 
 def main(argv=None):
     """python3 -m analysis.zeta_contrast DIR: the fit of a study (its directory or probes.csv), the
-    material from its metadata.json unless given. Before, the module ran nothing and exited 0,
-    --help included (an outside check)."""
+    material from its metadata.json unless given."""
     import argparse
     import sys
     from .results import read_metadata, said as said_error, table_path
@@ -157,7 +156,7 @@ def main(argv=None):
         sys.stderr.write("error: %s has fewer than 2 states probed on x, y and z%s: nothing to fit\n"
                          % (o.results, "" if o.rotations is None else " with rotations %s" % o.rotations))
         return 2
-    for note in contrast["notes"]:  # a fit that left a row out says so (it was silent)
+    for note in contrast["notes"]:  # a fit that left a row out says so
         sys.stderr.write("note: %s\n" % note)
     print(said(contrast))
     return 0

@@ -116,8 +116,8 @@ def validate(o):
         raise cli.InputError("--d50 %g --cu %g: %s" % (o.d50, o.cu, exc)) from None
     # The cell must be longer than the interaction range of the largest pair (a clump's length:
     # its bounding diameter at the largest size). Checked before the layers, and the least count it
-    # names also holds the layers: followed one after the other, the two checks' advice led from
-    # --n 60 to 67 (not a multiple of clump2's 4 layers) to 80 (an outside try).
+    # names also holds the layers: followed one after the other, the two checks' advice would lead
+    # from --n 60 to 67 (not a multiple of clump2's 4 layers) to 80.
     clumps = dict(d50=o.d50, cu=o.cu, phi_cell=o.phi_cell)
     side = (o.n * 3.14159265 / 6 * dist.d50 ** 3 / o.phi_cell) ** (1 / 3)
     length = dist.d[-1] * (1.0 if o.assembly == "sphere" else clump_specimen.bounding_diameter(o.assembly))
@@ -161,7 +161,7 @@ def main():
         # lends neither (it is refused, or removed by --force), nor does one beside a specimen kept.
         ck = prep_checkpoint.Checkpoints(prep_checkpoint.path_for(o.out), {})
         broken = ck.unusable()
-        if broken and o.force:  # its refusal says "or use --force", which then refused too (an outside try)
+        if broken and o.force:  # its refusal says "or use --force", which must then work
             ck.remove()
             print("removed the unusable checkpoint %s (%s) (--force)" % (ck.path, broken), flush=True)
         own = None
@@ -170,7 +170,7 @@ def main():
         cli.resolve_threads(o, study=False, preparation=ck.path if own else None)
         if o.checkpoint_every is None:
             o.checkpoint_every = (own or {}).get("every", prep_checkpoint.EVERY)
-            if own and "every" in own:  # said as the threads are, --quiet too; it was silent (an outside try)
+            if own and "every" in own:  # said as the threads are, --quiet too
                 print("%s: --checkpoint-every not given: its unfinished preparation wrote %s, so this run does too"
                       % (o.out, prep_checkpoint.interval_said(o.checkpoint_every)), flush=True)
         if o.threads:
@@ -197,8 +197,8 @@ def differences(o, meta):
 def _kept_with(o, meta):
     """What the kept specimen was made with that this run asked otherwise, none of which changes
     the recipe and each of which can change the last bits: a --threads or --checkpoint-every given,
-    and the code. It was kept without a word (an outside try asked for --checkpoint-every 0 and got
-    the old file)."""
+    and the code, so that the specimen is not kept without a word (--checkpoint-every 0 asked, the
+    old file given)."""
     p, other = meta.get("parameters", {}), []
     threads = o.given["threads"] if o.given["threads"] != 0 else engines.threads()
     if o.given["threads"] is not None and p.get("threads") is not None and p["threads"] != threads:
@@ -218,10 +218,10 @@ def _kept_with(o, meta):
 def _checkpoint_beside_kept(o, meta, checkpoints):
     """A checkpoint beside a specimen this run keeps: removed when it is the leftover of the run
     that saved the specimen (killed between its save and the removal: the same settings, threads,
-    interval and code as the specimen's own), else kept and named. Compared with this run, as it
-    was, the checkpoint of an interrupted --force remake with other threads was taken for such a
-    leftover and removed; and a damaged one beside a good specimen ended the run with an error
-    whose advice, --force, replaced the specimen (both an outside try)."""
+    interval and code as the specimen's own), else kept and named. Compared with this run instead,
+    the checkpoint of an interrupted --force remake with other threads would pass for such a
+    leftover and be removed; and a damaged one beside a good specimen is named, not an error whose
+    advice, --force, would replace the specimen."""
     broken = checkpoints.unusable()
     if broken:
         print("kept the unusable checkpoint %s beside it (%s); remove it (the specimen is complete)"
@@ -264,16 +264,16 @@ def prepare(o, dist):
         return
 
     # The code version goes into the file; taken now, so that sources edited (and a module rebuilt)
-    # while a preparation of an hour runs cannot make its save refuse (a 16,000-sphere run was lost
-    # so), and a module built from other sources is refused before any work.
+    # while a preparation of an hour runs cannot make its save refuse (and lose a 16,000-sphere
+    # run), and a module built from other sources is refused before any work.
     provenance.versions()
     stale = checkpoints.differences()
-    if stale and not o.force:  # refused before the estimate line, which read as the start of the work
+    if stale and not o.force:  # refused before the estimate line, which would read as the start of the work
         checkpoints.refuse_other()
     bar = progress.Progress("  preparation", progress.say, o.progress_every)
     if not o.quiet:
         members = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
-        # The engines' own count (set by main): "or cores()" said 16 s for 31 s under OMP_NUM_THREADS=1 (an outside try).
+        # The engines' own count (set by main), not all cores: those would say 16 s for 31 s under OMP_NUM_THREADS=1.
         memory, seconds = resources.preparation_estimate(members, engines.threads(), o.assembly)
         print("preparing %s (seed %d, D50 %.4g m, Cu %.3g) to %.4g kPa: about %s of memory and %s%s"
               % (clump_specimen.particles(o.n, o.assembly), o.seed, o.d50, o.cu, o.pressure / 1e3,
@@ -310,7 +310,7 @@ def prepare(o, dist):
     if not o.quiet:
         this = time.time() - t0
         total = log.get("wall_time", this)  # the preparation's, over every run that made it
-        # A resumed preparation said only its own run's time (an outside try: 1.0 s for 11 s).
+        # A resumed preparation says the whole preparation's time too, not only its own run's (1.0 s of 11 s).
         print("saved %s in %.1f s%s" % (o.out, this, "" if not checkpoints.resumed else
                                          " (this run; %.1f s in all, with the runs before its last checkpoint)"
                                          % total))
@@ -320,7 +320,7 @@ def prepare(o, dist):
 def report(scene, log, o, st=None):
     """The specimen's summary as one JSON line: the file's own (`st`, saved with it), so that a kept
     specimen says what its save said. Recomputed from a reloaded clump scene, the unbalanced force
-    (a residual) came out 5.59e-7 against the 5.17e-7 saved (an outside try)."""
+    (a residual) comes out otherwise (5.59e-7 against the 5.17e-7 saved)."""
     st = st or specimen.state(scene)
     print(json.dumps(dict(n=st["n"], void_ratio=round(st["void_ratio"], 4), Zm=round(st["Zm"], 3),
                           sigma_kPa=[round(st[k] / 1e3, 3) for k in ("sigma_x", "sigma_y", "sigma_z")],

@@ -23,8 +23,8 @@ import sys
 # and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
 # crash; cli.guarded gives both signals their meaning for the work when it starts. An MPI worker
 # (a rank other than 0: mpi4py.futures' master is rank 0) ends silently, as it does once loaded
-# (cli.release_start_guard): a Ctrl-C on mpiexec within its first second printed this line once a
-# worker beside the master's (an outside try, 4 times in 12).
+# (cli.release_start_guard): a Ctrl-C on mpiexec within its first second would print this line once
+# a worker beside the master's.
 _WORKER = next((os.environ[v] for v in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK") if v in os.environ), "0") != "0"
 for _signal in (signal.SIGINT, signal.SIGTERM):
     signal.signal(_signal, lambda number, _: ((_WORKER or sys.stderr.write("error: interrupted while starting; nothing "
@@ -108,8 +108,8 @@ def validate(o):
     """Every check that needs no work; returns the states."""
     ranks, rank = mpi_ranks()
     if ranks > 1 and not o.mpi:
-        # Each rank ran its own study in --out: one held the lock, the others refused, and mpiexec
-        # then killed the one at work (an outside try). Rank 0 says so; the others leave quietly.
+        # Each rank would run its own study in --out: one holds the lock, the others refuse, and
+        # mpiexec then kills the one at work. Rank 0 says so; the others leave quietly.
         if rank != 0:
             raise SystemExit(2)
         raise cli.InputError("mpiexec started this script on %d ranks without --mpi; for MPI workers start as "
@@ -185,8 +185,8 @@ def probe_axes(text, path):
         return list(triaxial.AXES) if path == "cross-anisotropic" else ["z", "x", "y"]
     shear = [n for n in triaxial.AXES if len(n) == 2]
     if text.strip() in shear:
-        # Read as letters, 'xy' ran the normal probes x and y, not the shear probe the help and the
-        # CSV call xy (an outside try): two readings, so neither is guessed.
+        # Read as letters, 'xy' would run the normal probes x and y, not the shear probe the help
+        # and the CSV call xy: two readings, so neither is guessed.
         n = text.strip()
         raise cli.InputError("--probes %r is ambiguous: the shear probe %s, or the normal probes %s and %s? Write "
                              "'%s,' for the shear probe alone, '%s,%s' for the two normal probes"
@@ -199,7 +199,7 @@ def probe_axes(text, path):
         names = list(text)
     unknown = [n for n in names if n not in triaxial.AXES]
     if not names or unknown:
-        # 'yx,' is not a repeat of anything: it is no name (an outside try), so it is named as such.
+        # 'yx,' is not a repeat of anything: it is no name, so it is named as such.
         named = [repr(n) for n in unknown if n]
         what = ("%s %s no probe's name" % (", ".join(named), "is" if len(named) == 1 else "are") if named
                 else "an empty item" if names else "no probe given")

@@ -86,8 +86,7 @@ def validate(o):
         raise cli.InputError("--ids: %s" % exc) from None
     if not o.mu > 0:
         raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
-    # Before the specimen is prepared (minutes at 4000 spheres; an outside try found the refusal
-    # after it): the specimen will sit at its preparation pressure within the preparation's stress
+    # Before the specimen is prepared (minutes at 4000 spheres), not after it: the specimen will sit at its preparation pressure within the preparation's stress
     # tolerance, so the path rate is checked from there now, that far off (study.check checks it
     # again on the file).
     defaults = inspect.signature(specimen.prepare_spheres if o.assembly == "sphere"
@@ -155,7 +154,7 @@ def check_recipe(o, log):
 
 def prepare(o, log):
     path = os.path.join(o.out, SPECIMEN)
-    # The engines' own count (set by main): "or cores()" said 16 s for 31 s under OMP_NUM_THREADS=1 (an outside try).
+    # The engines' own count (set by main), not all cores: those would say 16 s for 31 s under OMP_NUM_THREADS=1.
     memory, seconds = resources.preparation_estimate(o.n * members(o.assembly), engines.threads(), o.assembly)
     log("specimen: preparing %s (seed %d): about %s of memory and %s%s ..."
         % (clump_specimen.particles(o.n, o.assembly), o.seed, resources.human_bytes(memory),
@@ -217,7 +216,7 @@ def main(argv=None):
         except triaxial.StateNotReached as exc:
             cli.fail(str(exc), 1)
         # The isotropic state, and state 21 (Table B1's second state) when asked: each solve's
-        # result line after its own "solving" line (state 21's had none; an outside try).
+        # result line after its own "solving" line, state 21's too.
         sres = None
         for what, state in (("isotropic state", None), ("state 21", "21")):
             if state is not None and state not in {str(sid) for sid, _, _ in states}:

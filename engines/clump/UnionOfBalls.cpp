@@ -107,7 +107,7 @@ UnionMoments unionOfBallsMoments(const std::vector<Vec3>& centres, const std::ve
   out.first = S + V * origin;
   out.second = J + S * origin.transpose() + origin * S.transpose() + V * origin * origin.transpose();
   // The coarser level's volume rounded alike: unrounded, the estimate (written into every clump
-  // specimen's metadata) differed in its last bits between identical runs (an outside try).
+  // specimen's metadata) would differ in its last bits between identical runs.
   out.volumeErrorEstimate = std::abs(unitBest.V - fixed(prev.V)) / unitBest.V;
   out.facets = static_cast<long>(mesh.size_of_facets());
   return out;

@@ -33,8 +33,8 @@ void RadiusExpansion::apply(Scene& s) {
   const Real grow = 1.0 + rate * s.dt;
   scale *= grow;
   // The clumps' loops and the contacts' below set each item from its own values: on the team,
-  // the same bits. Serial, they were work the second thread of a preparation waited through every
-  // step. Not the spheres': setSphereRadius checks its input, and an exception cannot leave a team.
+  // the same bits. Serial, they would be work the second thread of a preparation waits through
+  // every step. Not the spheres': setSphereRadius checks its input, and an exception cannot leave a team.
   if (clumps) growClumps(s);
   else for (int b = 0; b < nb; ++b) s.setSphereRadius(b, scale * base_[b]);
   Real* const rbar = s.contacts.rbar.data();

@@ -1,6 +1,6 @@
 #pragma once
-// How far a measured stress is from a goal, in the terms a state is accepted in (the full-cell
-// issue): each principal stress against the goal's principal stress (both sorted, largest first)
+// How far a measured stress is from a goal, in the terms a state is accepted in (both within
+// 0.5 kPa by default): each principal stress against the goal's principal stress (both sorted, largest first)
 // and each component under stress control against its goal. Both are needed: at an isotropic goal
 // off-diagonal stresses of 0.4 kPa each leave every component within 0.5 kPa and still move the
 // principal stresses by up to 0.8 kPa; a principal error alone would accept a rotated state.

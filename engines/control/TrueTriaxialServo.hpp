@@ -14,7 +14,7 @@
 // paper's frictionless walls transmit no shear, so the cell's axes are the principal axes), and
 // move along the path with the normal stresses. A state is reached when the principal stresses
 // and the shear stresses are all within `stressTolerance` (StressGap). With controlShear off the
-// cell keeps its shear strains (the orthorhombic cell of before, whose shear stresses nothing
+// cell keeps its shear strains (an orthorhombic cell, whose shear stresses nothing
 // holds); a shear goal on such a path is refused.
 #include <string>
 
@@ -41,7 +41,7 @@ class TrueTriaxialServo : public Engine {
   Real loadingFriction = kLoadingFriction;
   Real pathRate = 2.0;             // Pa per step: the fastest the goal moves along the path
   Real followTolerance = 1000.0;   // Pa
-  Real stressTolerance = 500.0;    // Pa: principal and shear stresses, the 0.5 kPa
+  Real stressTolerance = 500.0;    // Pa: principal and shear stresses, within 0.5 kPa
   Real unbalancedTolerance = 1e-4;  // as reach_state and docs/triaxial.md
   long settleSteps = 200;          // the hold criterion must be met this many steps in a row
   Real maxStrain = 0.05;           // failure: |cell strain since start| on any axis beyond it

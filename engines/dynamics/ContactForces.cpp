@@ -95,8 +95,8 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     //     on the whole batch (HertzMindlin::evaluate) and the contact forces and moments, the
     //     arithmetic again two contacts at a time in loops without a choice (SSE2 lanes);
     //  3. the forces stored and added to the bodies, in pair order.
-    // Every contact does the arithmetic of the single loop that came before, in its order: the same
-    // bits (checked on 1 and 2 threads, rotations free and blocked, rolling resistance, clump1 and
+    // Every contact does the arithmetic of a plain one-contact-at-a-time loop, in its order: the same
+    // bits as that loop (checked on 1 and 2 threads, rotations free and blocked, rolling resistance, clump1 and
     // clump2 preparations; docs/benchmarks.md, "Two contacts at a time", with what it gained).
     constexpr int kBatch = HertzMindlin::Batch::kSize;
     // A touching pair's motion, by component like the law's batch: its relative velocity (the
@@ -191,7 +191,8 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         v.vx[k] = vrel.x(); v.vy[k] = vrel.y(); v.vz[k] = vrel.z();
         if (Rotations) {
           // Lever arms from the body centres to the contact point, mid-overlap as in YADE's
-          // ScGeom; (x + sh) - sh as before, which is not always x in floating point.
+          // ScGeom; the member's image (x + sh) - sh is kept as written, since it is not always x
+          // in floating point, and the results' last bits depend on it.
           const Real arm1len = ri - 0.5 * delta, arm2len = rj - 0.5 * delta;
           const Vec3 arm1 = (Clumps ? Vec3(memberPos[i] - pos[a]) : Vec3::Zero()) + arm1len * n;
           const Vec3 arm2 = (Clumps ? Vec3(Vec3(memberPos[j] + sh) - sh - pos[b]) : Vec3::Zero()) - arm2len * n;

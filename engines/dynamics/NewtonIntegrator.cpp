@@ -63,8 +63,8 @@ inline void turnAboutAxis(Quat& q, Vec3& Lbody, Real angle) {
 //
 // `count` (<= kClumpLanes) clumps at a time, each sub-step done for all of them before the next:
 // one clump is a single chain of about 500 dependent operations (five sines and cosines among
-// them), longer than the processor looks ahead, so clump after clump left it waiting; side by
-// side their chains overlap. Every clump does the operations it did alone, in its order: the same bits.
+// them), longer than the processor looks ahead, so clump after clump would leave it waiting; side
+// by side their chains overlap. Every clump does the operations it would do alone, in its order: the same bits.
 void NewtonIntegrator::advanceClumps(Bodies& B, const int* bodies, int count, Real dt, Real damping) {
   Quat q[kClumpLanes];
   Vec3 Lbody[kClumpLanes], I[kClumpLanes];

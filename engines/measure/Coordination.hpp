@@ -19,7 +19,7 @@ struct Coordination {
 Coordination coordination(const Scene& scene);
 std::vector<int> contactsPerBody(const Scene& scene);
 
-// A contact count with a gap tolerance (issue 14: the paper might count near-contacts): a listed
+// A contact count with a gap tolerance (the paper might count near-contacts): a listed
 // pair counts when its gap -overlap is below tol (r1 + r2), tol times the pair's mean diameter;
 // touching pairs (overlap > 0) always count. The same rattler rule then gives Zm_gap by Eq. (14).
 // tol = 0 counts the touching pairs, as coordination() does.

@@ -1,5 +1,5 @@
 #pragma once
-// Exact static stiffness of the contact network at a held state (issue 5).
+// Exact static stiffness of the contact network at a held state.
 //
 // What it computes: the tangent C = d sigma / d eps (6x6 Voigt, xx yy zz yz xz xy) of the
 // Love-Weber stress sigma = (1/V) sum F (x) L (compression positive, the symmetric part) against the

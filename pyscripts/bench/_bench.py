@@ -1,12 +1,25 @@
-"""What the benchmarks share (a module, not a script): the machine line every table states; the
-table written into a Markdown file between the markers <!-- NAME:begin --> and <!-- NAME:end -->
-(a file without them gets the block appended), atomically; and a timed worker run in its own
-process, ours under /usr/bin/python3 or YADE's under yade-double."""
+"""What the benchmarks share (a module, not a script): the packages they import made importable;
+the machine line every table states; the table written into a Markdown file between the markers
+<!-- NAME:begin --> and <!-- NAME:end --> (a file without them gets the block appended),
+atomically; a timed worker run in its own process, ours under /usr/bin/python3 or YADE's under
+yade-double, and our stepper timed in it."""
 import json
 import os
 import platform
 import re
 import subprocess
+import sys
+import time
+
+# Importing this module makes trueaniso (pyscripts/) and analysis (the repository root) importable,
+# first on the path, whether the script runs under /usr/bin/python3 or yade-double: the one place
+# the benchmarks say where the packages are.
+_PYSCRIPTS = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+for _path in (os.path.dirname(_PYSCRIPTS), _PYSCRIPTS):
+    if _path in sys.path:
+        sys.path.remove(_path)
+    sys.path.insert(0, _path)
+del _path
 
 
 def machine():
@@ -37,7 +50,7 @@ def replace_block(path, name, body, heading=None):
         text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: block, text, flags=re.S)
     elif heading and heading in text.split("\n"):
         # Into the heading's own section, before the next heading of its level or above: a second
-        # copy of the heading at the end of the file, as this did, split one section in two.
+        # copy of the heading at the end of the file would split one section in two.
         lines = text.split("\n")
         start = lines.index(heading)
         level = heading.split(" ", 1)[0]
@@ -59,8 +72,8 @@ def replace_block(path, name, body, heading=None):
 
 def sphere_specimen(path):
     """The number of spheres of the sphere specimen file `path`, checked before any run: a file
-    that is not a specimen failed inside a worker, with its traceback, and a clump specimen was
-    stepped and labelled as spheres, or failed on its array lengths (an outside try). Exits with
+    that is not a specimen would fail inside a worker, with its traceback, and a clump specimen be
+    stepped and labelled as spheres, or fail on its array lengths. Exits with
     one line of error otherwise."""
     from trueaniso import cli, specimen_file
     try:
@@ -110,6 +123,29 @@ def run_worker(script, code, threads, args, timeout=7200, build=None):
     if out.returncode != 0 or not line:
         cli.fail("benchmark worker failed: %s\n%s" % (" ".join(cmd), out.stderr[-2000:]), 1)
     return json.loads(line[-1][6:])
+
+
+def tile_counts(text):
+    """--tiles: the tiling counts K, whole numbers separated by commas; one line of error otherwise."""
+    from trueaniso import cli
+    try:
+        return [int(k) for k in str(text).split(",")]
+    except ValueError:
+        cli.fail("--tiles takes whole numbers separated by commas, not %r" % text)
+
+
+def time_ours(scene, dt, steps, warmup=100, damping=0.2):
+    """Our stepper on `scene` at the fixed time step `dt` (the time stepper off), local damping
+    `damping`: `warmup` steps untimed, then `steps` timed. Returns (chain, seconds of the timed
+    steps)."""
+    from trueaniso import dem
+    scene.dt = dt
+    chain = dem.Chain(scene, damping=damping)
+    chain.timestep.dead = True
+    chain.run(warmup)
+    t = time.perf_counter()
+    chain.run(steps)
+    return chain, time.perf_counter() - t
 
 
 def orthorhombic(scene):

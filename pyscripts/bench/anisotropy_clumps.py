@@ -1,5 +1,5 @@
-"""Inherent anisotropy of clump specimens at their isotropic state, beside the paper's numbers
-(issue 13): void ratio, Zm, the fabric R and H (Eqs. 15-16) and the clumps' long-axis fabric, and
+"""Inherent anisotropy of clump specimens at their isotropic state, beside the paper's numbers:
+void ratio, Zm, the fabric R and H (Eqs. 15-16) and the clumps' long-axis fabric, and
 E_x, E_y, E_z with particle rotations restrained and free, from the exact static solve
 (docs/statics.md) and from the dynamic stress probes (Eq. 10, gamma = 1e-6, the study's settings).
 
@@ -13,13 +13,12 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
 import numpy as np  # noqa: E402
 
 from trueaniso import cli  # noqa: E402
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
 
 # Table B1 (rotations restrained) and section 2.1 of the paper.
 PAPER = {"clump1": dict(e=0.445, E=(306.0, 306.0, 581.5), R="R_zz < R_xx ~ R_yy", H="H_zz > H_xx ~ H_yy"),

@@ -4,8 +4,7 @@
 
 TREE is a checkout of trueaniso, built (./setup.sh), e.g. `git worktree add ../before HEAD~1`.
 Each run is a process of its own that imports that tree's engines and steps the specimen (tiled
-K x K x K times and numbered in grid rows, as a prepared specimen of that size is; before
-2026-11-30 a tiled scene kept its tiles' order, each tile's bodies together) with
+K x K x K times and numbered in grid rows, as a prepared specimen of that size is) with
 ContactDetection, ContactForces and NewtonIntegrator on one engine thread (--threads N: N), as
 bench_stepper.py does; before and after alternate, the first of the pair alternating too.
 Figure: particle-steps per CPU second of the timed steps (CPU time, the figure other jobs on the
@@ -26,11 +25,10 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE)]
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-import _bench  # noqa: E402
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 # Run in a fresh interpreter with the tree's pyscripts first on the path: it uses only what both
 # builds have (specimen_file.load, dem.Chain, Scene.contact_arrays), so it can time an older tree.
@@ -107,8 +105,8 @@ def run_state(tree, specimen, state):
 def alternating(o, names, measure, differ):
     """measure(tree) o.repeats times for each build, before and after alternating which goes first;
     the two runs of a pair must give the same checksum (else: 'the two builds DIFFER')."""
-    # Keyed by side, not by tree: a tree timed against itself (an A/A check of the noise) kept both
-    # sides' runs in one list and printed a ratio of 1.000 (an outside try).
+    # Keyed by side, not by tree: a tree timed against itself (an A/A check of the noise) keeps its
+    # two sides' runs apart, where one list would print a ratio of 1.000.
     runs = {"before": [], "after": []}
     tree = {"before": o.before, "after": o.after}
     for r in range(o.repeats):
@@ -181,10 +179,7 @@ def options():
     p.add_argument("--doc", help="Markdown file whose block is replaced")
     p.add_argument("--block", default="stepper-builds", help="marker name of the block in --doc")
     o = cli.parse(p)
-    try:
-        o.tiles = [int(k) for k in str(o.tiles).split(",")]
-    except ValueError:
-        cli.fail("--tiles takes whole numbers separated by commas, not %r" % o.tiles)
+    o.tiles = _bench.tile_counts(o.tiles)
     if o.repeats < 1 or min(o.tiles) < 1 or max(o.tiles) > 4:
         cli.fail("--repeats must be >= 1 and --tiles between 1 and 4")
     from trueaniso import resources

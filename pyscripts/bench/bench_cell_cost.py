@@ -1,4 +1,4 @@
-"""What the fully deformable cell costs (issue 12): steps per second of the sheared force loop and
+"""What the fully deformable cell costs: steps per second of the sheared force loop and
 detection against the orthorhombic fast path on the same packing, and the steps to reach a state
 with six-component control against three (from docs/data/cell-states-*.csv, bench_cell_states.py).
 
@@ -19,11 +19,10 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE)]
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 DATA = os.path.join(os.path.dirname(os.path.dirname(HERE)), "docs", "data")
 

@@ -1,5 +1,5 @@
 """The isotropic state and the 39 states of Table C1 reached in the fully deformable cell: every
-principal stress against its goal and every off-diagonal stress against zero (issue 12).
+principal stress against its goal and every off-diagonal stress against zero.
 
     /usr/bin/python3 pyscripts/bench/bench_cell_states.py --specimen specimens/spheres-1000-s1.npz
     /usr/bin/python3 pyscripts/bench/bench_cell_states.py --specimen S.npz --control three
@@ -8,7 +8,7 @@ principal stress against its goal and every off-diagonal stress against zero (is
 Each loading path starts from the specimen and reaches its states in order, each from the one
 before it, as run_states.py does; the isotropic state (b = 0, sigma_z = 100 kPa) is reached from
 the specimen. --control six holds the shear stresses at zero (the full cell); --control three
-holds the cell's shear strains (the orthorhombic servo of before), for the steps and the shear
+holds the cell's shear strains (an orthorhombic servo), for the steps and the shear
 stress it leaves. One row per state is appended to docs/data/cell-states-N-CONTROL.csv as it
 comes (the file is rewritten from the start by each run). With --doc, the tables between
 <!-- cell-states:begin --> and <!-- cell-states:end --> of that file are rebuilt from every
@@ -21,18 +21,17 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE)]
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 DATA = os.path.join(ROOT, "docs", "data")
 COLUMNS = ["n", "control", "state", "b", "sigma_z_goal", "goal_1", "goal_2", "goal_3", "sigma_x", "sigma_y",
            "sigma_z", "sigma_1", "sigma_2", "sigma_3", "sigma_yz", "sigma_xz", "sigma_xy", "principal_error",
            "tau_max", "unbalanced", "steps", "wall_time", "start"]
-TOLERANCE = 500.0  # Pa: the issue's acceptance, 0.5 kPa
+TOLERANCE = 500.0  # Pa: a state's acceptance, 0.5 kPa
 
 
 def data_path(n, control):

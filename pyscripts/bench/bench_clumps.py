@@ -1,5 +1,5 @@
 """Cost of clump assemblies: the stepper on clumps against YADE's clumps on the same packing, and
-the preparation time of each assembly (issue 13 benchmark).
+the preparation time of each assembly.
 
     /usr/bin/python3 pyscripts/bench/bench_clumps.py --specimen specimens/clump1-4000-s1.npz \
         --specimen specimens/clump2-4000-s1.npz [--doc docs/benchmarks.md]
@@ -19,23 +19,17 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [HERE, os.path.dirname(HERE)]  # bench_stepper, trueaniso
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 
 def worker_ours(o):
-    from trueaniso import dem, specimen_file
+    from trueaniso import specimen_file
     s, _ = specimen_file.load(o.specimen[0])
-    s.dt = o.dt
-    c = dem.Chain(s, damping=0.2)
-    c.timestep.dead = True
-    c.run(100)
-    t = time.perf_counter()
-    c.run(o.steps)
-    return dict(code="trueaniso", steps=o.steps, seconds=time.perf_counter() - t, n=s.num_bodies,
+    _, seconds = _bench.time_ours(s, o.dt, o.steps)
+    return dict(code="trueaniso", steps=o.steps, seconds=seconds, n=s.num_bodies,
                 members=s.num_members)
 
 

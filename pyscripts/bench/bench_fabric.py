@@ -15,7 +15,9 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
+import _bench  # noqa: E402,F401  (it makes trueaniso and analysis importable)
 from trueaniso import atomic, cli, dem, engines, fabric, specimen_file, yade_bridge  # noqa: E402
 
 

@@ -1,4 +1,4 @@
-"""Speed against error of the ways to get E_i and nu_ij at a held state (issue 5).
+"""Speed against error of the ways to get E_i and nu_ij at a held state.
 
     /usr/bin/python3 pyscripts/bench/bench_speed_error.py --specimens A.npz B.npz ... \
         --doc docs/speed-vs-error.md --plot docs/speed-vs-error.png
@@ -21,11 +21,10 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 OURS = [  # label, damping, ramp, gain, settle, relative tolerance, unbalanced, gamma, detection
     ("fast", 0.7, 50, 0.2, 20, 5e-3, 1e-4, 1e-6, True),

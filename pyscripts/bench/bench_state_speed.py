@@ -18,11 +18,10 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 PROBE_ERROR_E, PROBE_ERROR_NU = 6.0e-4, 1.1e-4  # docs/speed-vs-error.md, default probe, 1000-16,000 spheres
 

@@ -31,11 +31,10 @@ import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE), os.path.dirname(os.path.dirname(HERE))]  # trueaniso, analysis
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 
 def load(o):
@@ -47,24 +46,17 @@ def load(o):
     if o.tile == 1:
         return _bench.orthorhombic(s)
     s = _bench.tiled(s, o.tile)
-    # In the order a prepared specimen of that size has (grid rows, _bench.grid_rows). Until
-    # 2026-11-30 the tiled scene was numbered along the Morton curve, which steps ours 6-10 %
-    # slower than rows (docs/benchmarks.md, "Stepper changes").
+    # In the order a prepared specimen of that size has (grid rows, _bench.grid_rows): the Morton
+    # curve steps ours 6-10 % slower than rows (docs/benchmarks.md, "Stepper changes").
     s.reorder_bodies(_bench.grid_rows(s))
     dem.refresh(s)
     return s
 
 
 def worker_ours(o):
-    from trueaniso import dem, engines
+    from trueaniso import engines
     s = load(o)
-    s.dt = o.dt
-    c = dem.Chain(s, damping=0.2)
-    c.timestep.dead = True
-    c.run(100)
-    t = time.perf_counter()
-    c.run(o.steps)
-    dt = time.perf_counter() - t
+    c, dt = _bench.time_ours(s, o.dt, o.steps)
     return dict(code="trueaniso", steps=o.steps, seconds=dt, n=s.num_bodies,
                 rebuilds=c.detection.rebuilds, pressure=float(engines.stress(s).trace() / 3),
                 build=engines.build_arch(), source_hash=engines.source_hash())
@@ -137,8 +129,8 @@ def options():
         cli.fail("--codes: name each code once, not %r" % ",".join(o.codes))
     if "ours" not in o.codes:
         cli.fail("--codes must include ours (every ratio is against it)")
-    # Before any work (an outside try: --dt -1 was printed as the table's time step, --threads 99 was
-    # timed, --repeats 0 failed after the runs, --dt nan and --steps -1 inside the engine).
+    # Before any work: --dt -1 would be printed as the table's time step, --threads 99 timed,
+    # --repeats 0 fail after the runs, --dt nan and --steps -1 inside the engine.
     import math
     from trueaniso import resources
     if not (math.isfinite(o.dt) and o.dt >= 0):
@@ -207,7 +199,7 @@ def main():
     s = load(o)
     dt = o.dt or 0.5 * engines.TimeStepper.stiffness_bound(s)
     limit = engines.TimeStepper.critical_pair_step(s)
-    if dt >= limit:  # before any run: a worker refused it, after the others had been timed
+    if dt >= limit:  # before any run, not in a worker after the others have been timed
         cli.fail("--dt %g s: unstable on this packing (the two-body limit of its stiffest contact is %.3g s)"
                  % (dt, limit))
     threads = o.thread_counts
@@ -217,9 +209,9 @@ def main():
     level = {}
     # Rounds outside, thread counts inside: every thread count of a round runs within minutes of the
     # others, so the speed-up over one thread is a ratio within a round too. Timed as separate
-    # loops over thread counts, the 2-thread runs came tens of minutes after the 1-thread ones and
-    # the speed-up took the machine's drift with it (1.57 at 16,000 spheres on 2026-11-30; paired
-    # within rounds, 1.66 and 1.87 in two runs that evening, single rounds 1.37-2.29).
+    # loops over thread counts, the 2-thread runs would come tens of minutes after the 1-thread
+    # ones and the speed-up take the machine's drift with it (1.57 at 16,000 spheres; paired
+    # within rounds, 1.66 and 1.87 in two runs hours apart, single rounds 1.37-2.29).
     res = {(th, c): [] for th in threads for c in codes}
     for rep in range(o.repeats):
         j = rep % len(threads)

@@ -1,4 +1,4 @@
-"""What each stepper change of issue 15 bought, measured on our own stepper alone.
+"""What each stepper change bought, measured on our own stepper alone.
 
     /usr/bin/python3 pyscripts/bench/bench_stepper_changes.py --specimen S.npz [--small T.npz] [--doc docs/benchmarks.md]
 
@@ -8,7 +8,7 @@
    Morton curve (Scene.order_in_space), one engine thread. Figure: particle-steps per CPU second of the timed
    steps (CPU time, not wall time: the figure the machine's other jobs disturb least).
 2. Parallel threshold. The small specimen (--small) stepped on two threads with every loop in a
-   team (engines.set_parallel_minimum(0), the former behaviour) and with the default threshold;
+   team (engines.set_parallel_minimum(0)) and with the default threshold;
    wall time per step, which is what a team's waits cost.
 Each variant runs in its own process; repeats interleave the variants and the median is reported.
 With --doc the tables between <!-- stepper-changes:begin --> and <!-- stepper-changes:end -->
@@ -22,11 +22,10 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [os.path.dirname(HERE)]
-from trueaniso import cli  # noqa: E402
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # _bench.py: yade-double does not put the script's folder on the path
-import _bench  # noqa: E402
+import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
+from trueaniso import cli  # noqa: E402
 
 
 def worker(o):
@@ -76,10 +75,7 @@ def options():
     p.add_argument("--tile", type=int, default=1, help="(internal)")
     p.add_argument("--steps", type=int, default=1000, help="(internal)")
     o = cli.parse(p)
-    try:
-        o.tiles = [int(k) for k in str(o.tiles).split(",")]
-    except ValueError:
-        cli.fail("--tiles takes whole numbers separated by commas, not %r" % o.tiles)
+    o.tiles = _bench.tile_counts(o.tiles)
     for path in [o.specimen] + ([o.small] if o.small else []):
         if not os.path.isfile(path):
             cli.fail("no specimen file %s (prepare it first, docs/benchmarks.md)" % path)

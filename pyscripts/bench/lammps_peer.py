@@ -100,7 +100,7 @@ def main():
     from trueaniso import engines, specimen_file
     import _bench
     # Squared as bench_stepper squares it: a prepared specimen's cell keeps ~1e-8 of shear, and
-    # every one was refused here as sheared (an outside try).
+    # would be refused here as sheared.
     s, _ = specimen_file.load(o.specimen)
     squared = _bench.orthorhombic(s)
     if squared is not s:

@@ -45,7 +45,7 @@ def _find_extension():
 def __getattr__(name):
     """`engines` (the compiled module) is loaded on first use, not with the package: reading and
     analysing results (trueaniso.results_csv, analysis/) needs none of it, and on a machine without
-    the build those tools ended in a 20-line ImportError traceback (an outside try)."""
+    the build those tools run, rather than end in a 20-line ImportError traceback."""
     if name == "engines":
         global engines
         engines = _find_extension()
@@ -53,5 +53,9 @@ def __getattr__(name):
     raise AttributeError("module 'trueaniso' has no attribute %r" % name)
 
 
-__version__ = "0.1.0"
+# The version of trueaniso: one home, the file VERSION beside this one, which CMake reads for the
+# engines (engines.version()) and a study records in metadata.json (versions.trueaniso).
+with open(os.path.join(_HERE, "VERSION")) as _f:
+    __version__ = _f.read().strip()
+del _f
 FORMAT_VERSION = 4  # specimen files; 2: the checksum covers the metadata; 3: the full cell matrix; 4: the bodies' volumes (docs/specimens.md)

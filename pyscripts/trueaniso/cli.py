@@ -70,7 +70,7 @@ def add_threads_option(parser, study=False, continues="the study --out holds (a 
     from . import resources
     parser.add_argument("--threads", type=count, default=None if study else 0,
                         # 0 is OpenMP's own count: OMP_NUM_THREADS when set (the MPI recipe sets it to 1),
-                        # which the help said nothing of (an outside try: 'all cores' recorded 1)
+                        # which the help says, since 'all cores' would be recorded as 1
                         help="OpenMP threads of the engines: 0 = OpenMP's count (OMP_NUM_THREADS when set, else "
                              "all %d cores%s), at most %d (%d x the cores)%s"
                              % (resources.cores(), "; one a worker under --mpi" if mpi else "",
@@ -96,22 +96,22 @@ def resolve_threads(o, study=True, preparation=None):
         if o.threads is None and preparation is not None:
             o.threads = prep_checkpoint.saved_threads(preparation)  # refuses an unreadable checkpoint
             # "unfinished", not "interrupted": it may be running in another process, which the lock
-            # then refuses (a second run_study.py during the first one's preparation; an outside try).
+            # then refuses (a second run_study.py during the first one's preparation).
             continued = "its unfinished preparation" if o.threads else None
     o.threads = o.threads or 0
     if o.threads == 0:
         _check_openmp_count()
     if continued:
         # Said as a fact about the work, not as "continuing": a check after it may still refuse the
-        # run (another --mu, say), and "continuing ..." then read as the opposite (an outside try).
+        # run (another --mu, say), and "continuing ..." would then read as the opposite.
         print("%s: --threads not given: %s ran at %d engine thread%s, so this run does too"
               % (o.out, continued, o.threads, "" if o.threads == 1 else "s"), flush=True)
     return o.threads
 
 
 def _check_openmp_count():
-    """--threads 0 takes OMP_NUM_THREADS: held to --threads' own limit, which it passed by (an
-    outside try made a study at 16 threads on 2 cores, which no --threads could then continue)."""
+    """--threads 0 takes OMP_NUM_THREADS: held to --threads' own limit, which it would pass by
+    otherwise (a study at 16 threads on 2 cores, which no --threads could then continue)."""
     from . import resources
     text = resources.openmp_threads_env() or ""
     if text.isdigit() and int(text) > resources.max_threads():
@@ -193,7 +193,7 @@ ASSEMBLIES = ("sphere", "clump1", "clump2")  # a specimen's particles (docs/spec
 
 def assembly(text):
     """--assembly of every script: sphere, clump1 or clump2; 'spheres', the paper's word, is taken
-    for sphere (run_states.py refused it while the other scripts took it; an outside try)."""
+    for sphere by every script alike."""
     name = {"spheres": "sphere"}.get(text, text)
     if name not in ASSEMBLIES:
         raise argparse.ArgumentTypeError("unknown assembly %r (available: %s)" % (text, ", ".join(ASSEMBLIES)))
@@ -309,7 +309,7 @@ def table_argv(parser, values, where):
 def _table_source(known):
     """(path, line) of the parameter table, or None: --table/--line first, then YADE_BATCH."""
     if known.table is not None:
-        if not known.table.strip():  # --table "" read as no table, then "--line needs --table" (an outside try)
+        if not known.table.strip():  # not read as no table, which would say "--line needs --table"
             raise InputError("--table is empty: give the parameter table's path")
         if known.line is None:
             raise InputError("--table needs --line (the line number as a text editor shows it, as yade-batch counts)")
@@ -363,8 +363,8 @@ _pending = None  # the last SIGINT or SIGTERM the handlers below raised (raise_p
 def _interrupt(number, frame):
     """SIGINT as KeyboardInterrupt, SIGTERM as Terminated, remembered: Python runs a handler at the
     next instruction, which may be inside a finalizer (an archive's or a file's __del__); there the
-    exception is printed as 'Exception ignored' and the work goes on. An outside try once saw a
-    Ctrl-C ignored, the run finishing with status 0; raise_pending() raises it again."""
+    exception is printed as 'Exception ignored' and the work goes on (a Ctrl-C ignored, the run
+    finishing with status 0); raise_pending() raises it again."""
     global _pending
     _pending = number
     raise Terminated() if number == signal.SIGTERM else KeyboardInterrupt()
@@ -407,8 +407,8 @@ def saves_work_in(check, complete=None):
 
 def work_done():
     """The script's work is all written; what remains is its last lines and the exit. A Ctrl-C
-    from here on ends it as finished (status 0), not as interrupted (a second outside try: 130 and
-    'the same command resumes' for a run whose every row was written, 6 of 6 at zero delay)."""
+    from here on ends it as finished (status 0), not as interrupted (status 130 and 'the same
+    command resumes' for a run whose every row was written)."""
     global _done
     _done = True
     _finished()
@@ -448,9 +448,9 @@ def _exits_after_script():
 
 def _finished():
     """The work is done and written; only the exit remains: python3's (about 0.03 s) or
-    yade-double's (about 0.4 s, IPython's exit handlers). A Ctrl-C there ended the run without a
-    word, killed by the signal (status 130 for a run that had finished), or with a traceback from
-    IPython's exit handler (found by an outside try, 5 of 5 times). From here on SIGINT and
+    yade-double's (about 0.4 s, IPython's exit handlers). A Ctrl-C there would end the run without
+    a word, killed by the signal (status 130 for a run that had finished), or with a traceback from
+    IPython's exit handler. From here on SIGINT and
     SIGTERM are ignored, which the interpreter's exit keeps (it resets only handlers of its own):
     the run ends with status 0, as it finished. Not in a yade-double session that stays open, where
     Ctrl-C is the user's again."""
@@ -497,7 +497,7 @@ def guarded(main, resumable=False):
         fail(_interrupted_line() if resumable else "interrupted", status)
     except BrokenPipeError:
         # The reader of the output went away (`| head`, a closed terminal): a Unix tool ends
-        # quietly on SIGPIPE; this ended in a traceback. Output to nowhere from here on, then the
+        # quietly on SIGPIPE, not with a traceback. Output to nowhere from here on, then the
         # line that says what was kept (on stderr, if it is still open).
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         what = "output closed (broken pipe)"

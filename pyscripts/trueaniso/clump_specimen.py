@@ -104,8 +104,8 @@ def _layer(n, template, size_distribution, seed, orientation_weights, phi_cell, 
 def _thin_layer(n, template, d, quats, start, box, layers):
     """(why a layer of stacked copies cannot hold its clumps: one is taller than the layer as
     drawn, a first-order estimate of the count that would) or None. Depends on the draws, so on n
-    and the seed: a small clump2 (4 layers) failed at some seeds only, with an internal message,
-    after the estimate line (an outside try)."""
+    and the seed: a small clump2 (4 layers) fails at some seeds only, and is refused here, before
+    the estimate line, not with an internal message after it."""
     if layers == 1:
         return None
 
@@ -129,8 +129,8 @@ def layers_problem(assembly, n, seed, phi_start=0.20, **overrides):
     thin = _layers_check(assembly, seed, phi_start, overrides)(n)
     if thin is None:
         return None
-    # The estimate ignores that more clumps draw a taller one: followed, it led from 28 to 60 to
-    # 116 (an outside try). The draws are cheap at these counts, so the least count that fits with
+    # The estimate ignores that more clumps draw a taller one: followed, it leads from 28 to 60 to
+    # 116. The draws are cheap at these counts, so the least count that fits with
     # this seed is searched and named instead; the estimate only where none is found.
     why = thin[0]
     least = least_layered_count(assembly, n + recipe(assembly)["layers"], seed, phi_start, **overrides)

@@ -91,7 +91,7 @@ def fabric_row(scene, zeta=1.0, density="eq36"):
 
 
 def gap_column(tolerance):
-    """'Zm_gap1e-3' for 1e-3: the column of Zm counted with that gap tolerance (issue 14)."""
+    """'Zm_gap1e-3' for 1e-3: the column of Zm counted with that gap tolerance."""
     mantissa, exponent = ("%.6e" % tolerance).split("e")
     return "Zm_gap%se%d" % (mantissa.rstrip("0").rstrip("."), int(exponent))
 

@@ -62,7 +62,7 @@ def columns_and_values(path):
 def parameter_columns(head, path="the parameter table"):
     """{column as written: parameter name}: '!'-prefixed columns and 'description' are not
     parameters; a trailing '!' only marks a description column. A parameter named twice is
-    refused: before, the last column won without a word (an outside try's `out out`)."""
+    refused, not decided by its last column without a word (`out out`)."""
     out = {}
     for h in head:
         if h.startswith("!") or h == "description":

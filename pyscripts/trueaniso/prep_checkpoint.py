@@ -35,14 +35,14 @@ def interval_said(every):
 
 def rounding_said(every, clumps):
     """What an interval that is no multiple of the chunks becomes, in words; None when it is one
-    (or 0). A checkpoint is due only where a chunk ends (Stages.run), so 100 wrote one every 500 or
-    2000 steps without a word (an outside try)."""
+    (or 0). A checkpoint is due only where a chunk ends (Stages.run), so 100 writes one every 500
+    or 2000 steps, which is said."""
     if every == 0 or every % CHUNK == 0:
         return None
     def after(chunk):
         return -(-every // chunk) * chunk
     # "At least": the chunk that ends a stage is not counted, so across a stage's end the gap is
-    # longer (an outside try measured 6000 between the stages of a 3000 run).
+    # longer (6000 between the stages of a 3000 run).
     smallest = FIRST_STAGES_CHUNK if clumps else CHUNK
     where = ("after every chunk of steps" if every <= smallest else
              "where a chunk of steps ends, at least %d steps apart" % every)
@@ -131,7 +131,7 @@ class Checkpoints:
     def differences(self):
         """What differs between the checkpoint on disk and this run ("seed: 7 there, 8 here"), []
         when it is this run's, None when there is none. The interval is named by its option
-        ("every: 3000 there" named the file's field; an outside try)."""
+        (not the file's field, "every: 3000 there")."""
         saved = self.saved_recipe()
         if saved is None:
             return None
@@ -142,8 +142,8 @@ class Checkpoints:
         """The checkpoint's recipe when it was written by a preparation of these `settings` (the
         options that make the specimen), whatever its threads, interval and code; else None (none
         on disk, or another preparation's, which this run refuses or, with --force, removes). Only
-        then may a run take the threads and interval it was written with: --force --seed 2 took
-        them from a seed-1 checkpoint it then removed (an outside try)."""
+        then may a run take the threads and interval it was written with: --force --seed 2 must not
+        take them from a seed-1 checkpoint it then removes."""
         saved = self.saved_recipe()
         if saved is None:
             return None
@@ -164,7 +164,7 @@ class Checkpoints:
         if diff:
             built = self.saved_recipe().get("build")
             rebuild = ""
-            if built is not None and built != self.recipe.get("build"):  # an outside try: two hashes said nothing
+            if built is not None and built != self.recipe.get("build"):  # named: two hashes alone say nothing
                 rebuild = (" (it was made by engines built for %s, this run's are for %s: %s builds them so, "
                            "README)" % (built, self.recipe.get("build"), buildarch.setup_command(built)))
             raise CheckpointMismatch(

@@ -18,9 +18,9 @@ EVERY = 5.0  # seconds between lines: "about every few seconds"
 
 def say(message):
     """`message` and its newline to stdout in one write, flushed: the log of every script. Under
-    mpiexec, Python's output is unbuffered (PYTHONUNBUFFERED=1), so print() wrote the text and the
-    newline apart, and lines of two workers ran together on one line, with an empty one after
-    (an outside try; 59 of 4000 lines of two ranks). One write of a line stays whole."""
+    mpiexec, Python's output is unbuffered (PYTHONUNBUFFERED=1), so print() writes the text and the
+    newline apart, and lines of two workers can run together on one line, with an empty one after
+    (59 of 4000 lines of two ranks). One write of a line stays whole."""
     sys.stdout.write(message + "\n")
     sys.stdout.flush()
 

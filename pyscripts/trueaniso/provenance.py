@@ -10,11 +10,13 @@
 - the x86-64 level the module was compiled for, when it is not the portable baseline
   (``engines.build_arch()``, CMake's TRUEANISO_ARCH): a build for x86-64-v3 fuses multiply-adds and
   its results differ in the last bits, so its studies and specimens are another code's. The
-  baseline adds nothing, so its code versions are those of before the option.
+  baseline adds nothing.
 It changes exactly when that code changes, committed or not, in a checkout or an installation;
 edits to docs, tests, benchmarks, analysis/ (which only reads results, and is rerun on every study
 run) or the user scripts (whose options are recorded in the study's fingerprint) leave it alone.
-The git commit is recorded beside it for people, not compared.
+The git commit and the release version (``__version__``, the file VERSION, which is not hashed:
+the same engines under a new version number make the same numbers) are recorded beside it for
+people, not compared.
 """
 import functools
 import hashlib

@@ -13,7 +13,7 @@ THREADS_PER_CORE = 4  # more threads than this only slow the contact loops (meas
 # Measured on 1,000-16,000 spheres (peak RSS of the preparation above the interpreter's, with the
 # contact list of the dense state): 1.7 kB per sphere; 2.5 kB leaves a margin.
 PREPARATION_BYTES_PER_SPHERE = 2500
-# The interpreter with numpy and the module loaded (peak RSS, measured 2026-11-29): python3 37 MB,
+# The interpreter with numpy and the module loaded (peak RSS, measured): python3 37 MB,
 # yade-double 252 MB (YADE loads its own libraries and plugins). With a margin each; one figure for
 # both made every python3 estimate 2.7 times the measured peak (docs/runs.md).
 INTERPRETER_BYTES = {"python3": 60e6, "yade": 300e6}
@@ -22,10 +22,9 @@ INTERPRETER_BYTES = {"python3": 60e6, "yade": 300e6}
 STATICS_BYTES_PER_SPHERE = 160e3
 # Preparation time: random placement ~3.5 ms per sphere (pure Python), then the recipe's steps at
 # ~0.45 us per member sphere on one thread: 53,004 spheres took 80 min of CPU for 180,000 steps
-# (0.50 us, beside other jobs, 2026-11-29), the 53,004-clump1 preparation 0.27-0.33 us a member
-# (2026-11-30, docs/runs.md). It was 0.75 us, from before the force loop's changes of issue 15,
-# and the estimates came out 2-5 times the wall time (an outside try: 51 s said, 11 s taken, at
-# 300 spheres, whose recipe takes half the steps of a large one).
+# (0.50 us, beside other jobs), the 53,004-clump1 preparation 0.27-0.33 us a member
+# (docs/runs.md). A figure of a slower force loop (0.75 us) would give estimates 2-5 times the wall
+# time (51 s said, 11 s taken, at 300 spheres, whose recipe takes half the steps of a large one).
 PLACEMENT_SECONDS_PER_SPHERE = 3.5e-3
 STEP_SECONDS_PER_SPHERE = 0.45e-6
 # Steps of each recipe (docs/specimens.md, "Preparation cost"): spheres about 2e5; clump1's
@@ -121,8 +120,8 @@ CLUMP_STEPS_MEASURED_UP_TO = 4000
 
 def preparation_caveat(assembly, clumps):
     """Words after a preparation's time estimate when it is a lower bound, else ''. The estimate
-    said 7.7 h for the clump1 specimen of the paper's size, which ran 10 h without converging (an
-    outside try found the printed estimates and the docs at odds)."""
+    would say 7.7 h for the clump1 specimen of the paper's size, which ran 10 h without
+    converging."""
     if assembly == "sphere" or clumps <= CLUMP_STEPS_MEASURED_UP_TO:
         return ""
     return (" at least (the step count of %d clumps; larger %s specimens take more steps, docs/runs.md)"

@@ -195,7 +195,7 @@ def read(path):
 def volumes_problem(a):
     """A stored clump volume that disagrees with its members' union (CGAL, cached once per shape),
     or None. Checked when a file is read, so that a study refuses such a specimen before it writes
-    anything (it was checked only when the scene was built, after the study had begun)."""
+    anything, not when the scene is built, after the study has begun."""
     if "volumes" not in a:
         return None
     mb = a["member_begin"]
@@ -387,8 +387,8 @@ def contacts_problem(scene, a):
 
 
 def _float_problem(x, name):
-    """An array that is not of finite floating-point numbers, named (an integer array was called
-    non-finite, an outside try)."""
+    """An array that is not of finite floating-point numbers, named as what it is (an integer
+    array is not called non-finite)."""
     if not np.issubdtype(x.dtype, np.floating):
         return "%s must hold floating-point numbers, not %s" % (name, x.dtype)
     if not np.all(np.isfinite(x)):

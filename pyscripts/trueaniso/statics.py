@@ -1,4 +1,4 @@
-"""Exact static stiffness of the contact network (issue 5): Python face of engines/statics.
+"""Exact static stiffness of the contact network: Python face of engines/statics.
 
 The C++ engine linearises the dynamic contact law at the scene's state with every contact
 sticking, relaxes the bodies (translations, and rotations unless blocked) under the six unit
@@ -93,7 +93,7 @@ def said_zeta(z):
 
 def state_file(out, state):
     """Where a study directory keeps a state's record: statics_isotropic.json for the specimen
-    (run_study's name since issue 5), statics_state-ID.json for the checkpoint of state ID."""
+    (run_study's name), statics_state-ID.json for the checkpoint of state ID."""
     return os.path.join(out, "statics_isotropic.json" if state is None else "statics_state-%s.json" % state)
 
 

@@ -25,7 +25,7 @@ from .refusal import InputError
 from .triaxial import AXES
 
 # A row is also the state's record: its six stresses, the principal values and the largest
-# off-diagonal (issue 12). E and nu_* are empty in a shear probe's row, G in a normal probe's.
+# off-diagonal. E and nu_* are empty in a shear probe's row, G in a normal probe's.
 COLUMNS = ["path", "state", "b", "sigma_z_goal", "sigma_x", "sigma_y", "sigma_z", "sigma_yz", "sigma_xz",
            "sigma_xy", "sigma_1", "sigma_2", "sigma_3", "tau_max", "q", "probe", "sign",
            "d_sigma_x", "d_sigma_y", "d_sigma_z", "d_sigma_yz", "d_sigma_xz", "d_sigma_xy", "d_eps_x", "d_eps_y",
@@ -63,9 +63,9 @@ UNNAMED_CLUMPS = "clumps"  # a clump packing saved without an assembly (the YADE
 def assembly_of(specimen_meta, member_begin):
     """The assembly of a specimen: the one prepare_specimen.py recorded, checked against the file's
     bodies (sphere: no clumps; clump1, clump2: clumps), or, when none is recorded, sphere for a
-    file without clumps and UNNAMED_CLUMPS for one with clumps. Before, a clump packing saved
-    without the parameter was taken for spheres, and its report compared with the paper's spheres
-    (an outside try). Raises InputError for a recorded assembly that is unknown or contradicts the
+    file without clumps and UNNAMED_CLUMPS for one with clumps, so that a clump packing saved
+    without the parameter is not taken for spheres (and its report compared with the paper's
+    spheres). Raises InputError for a recorded assembly that is unknown or contradicts the
     bodies."""
     import numpy as np
     spheres = bool(np.all(np.diff(np.asarray(member_begin)) == 1))
@@ -146,8 +146,8 @@ def _listed(ids, most=12):
 def _summary(specimen_path, spec_meta):
     """The specimen's summary (its stresses, void ratio, Zm): as saved, or measured on the file's
     scene when it has none. A specimen saved from a YADE scene (yade_bridge, specimen_file.save)
-    carries none, and the checks that read it were skipped: --path-rate 1e-9 started loading
-    (an outside try)."""
+    carries none, and the checks that read it would be skipped (--path-rate 1e-9 would start
+    loading)."""
     summary = spec_meta.get("summary") or {}
     if all(k in summary for k in ("sigma_x", "sigma_y", "sigma_z", "void_ratio", "Zm")):
         return summary
@@ -161,8 +161,8 @@ def _summary(specimen_path, spec_meta):
 
 def _refuse_unloaded(specimen_path, summary):
     """InputError for a specimen that carries no stress (a loose cloud, no loaded contact, as a YADE
-    scene saved before it was consolidated): the servo strained it to its 5 % limit and reported
-    that 'the specimen fails' at stresses (0, 0, 0) kPa (an outside try)."""
+    scene saved before it was consolidated): the servo would strain it to its 5 % limit and report
+    that 'the specimen fails' at stresses (0, 0, 0) kPa."""
     stresses = [summary.get(k) for k in ("sigma_x", "sigma_y", "sigma_z")]
     if None in stresses:  # nothing measured (a scene that could not be evaluated): the servo's own checks
         return
@@ -197,8 +197,8 @@ def refuse_slow_paths(states, path, start, state_options=None, start_within=0.0)
     step ran 3,000,000 steps, then blamed equilibrium). Each state is measured from where it
     starts, as run_states walks the paths (triaxial.paths): from the state before it on its
     loading path, the first from `start` (the specimen's principal stresses, known to within
-    `start_within` Pa before the specimen exists). Measured from the specimen, state 3 was refused
-    at rates state 2's checkpoint reaches it at (an outside try). The ramp must end `settle_steps`
+    `start_within` Pa before the specimen exists): measured from the specimen, state 3 would be
+    refused at rates state 2's checkpoint reaches it at. The ramp must end `settle_steps`
     before max_steps: the servo holds the goal that long before it calls a state reached (a ramp
     ending within them was accepted, then ran out of steps)."""
     servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
@@ -232,7 +232,7 @@ def _rounded_up(x):
 def _nearer_states(path, sid, b, sz, asked):
     """'; or ask for the states before it on its path too (--ids 2,3,4,5)': a Table C1 state is
     reached from the one before it that is asked, so the nearer ones shorten its way at any rate
-    (a study's rate is fixed: the advice to raise it led to another refusal, an outside try)."""
+    (a study's rate is fixed: advice to raise it would lead to another refusal)."""
     if path != "true-triaxial":
         return ""
     for group in triaxial.paths(triaxial.table_c1_states()).values():
@@ -314,17 +314,17 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                    dict(damping=damping, **(state_options or {})), keep=checkpoints, asked=ids)
         # The paths run over the states asked and the states earlier runs defined: a state is
         # reached from the nearest one before it on its path, so adding states to a study in path
-        # order gives the rows of asking them all at once. Before, the paths held only the states
-        # asked: --ids 1,2,3 then --ids 5 reached 5 from the specimen, not from 3 (an outside try:
-        # 234 cells differed from one run's, E_z by 3e-6). An earlier state whose checkpoint is
+        # order gives the rows of asking them all at once (paths of the states asked alone would
+        # reach 5 from the specimen after --ids 1,2,3 then --ids 5, not from 3, and differ from one
+        # run's rows, E_z by 3e-6). An earlier state whose checkpoint is
         # gone is reached again on the way, as it was first reached (_Run.start_of).
         walk = states + held_states(previous, ids)
         ordered = [path for _, path in sorted(triaxial.paths(walk).items(), key=lambda kv: (kv[0][1] != 0, kv[0]))]
-        if not any(run.needs(sid) for path in ordered for sid, _, _ in path):  # before, a rerun said nothing of it
+        if not any(run.needs(sid) for path in ordered for sid, _, _ in path):  # said, so that a rerun that does nothing is not silent
             log("%s: the rows of every state asked for are already there; no state to run" % out)
-        else:  # a run that does nothing leaves metadata.json as it was (before, it added itself to the runs)
+        else:  # a run that does nothing leaves metadata.json as it was (it adds no entry to the runs)
             done = [str(sid) for sid, _, _ in states if not run.wanted(sid)]
-            if done:  # a resumed run began at its next state without a word of what it kept (an outside try)
+            if done:  # a resumed run says what it keeps before it begins at its next state
                 log("%s: continuing the study; %d of the %d states asked for already %s (%s)"
                     % (out, len(done), len(states), "has its rows" if len(done) == 1 else "have their rows",
                        _listed(done)))
@@ -332,7 +332,7 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
             os.makedirs(os.path.join(out, "states"), exist_ok=True)
         # A state the specimen cannot reach (near its strength, the servo holds it without settling)
         # ends its own path only: the other paths go on, and the run fails at the end naming every
-        # such state. Before, the first one stopped the whole study.
+        # such state, rather than stopping the whole study at the first.
         failed = []
         if executor is None:
             for path in ordered:
@@ -351,8 +351,8 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
 def held_states(previous, asked):
     """[(id, b, sigma_z)] of the states earlier runs of the study defined (its metadata.json,
     `previous`) that are not among `asked`: where the paths of this run continue from. Their
-    checkpoints, when missing, are reached again (an outside try removed state 3's, as a refusal
-    of a damaged one advises, and --ids 5 then started from state 2)."""
+    checkpoints, when missing, are reached again (removing state 3's, as a refusal of a damaged
+    one advises, must not make --ids 5 start from state 2)."""
     asked = {str(i) for i in asked}
     return [(int(sid) if sid.isdigit() else sid, float(d["b"]), float(d["sigma_z"]))
             for sid, d in ((previous or {}).get("states") or {}).items() if sid not in asked]
@@ -362,7 +362,8 @@ def _run_paths_on(executor, run, paths):
     """The states of each loading path go to the executor's workers one at a time, in path order
     (a state starts from the checkpoint of the one before it), the paths side by side; each
     state's rows are appended here as it ends, so an interruption loses at most the states in
-    flight (before, a worker walked a whole path and its rows came back only at the path's end).
+    flight, not a whole path's (a worker walking a whole path would hand its rows back only at
+    the path's end).
     A state not reached ends its path and the others go on; returns the failures' messages. Any
     other error stops the run (the rows of states already ended are kept)."""
     import concurrent.futures as cf
@@ -484,7 +485,7 @@ class _Run:
         ck = self.checkpoint(sid)
         if not os.path.exists(ck) and any(self.needs(s) for s, _, _ in path[k:]):
             self.reach(sid, b, sz, self.start_of(path, k), ck)
-        elif self.wanted(sid):  # an earlier run reached it and was stopped before its rows (an outside try)
+        elif self.wanted(sid):  # an earlier run reached it and was stopped before its rows
             self.log("state %s: reached by an earlier run; probed from its checkpoint %s" % (sid, ck))
         if self.wanted(sid):
             self.probe_state(sid, b, sz, ck)
@@ -520,7 +521,7 @@ class _Run:
             ok = (str(p.get("state")) == str(sid) and p.get("b") == b and p.get("sigma_z") == sz
                   and p.get("specimen") == self.fp["specimen"] and p.get("path", "true-triaxial") == self.loading)
             what = "it is not state %s (b = %g, sigma_z = %g Pa) of this study's specimen" % (sid, b, sz)
-            # Checkpoints written before 2026-11-30 record no key: they pass on the checks above.
+            # A checkpoint that records no study key (an older layout) passes on the checks above.
             if ok and p.get("study", study_dir.states_key(self.fp)) != study_dir.states_key(self.fp):
                 ok, what = False, ("it was made by another study (another friction, path rate, thread count or "
                                    "code: the study's fingerprint differs)")

@@ -22,7 +22,7 @@ from .refusal import Refusal
 
 METADATA = "metadata.json"
 SUPERSEDED = "superseded"
-LAYOUT = 2  # of metadata.json; 1 (before fingerprints) cannot prove what its rows were made with
+LAYOUT = 2  # of metadata.json; layout 1 (no fingerprint) cannot prove what its rows were made with
 CSV_NAME = "probes.csv"  # one row per state and probe direction (trueaniso/study.py)
 
 
@@ -34,8 +34,8 @@ WAY_OUT = "use a new --out, or --force-new to move the old study aside into %s/"
 
 LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code": "the code version (code: a hash of engines/ and pyscripts/trueaniso/, and of the x86-64 level the engines were built for, TRUEANISO_ARCH)",
           "specimen": "the specimen (specimen: its checksum)", "threads": "the engine thread count (threads)",
-          # The fields the scripts' options set, named by the option (an outside try read
-          # "state.friction is 0.5 there, 0.3 in this run" after giving --mu 0.3).
+          # The fields the scripts' options set, named by the option (--mu 0.3, not
+          # "state.friction is 0.5 there, 0.3 in this run").
           "state.friction": "the loading friction (--mu; state.friction)",
           "state.path_rate": "the path rate (--path-rate; state.path_rate)",
           "state.rolling_stiffness": "the rolling stiffness (--rolling-stiffness; state.rolling_stiffness)",
@@ -166,8 +166,8 @@ def _normal(x):
 def states_key(fingerprint):
     """What a state's checkpoint depends on, as one hash: the study's fingerprint without its probe
     options (specimen, code, path, threads, every option of reaching a state). A checkpoint records
-    it, and one of another study is refused on load: an outside try copied a checkpoint made at
-    --mu 0.3 into a study at 0.5, and a later state started from it without a word."""
+    it, and one of another study is refused on load: a checkpoint made at --mu 0.3 copied into a
+    study at 0.5 must not start a later state without a word."""
     import hashlib
     reach = {k: v for k, v in _normal(fingerprint).items() if k != "probe"}
     return hashlib.sha256(json.dumps(reach, sort_keys=True).encode()).hexdigest()[:16]
@@ -249,7 +249,7 @@ def check(out, fingerprint, states):
         way = _way_out(out)
         if field.startswith("recipe.") and here is _ABSENT:
             # run_states.py on run_study.py's directory: "recipe.assembly is "sphere" there, absent
-            # in this run" named a field the user never set (an outside try).
+            # in this run" would name a field the user never set.
             raise StudyMismatch("%s holds a study made by run_study.py (its specimen recipe, %s, is there and "
                                 "run_states.py gives none); continue it with run_study.py, or %s"
                                 % (out, ", ".join(k for k, _, _ in diff if k.startswith("recipe.")), way))
@@ -272,7 +272,7 @@ def check(out, fingerprint, states):
     have = meta.get("states", {})
     for sid, d in states_table(states).items():
         if sid in have and have[sid] != d:
-            # %.12g: %g printed 100050 for both 100050 and 100049.99 (an outside try)
+            # %.12g: %g prints 100050 for both 100050 and 100049.99
             raise StudyMismatch("%s holds another study: state %s is b = %.12g, sigma_z = %.12g Pa there, b = %.12g, "
                                 "sigma_z = %.12g Pa in this run; %s" % (out, sid, have[sid]["b"], have[sid]["sigma_z"],
                                                                          d["b"], d["sigma_z"], _way_out(out)))

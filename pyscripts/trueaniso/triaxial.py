@@ -190,8 +190,8 @@ def stress_as_held(scene):
 def stress_record(scene, goal=None):
     """What a state record reports of the stress (Pa, compression positive): the six components,
     the three principal values (largest first), the largest off-diagonal, and with a goal (six
-    Voigt components) the largest principal and shear errors against it (the acceptance of the
-    full-cell issue: both within 0.5 kPa)."""
+    Voigt components) the largest principal and shear errors against it (a state is accepted with
+    both within 0.5 kPa)."""
     sig = engines.stress(scene)
     sym = 0.5 * (sig + sig.T)
     principal = engines.principal_stresses(sym)

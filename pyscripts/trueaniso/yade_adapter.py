@@ -52,8 +52,8 @@ class CellAdapter:
         self.O.cell.velGrad = Matrix3(*[float(v) for v in L.ravel()])
         self.calls += 1
         # Pause once, when the controller gets done: that is how run_until_done's O.run returns.
-        # Pausing at every call after it made any later O.run(N) of the scene stop after one step,
-        # without a word, while the finished controller stayed attached (an outside try).
+        # Pausing at every call after it would make any later O.run(N) of the scene stop after one
+        # step, without a word, while the finished controller stays attached.
         if self.controller.done and not self.was_done:
             self.O.pause()
         self.was_done = self.controller.done
@@ -77,9 +77,9 @@ def attach(controller, stiffness, O=None, label=DEFAULT_LABEL):
     if not newton:
         raise ValueError("the YADE scene needs a NewtonIntegrator")
     # A controller is no part of a YADE scene file: a scene saved (O.save) with it attached and
-    # loaded in another process runs a command whose name is gone, which said only "NameError:
-    # name '_trueaniso_adapter_...' is not defined" (an outside try). The command says why.
-    named = "" if label == DEFAULT_LABEL else ", label=%r" % label  # the fix for its own label (an outside try)
+    # loaded in another process runs a command whose name is gone, which would say only "NameError:
+    # name '_trueaniso_adapter_...' is not defined". The command says why.
+    named = "" if label == DEFAULT_LABEL else ", label=%r" % label  # the way out names the controller's own label
     missing = ("the PyRunner %r calls a trueaniso controller, which a YADE scene file does not keep: this scene "
                "was saved (O.save) with it attached and loaded without it. Attach a new one after O.load "
                "(yade_adapter.attach(controller, stiffness%s) replaces it), or yade_adapter.detach(O%s) before "

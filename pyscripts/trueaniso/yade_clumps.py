@@ -21,11 +21,10 @@ import math
 import numpy as np
 
 from . import clump_shapes, engines
-
-
-def _bridge_error(msg):
-    from .yade_bridge import BridgeError
-    return BridgeError(msg)
+from .yade_convert import (BridgeError, _cell, _check_homo_deform, _contact_rows, _current_velocity_gradient,
+                           _interaction_images, _keep_interaction_images, _reference_cell,
+                           _scheduled_velocity_gradient, _shared_material, _write_cell, _yade_matrix,
+                           contacts_made_at_rest, nearest_image_shifts, write_shear_history)
 
 
 def _quat_wxyz(q):
@@ -35,8 +34,7 @@ def _quat_wxyz(q):
 
 
 def _material(bodies):
-    """(G, nu, density, mu) shared by all spheres: yade_bridge's one rule (FrictMat, compared by value)."""
-    from .yade_bridge import _shared_material
+    """(G, nu, density, mu) shared by all spheres: yade_convert._shared_material (FrictMat, compared by value)."""
     young, nu, rho, phi = _shared_material(bodies)
     return young / (2.0 * (1.0 + nu)), nu, rho, math.tan(phi)
 
@@ -54,23 +52,23 @@ def check_clumps(O):
     clump_ids = {b.id for b in clumps}
     for b in bodies:
         if not b.isClump and not isinstance(b.shape, Sphere):
-            raise _bridge_error("body #%d is a %s; the bridge imports spheres and clumps of spheres"
+            raise BridgeError("body #%d is a %s; the bridge imports spheres and clumps of spheres"
                                 % (b.id, type(b.shape).__name__))
         if b.isClumpMember and b.clumpId not in clump_ids:
-            raise _bridge_error("body #%d is a member of clump #%d, which is missing" % (b.id, b.clumpId))
+            raise BridgeError("body #%d is a member of clump #%d, which is missing" % (b.id, b.clumpId))
     for c in clumps:
         members = c.shape.members
         if not members:
-            raise _bridge_error("clump #%d has no members" % c.id)
+            raise BridgeError("clump #%d has no members" % c.id)
         total = 0.0
         for mid in members:
             m = O.bodies[mid] if 0 <= mid < len(O.bodies) else None
             if m is None or not isinstance(m.shape, Sphere) or m.clumpId != c.id:
-                raise _bridge_error("clump #%d: member #%d is missing (erased, or not a sphere of this clump)"
+                raise BridgeError("clump #%d: member #%d is missing (erased, or not a sphere of this clump)"
                                     % (c.id, mid))
             total += m.state.mass
         if c.state.mass > total * (1 + 1e-9):
-            raise _bridge_error("clump #%d has mass %.6g but its %d members only %.6g: members are missing "
+            raise BridgeError("clump #%d has mass %.6g but its %d members only %.6g: members are missing "
                                 "(erased after clumping?)" % (c.id, c.state.mass, len(members), total))
     return clumps, spheres
 
@@ -78,8 +76,6 @@ def check_clumps(O):
 def scene_from_yade_clumps(O, import_contacts=True):
     """Our Scene from YADE's clumps and free spheres, periodic cell, material and contact history.
     Returns (scene, ids): ids[k] is the YADE id of our body k (a clump's id for a clump)."""
-    from .yade_bridge import (BridgeError, _cell, _check_homo_deform, _contact_rows, _current_velocity_gradient,
-                              _reference_cell, _scheduled_velocity_gradient)
     h = _cell(O)  # the full cell matrix, sheared or not (yade_bridge.scene_from_yade)
     clumps, spheres = check_clumps(O)
     member_bodies = [O.bodies[mid] for c in clumps for mid in c.shape.members]
@@ -138,7 +134,6 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
                       InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin,
                       NewtonIntegrator, Vector3, utils)
-    from .yade_bridge import _write_cell, _yade_matrix, contacts_made_at_rest
     O.reset()
     O.periodic = True
     _write_cell(O, scene.cell, scene.cell_ref)
@@ -191,8 +186,6 @@ def write_clumps_to_yade(scene, O, ids):
     member positions, so O shows the state before YADE's next step moves them. Velocities and
     strain rate follow yade_bridge.write_to_yade's rule."""
     from yade import Quaternion, Vector3
-    from .yade_bridge import (BridgeError, _current_velocity_gradient, _interaction_images, _keep_interaction_images,
-                              _write_cell, _yade_matrix, nearest_image_shifts, write_shear_history)
     if ids is None or len(ids) != scene.num_bodies:
         raise BridgeError("ids must list one YADE body per scene body")
     current = _current_velocity_gradient(O)
@@ -221,7 +214,7 @@ def write_clumps_to_yade(scene, O, ids):
                 m.state.ori = b.state.ori * b.shape.members[mid][1]
         else:
             b.state.pos = Vector3(*pos[k])
-    _keep_interaction_images(O, before)  # the members' interactions keep their branches (yade_bridge)
+    _keep_interaction_images(O, before)  # the members' interactions keep their branches (yade_convert)
     yade_of_member = np.empty(int(begin[-1]), dtype=int)
     for k, i in enumerate(ids):
         b = O.bodies[i]
