@@ -31,6 +31,37 @@ def yade_json(tmp_path):
     return go
 
 
+class YadeResults:
+    """The JSON of each script of one yade-double run (run_yade_scripts), by name; a script that
+    failed fails the test that reads it, with its traceback and the run's output."""
+
+    def __init__(self, outs, proc):
+        self.outs, self.proc = outs, proc
+
+    def __getitem__(self, name):
+        out = self.outs[name]
+        if os.path.exists(out):
+            with open(out) as f:
+                return json.load(f)
+        error = open(out + ".error").read() if os.path.exists(out + ".error") else "(no traceback: it did not end)"
+        raise AssertionError("yade-double %s failed (status %d):\n%s\n%s\n%s" % (
+            name, self.proc.returncode, error, self.proc.stdout[-3000:], self.proc.stderr[-3000:]))
+
+
+def run_yade_scripts(directory, jobs, timeout=1800):
+    """Several scripts of yade_scripts/ in one yade-double (in_one_yade.py gives each a new scene
+    and its own argv): jobs = {name: (script name, arg, ...)}; each writes directory/name.json."""
+    if shutil.which("yade-double") is None:
+        pytest.fail("yade-double is not installed (the test command installs it with apt-get)")
+    outs = {name: str(directory / (name + ".json")) for name in jobs}
+    listed = [[os.path.join(HERE, "yade_scripts", script + ".py"), *map(str, args), outs[name]]
+              for name, (script, *args) in jobs.items()]
+    (directory / "jobs.json").write_text(json.dumps(listed))
+    proc = run_yade(os.path.join(HERE, "yade_scripts", "in_one_yade.py"), str(directory / "jobs.json"),
+                    timeout=timeout)
+    return YadeResults(outs, proc)
+
+
 SCRIPTS = os.path.join(REPO, "pyscripts")
 
 

@@ -354,8 +354,16 @@ def test_run_states_on_a_clump_specimen(packing, tmp_path, rotations):
     assert meta["fingerprint"]["assembly"] == "clump1"
 
 
-def test_two_clumps_match_yade_forces_and_torques(yade_json):
-    r = yade_json("peer_two_clumps")
+@pytest.fixture(scope="module")
+def in_yade(packing, tmp_path_factory):
+    """The two YADE scripts of this module in one yade-double, each on a new scene."""
+    from conftest import run_yade_scripts
+    return run_yade_scripts(tmp_path_factory.mktemp("yade"), {"peer_two_clumps": ("peer_two_clumps",),
+                                                               "bridge_clumps": ("bridge_clumps", packing)})
+
+
+def test_two_clumps_match_yade_forces_and_torques(in_yade):
+    r = in_yade["peer_two_clumps"]
     assert r["steps_two_contacts"] > 500  # two member contacts between the clumps most of the path
     assert r["contacts_ours"] == r["contacts_yade"] == 2
     assert r["shear_share"] == pytest.approx(0.5, rel=1e-9)  # the path ends sliding at mu = 0.5
@@ -367,8 +375,8 @@ def test_two_clumps_match_yade_forces_and_torques(yade_json):
     assert r["report"]["max_centre_offset"] > 0.01
 
 
-def test_bridge_round_trip_with_clumps(yade_json, packing):
-    r = yade_json("bridge_clumps", packing)
+def test_bridge_round_trip_with_clumps(in_yade):
+    r = in_yade["bridge_clumps"]
     assert r["yade_clumps"] == r["n"] and r["ids_same"]
     assert r["masses"] == 0  # our mass written into YADE's clump state, read back as it is
     # YADE puts the clump at its members' centroid, ours for these symmetric dimers to round-off

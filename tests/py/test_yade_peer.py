@@ -1,7 +1,10 @@
 """Side by side with YADE 2023.02a (Law2_ScGeom_MindlinPhys_Mindlin) in yade-double."""
+import os
+
 import numpy as np
 import pytest
 
+from conftest import run_yade_scripts
 from trueaniso import specimen, specimen_file
 
 
@@ -13,8 +16,28 @@ def specimen_path(tmp_path_factory):
     return str(path)
 
 
-def test_two_sphere_path_matches_yade_step_by_step(yade_json):
-    r = yade_json("peer_two_spheres")
+@pytest.fixture(scope="module")
+def in_yade(specimen_path, specimen_100, tmp_path_factory):
+    """Every YADE script of this module in one yade-double, each on a new scene; peer_oload alone
+    runs in a yade-double of its own, since what it checks is O.load in a fresh process."""
+    d = tmp_path_factory.mktemp("yade")
+    return run_yade_scripts(d, {
+        "peer_two_spheres": ("peer_two_spheres",),
+        "peer_stress": ("peer_stress", 300),
+        "peer_stress_sheared": ("peer_stress", 300, 15, "100e3"),
+        "peer_probe": ("peer_probe", specimen_path),
+        "adapter_servo": ("adapter_servo", specimen_path),
+        "bridge_roundtrip": ("bridge_roundtrip", specimen_path),
+        "peer_damping": ("peer_damping",),
+        "adapter_probe_restore": ("adapter_probe_restore", specimen_path),
+        "yade_save_packing": ("yade_save_packing", 300, d / "pack.yade.gz"),
+        "peer_rolling": ("peer_rolling",),
+        "bridge_checks": ("bridge_checks", specimen_100),
+    })
+
+
+def test_two_sphere_path_matches_yade_step_by_step(in_yade):
+    r = in_yade["peer_two_spheres"]
     assert r["steps"] == 900
     # YADE turns the shear force with a small-angle update, we with an exact rotation: the two
     # differ by O(angle^2) per step (angle ~1e-5 here), far below 1e-6 over the path.
@@ -24,8 +47,8 @@ def test_two_sphere_path_matches_yade_step_by_step(yade_json):
     assert r["yade_sliding_steps"] == r["ours_sliding_steps"] > 100
 
 
-def test_stress_of_yade_packing_matches_get_stress(yade_json):
-    r = yade_json("peer_stress", "300")
+def test_stress_of_yade_packing_matches_get_stress(in_yade):
+    r = in_yade["peer_stress"]
     assert r["contacts_ours"] == r["contacts_yade"] > 300
     assert r["max_rel_normal_force"] < 1e-8  # same Hertz law; round-off of tiny overlaps
     assert r["rel_stress"] < 1e-6  # the issue's tolerance; ours is minus YADE's (sign convention)
@@ -39,12 +62,12 @@ def test_stress_of_yade_packing_matches_get_stress(yade_json):
     assert r["ours_unbalanced"] == pytest.approx(r["yade_unbalanced"], rel=1e-6)
 
 
-def test_stress_of_a_sheared_yade_cell_matches(yade_json):
+def test_stress_of_a_sheared_yade_cell_matches(in_yade):
     """The full-cell issue's peer: a YADE cell sheared through a general velGrad (hSize with
     off-diagonal terms, stress with shear components) at 100 kPa, imported through the bridge:
     every component of our Love-Weber tensor against utils.getStress(), to 1e-6 of 100 kPa
     (measured 1e-3 Pa, 1e-8 of it)."""
-    r = yade_json("peer_stress", "300", "15", "100e3")
+    r = in_yade["peer_stress_sheared"]
     h = np.array(r["hSize"])
     assert np.abs(h - np.diag(np.diag(h))).max() > 0.04 * h[0, 0]  # sheared by several per cent
     np.testing.assert_array_equal(np.array(r["ours_cell"]), h)  # the matrix copied as it is
@@ -56,8 +79,8 @@ def test_stress_of_a_sheared_yade_cell_matches(yade_json):
     assert r["max_abs_error"] < 1e-6 * 100e3
 
 
-def test_probe_matches_yade_user_probe_and_adapter(yade_json, specimen_path):
-    r = yade_json("peer_probe", specimen_path)
+def test_probe_matches_yade_user_probe_and_adapter(in_yade):
+    r = in_yade["peer_probe"]
     # issue 3: a probe done the YADE way (PeriTriaxController, Mindlin law) within 2 % of ours
     assert r["yade"]["E"] == pytest.approx(r["ours"]["E"], rel=0.02)
     assert r["yade"]["nu_zx"] == pytest.approx(r["ours"]["nu_zx"], abs=0.01)
@@ -66,8 +89,8 @@ def test_probe_matches_yade_user_probe_and_adapter(yade_json, specimen_path):
     assert r["adapter"]["E"] == pytest.approx(r["ours"]["E"], rel=1e-3)
 
 
-def test_servo_drives_yade_through_adapter(yade_json, specimen_path):
-    r = yade_json("adapter_servo", specimen_path)
+def test_servo_drives_yade_through_adapter(in_yade):
+    r = in_yade["adapter_servo"]
     assert r["status"] == "reached"
     for got, want in zip(r["yade_stress"], r["goal"]):
         assert abs(got - want) < 500.0  # the issue's 0.5 kPa, measured by YADE's getStress()
@@ -75,8 +98,8 @@ def test_servo_drives_yade_through_adapter(yade_json, specimen_path):
     assert r["unbalanced"] < 1e-3
 
 
-def test_bridge_round_trip(yade_json, specimen_path):
-    r = yade_json("bridge_roundtrip", specimen_path)
+def test_bridge_round_trip(in_yade):
+    r = in_yade["bridge_roundtrip"]
     assert r["positions"] == 0 and r["radii"] == 0 and r["cell"] == 0  # doubles copied, not converted
     assert r["contacts"][0] == r["contacts"][1]
     assert r["stress_rel"] < 1e-9          # tangential forces carried through YADE's interactions
@@ -97,10 +120,10 @@ def test_bridge_round_trip(yade_json, specimen_path):
     assert r["cell_first_step"] == 0 and abs(r["cell_second_step_rel"]) < 1e-6
 
 
-def test_local_damping_matches_yade_newton_integrator(yade_json):
+def test_local_damping_matches_yade_newton_integrator(in_yade):
     """Our NewtonIntegrator damping against YADE's (cundallDamp2nd) on a free oblique collision,
     from a state imported through the bridge (velocities included)."""
-    r = yade_json("peer_damping")
+    r = in_yade["peer_damping"]
     assert r["steps_in_contact"] > 100  # the collision lasts: forces, torques and damping act
     # the damping matters: without it the spheres leave 30 % faster
     assert r["undamped_final_speed"] > 1.2 * r["final_speed"]
@@ -111,11 +134,11 @@ def test_local_damping_matches_yade_newton_integrator(yade_json):
     assert r["max_angular_velocity_diff"] < 1e-9 * r["angular_velocity_scale"]
 
 
-def test_adapter_probe_workflow_restores_with_yade_tools(yade_json, specimen_path):
+def test_adapter_probe_workflow_restores_with_yade_tools(in_yade):
     """docs/yade-peer.md's recipe: O.saveTmp, mu = 1e23, probe z through the adapter, O.loadTmp,
     probe x. Each probe starts from the held state (positions and cell exact, mu 0.5 again) and
     agrees with ours (the adapter reached 6e-8 on z in the peer above; 1e-3 asserted)."""
-    r = yade_json("adapter_probe_restore", specimen_path)
+    r = in_yade["adapter_probe_restore"]
     for axis in "zx":
         assert r["pos_diff_" + axis] == 0 and r["cell_diff_" + axis] == 0
         assert r["mu_after_" + axis] == pytest.approx(0.5, rel=1e-12)
@@ -123,13 +146,13 @@ def test_adapter_probe_workflow_restores_with_yade_tools(yade_json, specimen_pat
         assert r["steps_after_done_" + axis] == 20  # 1 before: a finished controller paused every O.run
 
 
-def test_scene_saved_by_yade_and_o_loaded_imports(yade_json, tmp_path):
+def test_scene_saved_by_yade_and_o_loaded_imports(in_yade, yade_json):
     """A YADE user's packing: made in YADE (makeCloud, PeriTriaxController to 100 kPa), saved with
     O.save, restored with O.load in a fresh yade-double and imported through the bridge. A loaded
     scene hands out a new wrapper at every b.material access, which the bridge once took for
     different materials and refused."""
-    pack = str(tmp_path / "pack.yade.gz")
-    saved = yade_json("yade_save_packing", "300", pack)
+    saved = in_yade["yade_save_packing"]
+    pack = os.path.join(os.path.dirname(in_yade.outs["yade_save_packing"]), "pack.yade.gz")
     assert saved["n"] > 200 and saved["materials"] == 1
     assert all(abs(saved["stress"][k][k] + 100e3) < 1e3 for k in range(3))  # YADE reached 100 kPa
     r = yade_json("peer_oload", pack)
@@ -144,24 +167,24 @@ def test_scene_saved_by_yade_and_o_loaded_imports(yade_json, tmp_path):
     assert r["ours"]["E"] > 20e6  # a loaded network, not a trivial one
 
 
-def test_rolling_resistance_matches_yade_include_moment(yade_json):
+def test_rolling_resistance_matches_yade_include_moment(in_yade):
     """Our rolling resistance (docs/rolling.md) against YADE 2023.02a's Law2_ScGeom_MindlinPhys_Mindlin
     (includeMoment=True) with Ip2's krot set to our k_r and the cap to our eta_r rbar N: a sphere
     spun off the normal for 400 steps, 37 elastic then at the cap. Same incremental law, same
     frame (no rotation of the pair): the moments agree to round-off (measured 3.5e-16; 1e-12)."""
-    r = yade_json("peer_rolling")
+    r = in_yade["peer_rolling"]
     assert r["yade_kr"] == pytest.approx(r["kr"], rel=1e-15)
     assert r["R_yade"] == pytest.approx(0.9e-4, rel=1e-12)  # YADE's cap lever: eta times the mean radius
     assert r["max_rel_moment"] < 1e-12
     assert r["capped_steps_yade"] == r["capped_steps_ours"] > 300
 
 
-def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json, specimen_100):
+def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(in_yade):
     """Found by an outside try: yade_scene_from dropped our strain and strain rate (setting hSize
     resets YADE's refHSize); a cell YADE flipped imported with a shear it never underwent; a
     ViscElMat scene and a linear law's interactions were converted without a word (ViscEl's
     50 kPa read 226 kPa); blocked and fixed bodies became free."""
-    r = yade_json("bridge_checks", specimen_100)
+    r = in_yade["bridge_checks"]
     assert max(abs(v) for v in r["strain"][:3]) > 5e-3
     np.testing.assert_allclose(r["strain_back"], r["strain"], rtol=0, atol=1e-12)
     assert r["velocity_gradient_back"] == 0
