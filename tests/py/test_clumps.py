@@ -1,4 +1,4 @@
-"""Clump assemblies (issue 13): templates from Python, bad input, clump growth, specimen files,
+"""Clump assemblies: templates from Python, bad input, clump growth, specimen files,
 the static solve against the +/- probe mean, YADE's clumps side by side and through the bridge."""
 import json
 import math
@@ -398,10 +398,9 @@ def test_bridge_round_trip_with_clumps(in_yade):
 
 def test_a_clump_specimen_without_an_assembly_is_not_taken_for_spheres(packing, tmp_path):
     """A clump packing saved without prepare_specimen.py's `assembly` parameter (the YADE bridge, a
-    script) was taken for spheres: its study said sphere and its report compared it with the
-    paper's spheres (found by an outside try). Now its study records `clumps`, --assembly cannot
-    label it, the report asks which of the paper's clumps to compare with, and a recorded assembly
-    that is unknown or contradicts the bodies is refused."""
+    script) is not taken for spheres: its study records `clumps`, --assembly cannot label it, the
+    report asks which of the paper's clumps to compare with (not the paper's spheres), and a
+    recorded assembly that is unknown or contradicts the bodies is refused."""
     import json
     from conftest import one_line_error, run_script
     from analysis import report
@@ -429,10 +428,9 @@ def test_a_clump_specimen_without_an_assembly_is_not_taken_for_spheres(packing, 
 
 
 def test_a_clump_specimen_with_a_wrong_volume_is_refused_before_the_study_begins(packing, tmp_path):
-    """A stored volume that disagrees with the members (checksum resealed) was refused only when the
-    scene was built, after the study had written metadata.json, with the advice to remove the
-    specimen; the directory then refused the right specimen as another study (an outside try).
-    Now read() checks it: refused before anything is written."""
+    """A stored volume that disagrees with the members (checksum resealed) is refused by read(),
+    before the study writes anything (after metadata.json, the directory would refuse the right
+    specimen as another study)."""
     from conftest import one_line_error, run_script
     from test_specimen_file import _rewrite
 
