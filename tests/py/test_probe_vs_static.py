@@ -1,5 +1,5 @@
-"""The dynamic stress probe converges to the exact static stiffness (issue 5), and the affine part
-of the static solve equals the micromechanical stiffness of Eq. 35 with zeta = 1 (issue 4 x 5)."""
+"""The dynamic stress probe converges to the exact static stiffness, and the affine part of the
+static solve equals the micromechanical stiffness of Eq. 35 with zeta = 1."""
 import os
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Static stiffness on random consolidated packings (issue 5): the limit of a dynamic relaxation
+"""Static stiffness on random consolidated packings: the limit of a dynamic relaxation
 with sliding suppressed, rattlers against an independent count, bounds, periodic tiling, a loose
 nearly isostatic packing, refusal of an unbalanced state, and the rotation factor.
 Lattices in closed form are in tests/cpp/test_statics.cpp."""
@@ -243,8 +243,8 @@ def test_loose_packing_at_a_high_stress_ratio():
 
 def test_records_are_standard_json(tmp_path):
     """A statics record, summary.json and every other atomic.write_json file: a number that is not
-    finite is null. Before, clump2's isotropic record held zeta_h: NaN (no zeta in range reproduces
-    its modulus), which is not JSON: strict parsers (jq, JavaScript) refused the whole file."""
+    finite is null: clump2's isotropic record has zeta_h NaN (no zeta in range reproduces its
+    modulus), which is not JSON, and strict parsers (jq, JavaScript) would refuse the whole file."""
     import json
     from trueaniso import atomic
     path = tmp_path / "record.json"

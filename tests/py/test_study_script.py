@@ -117,7 +117,7 @@ def test_resume_adds_only_the_missing_probe(finished, small_specimen, tmp_path):
     (["--ids", "40"], "40"),
     (["--ids", "1", "--path-rate", "0"], "--path-rate"),
     (["--ids", "1", "--path-rate", "nan"], "--path-rate"),
-    # before: 3,000,000 steps (6 min on 200 spheres), then "no equilibrium" (an outside try)
+    # else 3,000,000 steps (6 min on 200 spheres), then "no equilibrium"
     (["--ids", "5", "--path-rate", "1e-9"], "--path-rate 1e-09: state 5 is"),
     (["--ids", "1", "--bogus"], "unrecognized"),
 ])

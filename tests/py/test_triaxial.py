@@ -57,7 +57,7 @@ def simple_cubic(n=4, r=1e-4, sigma=100e3):
 
 
 def test_simple_cubic_probe_gives_closed_form():
-    """E = (12 E*^2 sigma)^(1/3)/2 (406.7 MPa) within 0.5 %, nu_ij = 0 within 1e-3 (issue 3)."""
+    """E = (12 E*^2 sigma)^(1/3)/2 (406.7 MPa) within 0.5 %, nu_ij = 0 within 1e-3."""
     s, estar = simple_cubic()
     sigma = engines.stress(s)
     assert np.diag(sigma) == pytest.approx([100e3] * 3, rel=1e-9)
@@ -233,9 +233,9 @@ def test_shear_goal_on_a_path_that_fixes_the_shear_is_refused(specimen300):
 
 
 def test_measures_of_an_imported_scene_need_a_force_evaluation(specimen_100):
-    """Before: a scene whose contacts came in with forces only (yade_bridge.scene_from_yade's way)
-    gave specimen.state p = 0 with Zm 4.8 and no warning. Now it is refused until dem.refresh,
-    after which the state is the specimen's own (1e-9: refresh recomputes the same forces)."""
+    """A scene whose contacts came in with forces only (yade_bridge.scene_from_yade's way) is refused
+    until dem.refresh (its state would read p = 0 with Zm 4.8), after which the state is the
+    specimen's own (1e-9: refresh recomputes the same forces)."""
     from trueaniso import dem, specimen, specimen_file
     scene, _ = specimen_file.load(str(specimen_100))
     want = specimen.state(scene)
@@ -249,8 +249,8 @@ def test_measures_of_an_imported_scene_need_a_force_evaluation(specimen_100):
 
 
 def test_a_probe_refuses_stresses_the_scene_is_not_at(specimen_100):
-    """Before: a probe told to hold 100 kPa on a scene at another stress travelled there and
-    returned that path's slope as E (63 MPa and nu 0.57 on a 579 kPa scene), without a word."""
+    """A probe told to hold 100 kPa on a scene at another stress is refused: it would travel there
+    and return that path's slope as E (63 MPa and nu 0.57 on a 579 kPa scene)."""
     from trueaniso import specimen_file
     scene, _ = specimen_file.load(str(specimen_100))
     with pytest.raises(ValueError, match="not at the stresses the probe is told to hold"):
