@@ -203,7 +203,7 @@ def test_loose_packing_at_a_high_stress_ratio():
     """The nearly singular case: the loose packing (Zm ~ 4.4) driven to state 21 of Table C1
     (sigma_z / sigma_y = 140 / 60). Few contacts carry a strongly anisotropic load; hinge modes
     are pinned. The solve stays exact, the stiffness follows the load, and the dynamic probe
-    (tight settings, +/- mean) agrees with it (5e-5 measured; the issue's 0.5 % asserted).
+    (tight settings, +/- mean) agrees with it (5e-5 measured; 0.5 % asserted, the probes' required accuracy).
 
     A loose packing at q/p = 0.69 is at the edge of failure: with mu = 0.5 while loading, one of
     seeds 5-8 carries the state, with mu = 1.0 three do (seed 5 creeps away from the path in both).

@@ -73,7 +73,7 @@ def test_simple_cubic_probe_gives_closed_form():
 
 
 def test_simple_cubic_micromechanics_equals_probe():
-    """Issue 4: Eq. (40) with zeta = 1 on the simple cubic packing gives E = k_n / a (k_n/(2r) to
+    """Eq. (40) with zeta = 1 on the simple cubic packing gives E = k_n / a (k_n/(2r) to
     O(delta/r)), the same as the stress probe measures with rotations restrained. The +/- probe
     mean removes the secant error of the finite increment; 4e-7 measured, 1e-5 allowed."""
     from trueaniso import fabric
@@ -187,7 +187,7 @@ def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, si
     for k, v in held_state.items():
         np.testing.assert_array_equal(_state(s)[k], v, err_msg=k)
     np.testing.assert_allclose(np.diag(engines.stress(s)), goal, atol=500.0)
-    # the principal stresses are the goal's and the shear stresses zero, to the 0.5 kPa of the issue
+    # the principal stresses are the goal's and the shear stresses zero, to the servo's 0.5 kPa
     # (principal values computed here by numpy, independently of the engines)
     sig = engines.stress(s)
     principal = np.sort(np.linalg.eigvalsh(0.5 * (sig + sig.T)))

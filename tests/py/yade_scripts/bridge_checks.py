@@ -163,8 +163,8 @@ res["written_moved"] = float(max((O.bodies[i].state.pos - Vector3(*p)).norm() fo
                                                                                              scene.cell))))
 
 
-# Continued in YADE under a strain rate, the written-back scene follows the original (a third outside
-# try: bodies written wrapped made YADE's collider miss 2 of 314 contacts after 1500 steps).
+# Continued in YADE under a strain rate, the written-back scene follows the original (bodies written
+# wrapped would make YADE's collider miss contacts, 2 of 314 after 1500 steps).
 def continued(steps):
     for b in O.bodies:
         b.state.vel = Vector3(0, 0, 0)
