@@ -100,3 +100,27 @@ def specimen_100(tmp_path_factory):
     path = tmp_path_factory.mktemp("specimen100") / "s100.npz"
     specimen_file.save(str(path), scene, seed=3, parameters=log, summary=specimen.state(scene))
     return path
+
+
+def committed_specimen(name, tmp_path_factory):
+    """A copy of tests/data/NAME (tests/data/README.md says how each was made), first loaded
+    through specimen_file.load: its checksum and every field are checked."""
+    from trueaniso import specimen_file
+    path = tmp_path_factory.mktemp(name.replace(".npz", "")) / name
+    shutil.copyfile(os.path.join(REPO, "tests", "data", name), path)
+    specimen_file.load(str(path))
+    return path
+
+
+@pytest.fixture(scope="session")
+def specimen_300(tmp_path_factory):
+    """A 300-sphere specimen (prepare_spheres(300, seed=3) on one engine thread), committed: the
+    tests of probes, zeta and the YADE peers share it instead of each preparing its own."""
+    return committed_specimen("spheres-300-s3.npz", tmp_path_factory)
+
+
+@pytest.fixture(scope="session")
+def specimen_150(tmp_path_factory):
+    """A 150-sphere specimen (prepare_spheres(150, seed=4) on one engine thread), committed, for
+    the static solves (test_specimen prepares its own: the preparation is what it checks)."""
+    return committed_specimen("spheres-150-s4.npz", tmp_path_factory)

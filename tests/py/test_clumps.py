@@ -3,13 +3,15 @@ the static solve against the +/- probe mean, YADE's clumps side by side and thro
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from trueaniso import clump_shapes, clump_specimen, dem, engines, specimen, specimen_file, statics, triaxial
+from conftest import REPO
+from trueaniso import clump_shapes, dem, engines, specimen, specimen_file, statics, triaxial
 
 
 def _clump_gas(n, seed, phi=0.55):
@@ -256,17 +258,14 @@ def test_clump_file_with_bad_members_is_refused(tmp_path, edit, message):
 
 @pytest.fixture(scope="module")
 def packing(tmp_path_factory):
-    """A small clump specimen at 100 kPa in force and moment balance, made the quick way (nothing
-    here depends on the packing's history): dimers, rotations blocked through the whole expansion,
-    frictionless, inertial number 0.05 instead of the recipes' 0.01 (30-50 s instead of minutes).
-    200 clumps: at 80 the packing was so fragile (9 rattlers, a hinge) that the +/- probe mean still
-    moved by 1.5e-4 between gamma = 1e-6 and 3e-7; at 200 it agrees with the static solve to 1e-5
-    at both."""
-    scene, log = clump_specimen.prepare_clumps("clump1", 200, seed=4, inertial_number=5e-2, shape="dimer-1.5",
-                                               orientation_weights=(1.0, 1.0, 3.0), stage1_pressure=100e3,
-                                               mu_prep=0.0)
+    """A small clump specimen at 100 kPa in force and moment balance (200 dimers of clump1, made the
+    quick way: fixture_recipes.clump1_200_s4 says how and why), committed as
+    tests/data/clump1-200-s4.npz: its preparation takes longer than all the tests that use it.
+    Loaded through specimen_file.load here (checksum, fields, the clumps' stored volumes against
+    their members), and handed out as a copy."""
     path = tmp_path_factory.mktemp("clumps") / "clump1-200.npz"
-    specimen_file.save(str(path), scene, seed=4, parameters=log, summary=specimen.state(scene))
+    shutil.copyfile(os.path.join(REPO, "tests", "data", "clump1-200-s4.npz"), path)
+    specimen_file.load(str(path))
     return str(path)
 
 

@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from trueaniso import dem, engines, specimen, triaxial
+from trueaniso import dem, engines, specimen_file, triaxial
 
 
 def test_equation_9_reproduces_table_c1():
@@ -90,8 +90,8 @@ def test_simple_cubic_micromechanics_equals_probe():
 
 
 @pytest.fixture(scope="module")
-def specimen300():
-    scene, _ = specimen.prepare_spheres(300, seed=3)
+def specimen300(specimen_300):
+    scene, _ = specimen_file.load(str(specimen_300))
     return scene
 
 

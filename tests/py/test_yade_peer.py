@@ -5,15 +5,11 @@ import numpy as np
 import pytest
 
 from conftest import run_yade_scripts
-from trueaniso import specimen, specimen_file
 
 
 @pytest.fixture(scope="module")
-def specimen_path(tmp_path_factory):
-    scene, log = specimen.prepare_spheres(300, seed=3)
-    path = tmp_path_factory.mktemp("peer") / "s300.npz"
-    specimen_file.save(str(path), scene, seed=3, parameters=log)
-    return str(path)
+def specimen_path(specimen_300):
+    return str(specimen_300)
 
 
 @pytest.fixture(scope="module")

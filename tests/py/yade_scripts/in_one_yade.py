@@ -14,17 +14,19 @@ import traceback
 import __main__
 from yade import O
 
-with open(sys.argv[1]) as f:
-    jobs = json.load(f)
-main_before = dict(vars(__main__))
-builtins_before = dict(vars(builtins))
-
 
 def restore(namespace, before):
     for name in [k for k in namespace if k not in before]:
         del namespace[name]
     namespace.update(before)
 
+
+with open(sys.argv[1]) as f:
+    jobs = json.load(f)
+# yade-double runs this script in __main__'s namespace: every name it needs exists before the
+# snapshot, so that restoring it keeps them.
+saved = {"builtins": dict(vars(builtins))}
+saved["main"] = dict(vars(__main__))
 
 for job in jobs:
     script, out = job[0], job[-1]
@@ -39,5 +41,5 @@ for job in jobs:
         with open(out + ".error", "w") as f:
             f.write(traceback.format_exc())
     finally:
-        restore(vars(__main__), main_before)
-        restore(vars(builtins), builtins_before)
+        restore(vars(__main__), saved["main"])
+        restore(vars(builtins), saved["builtins"])
