@@ -47,7 +47,7 @@ def test_first_run_writes_everything_and_reports_progress(first):
         assert label in proc.stdout, label
     line = next(x for x in proc.stdout.splitlines() if x.startswith("state 5: step"))
     assert "stress error" in line and "unbalanced" in line and "|shear|" in line
-    # specimen_state.json reports the whole stress (full-cell issue): the principal values of its
+    # specimen_state.json reports the whole stress: the principal values of its
     # six components (numpy here) and the largest off-diagonal, within 0.5 kPa of 100 kPa and of 0
     st = json.loads((out / "specimen_state.json").read_text())
     s = np.array([[st["sigma_x"], st["sigma_xy"], st["sigma_xz"]], [st["sigma_xy"], st["sigma_y"], st["sigma_yz"]],

@@ -221,7 +221,7 @@ def test_state_that_never_settles_is_reported(specimen300):
 
 
 def test_shear_goal_on_a_path_that_fixes_the_shear_is_refused(specimen300):
-    """Bad input of the full-cell issue: a shear stress goal on a path that holds the cell's shear
+    """Bad input: a shear stress goal on a path that holds the cell's shear
     strains (control_shear=False) is refused with one clear message before any step runs."""
     s = specimen300.copy()
     step = s.step
