@@ -284,11 +284,10 @@ def test_static_solve_equals_probe_mean_on_clumps(packing, rotations):
     """The +/- probe mean converges to the exact static stiffness on clumps as on spheres
     (tests/py/test_probe_vs_static.py): the clumps' rigid-body DOFs, lever arms from the clump
     centre and rotations free or restrained; E_i against the full compliance, 1/S_ii, within the
-    spheres' 2e-4, nu_ij within 6e-4. The probe holds the state's own six stresses: the packing
-    carried sigma_yz = -54 Pa (before specimens were Morton-ordered; 6.5 Pa now), and a probe that
-    holds the shear stresses at zero (the default for
-    the paper's states, whose shear stresses are zero) first shears it by 54 Pa / G = 6e-7, a
-    different state, whose E_z is 5.4e-4 lower (docs/clumps.md). Measured, rotations free: x, y
+    spheres' 2e-4, nu_ij within 6e-4. The probe holds the state's own six stresses: a packing
+    carries shear stresses of up to tens of Pa, and a probe that holds them at zero (the default
+    for the paper's states, whose shear stresses are zero) would first shear it (54 Pa / G = 6e-7
+    gives a different state, whose E_z is 5.4e-4 lower). Measured, rotations free: x, y
     within 3.1e-5, z 1.5e-4 (the scatter of this 200-clump packing over gamma = 1e-7 ... 3e-6 is
     -3.1e-4 ... +7.9e-5 on z, without a trend)."""
     scene, _ = specimen_file.load(packing)
@@ -332,9 +331,8 @@ def test_run_states_on_a_clump_specimen(packing, tmp_path, rotations):
     """run_states.py on a clump specimen: the isotropic state and its three probes, one row each,
     with E from the dynamic probe within 5e-3 of the static solve, and the assembly in the study's
     fingerprint. The probe is one-sided (gamma 1e-6), so it carries the packing's nonlinearity:
-    measured 1e-4..9e-4 on one fixture packing and 2.4e-3 (x, rotations free) on another (two
-    packings the fixture gave before the clump templates were made bit-reproducible across
-    processes, docs/specimens.md); the +/- mean test above is the tight one."""
+    measured 1e-4..9e-4 on one clump packing and 2.4e-3 (x, rotations free) on another; the +/-
+    mean test above is the tight one."""
     import csv
     import json
     from conftest import run_script
