@@ -7,7 +7,8 @@ cd "$(dirname "$0")"
 
 PACKAGES=(g++ cmake make yade libeigen3-dev libboost-python-dev libboost-numpy-dev libgtest-dev
           libsuitesparse-dev libcgal-dev python3-numpy python3-scipy python3-matplotlib python3-pytest
-          python3-mpi4py openmpi-bin python3-sphinx python3-myst-parser python3-sphinx-rtd-theme)
+          python3-mpi4py openmpi-bin python3-sphinx python3-myst-parser python3-sphinx-rtd-theme
+          python3-pytest-xdist ninja-build)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -35,7 +36,11 @@ log=build/build.log
 # TRUEANISO_ARCH=x86-64-v3 ./setup.sh (or ./main.sh, ./test.sh) builds for that x86-64 level, about
 # 1.2-1.3x faster and different in the last bits (CMakeLists.txt); unset, the build keeps the level it
 # was configured with (the portable baseline unless asked), TRUEANISO_ARCH= returns to the baseline.
-if ! cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 \
+# A new build directory uses Ninja (a fresh build is faster than with make); one configured before
+# keeps its generator, as CMake requires.
+generator=()
+[ -f build/CMakeCache.txt ] || generator=(-G Ninja)
+if ! cmake -S . -B build "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 \
        ${TRUEANISO_ARCH+"-DTRUEANISO_ARCH=$TRUEANISO_ARCH"} >"$log" 2>&1; then
   tail -n 40 "$log" >&2
   echo "setup: CMake refused to configure the build (full log: $log)" >&2

@@ -1,13 +1,29 @@
 #!/usr/bin/env bash
-# Every test: the C++ engines (GoogleTest through ctest), then the Python/YADE side (pytest; the
-# tests that compare with YADE start yade-double themselves). `ctest --test-dir build` alone runs
-# the same set (pytest is registered there as one test labelled "python"); this script runs pytest
-# itself so that its progress shows. Arguments go to pytest (e.g. ./test.sh -k probe).
+# The quick suite: the C++ engines (GoogleTest through ctest), then the Python/YADE side (pytest,
+# the tests marked `long` left out; the tests that compare with YADE start yade-double themselves).
+#   ./test.sh           setup, ctest, pytest -m "not long"
+#   ./test.sh --long    setup, then only the long tests (pytest -m long)
+# Other arguments go to pytest (e.g. ./test.sh -k probe). pytest runs its test files on as many
+# workers as there are cores (pytest-xdist, a file stays on one worker so that its module fixtures
+# are made once) and names the 15 slowest tests at the end. `ctest --test-dir build` alone runs
+# both pytest sets too (labels python and python_long).
 set -euo pipefail
 cd "$(dirname "$0")"
+long=0
+args=()
+for a in "$@"; do
+  if [ "$a" = --long ]; then long=1; else args+=("$a"); fi
+done
 ./setup.sh
-# ctest runs two test programs at once on two cores, so each gets one thread: two OpenMP teams
-# of two on two cores spin against each other (a statics test took 1.2 s alone, 25.7 s so).
-OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}" ctest --test-dir build --output-on-failure -j2 -LE python
-export OMP_NUM_THREADS="${OMP_NUM_THREADS:-2}"
-/usr/bin/python3 -m pytest -q -p no:cacheprovider tests/py "$@"
+# One engine thread per process: ctest runs two test programs at once and pytest two workers on
+# two cores, and two OpenMP teams of two on two cores spin against each other (a statics test took
+# 1.2 s alone, 25.7 s so).
+export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
+if ((long)); then
+  marker=long
+else
+  ctest --test-dir build --output-on-failure -j"$(nproc)" -LE python
+  marker="not long"
+fi
+/usr/bin/python3 -m pytest -q -p no:cacheprovider -n auto --dist loadfile --durations=15 -m "$marker" \
+  tests/py "${args[@]}"

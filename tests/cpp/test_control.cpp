@@ -93,7 +93,7 @@ TEST(CellServoLaw, ClosesAFractionOfTheErrorAndCapsTheRate) {
 // State 21 of Table C1 (b = 0.5, sigma_z = 140 kPa) from the isotropic state carrying shear
 // stresses of up to 2.4 kPa: reached, every principal stress and every shear stress within the
 // tolerance, the normal goals moving along the straight path of constant b and p, no overshoot
-// beyond the tolerance (the 0.5 kPa), and the number of steps the path rate implies.
+// beyond the tolerance (0.5 kPa), and the number of steps the path rate implies.
 TEST(TrueTriaxialServo, ReachesState21AlongTheConstantBAndPPath) {
   LinearCell cell;
   TrueTriaxialServo servo;
@@ -131,10 +131,10 @@ TEST(TrueTriaxialServo, ReachesState21AlongTheConstantBAndPPath) {
   EXPECT_LT(servo.steps, 40000);
 }
 
-// With the shear stresses left out (controlShear off: the cell's shear strains held, the
-// orthorhombic servo of before), the normal stresses still reach their goals but nothing holds the
-// shear stresses: they stay at the start's 2.4 kPa plus what the coupling adds. That is the
-// issue's defect, and why the full servo is the default; a shear goal there is refused.
+// With the shear stresses left out (controlShear off: the cell's shear strains held, an
+// orthorhombic servo), the normal stresses still reach their goals but nothing holds the shear
+// stresses: they stay at the start's 2.4 kPa plus what the coupling adds. That is why the full
+// servo is the default; a shear goal there is refused.
 TEST(TrueTriaxialServo, WithoutShearControlTheShearStressesStayAndShearGoalsAreRefused) {
   LinearCell cell;
   TrueTriaxialServo servo;

@@ -1,4 +1,4 @@
-// The gap-tolerant contact count Zm_gap (measure/Coordination.hpp, issue 14): a slightly expanded
+// The gap-tolerant contact count Zm_gap (measure/Coordination.hpp): a slightly expanded
 // simple cubic lattice in closed form, and a brute-force count on a random packing.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Static stiffness of the contact network (issue 5): the linearised contact law against finite
+// Static stiffness of the contact network: the linearised contact law against finite
 // differences of the dynamic force loop; the assembled network tangent against finite differences
 // of every body's resultant; lattices against closed-form elastic constants (simple cubic, cubic
 // and orthorhombic, rotations free and blocked; FCC); the sparse solve against a dense one;

@@ -31,6 +31,37 @@ def yade_json(tmp_path):
     return go
 
 
+class YadeResults:
+    """The JSON of each script of one yade-double run (run_yade_scripts), by name; a script that
+    failed fails the test that reads it, with its traceback and the run's output."""
+
+    def __init__(self, outs, proc):
+        self.outs, self.proc = outs, proc
+
+    def __getitem__(self, name):
+        out = self.outs[name]
+        if os.path.exists(out):
+            with open(out) as f:
+                return json.load(f)
+        error = open(out + ".error").read() if os.path.exists(out + ".error") else "(no traceback: it did not end)"
+        raise AssertionError("yade-double %s failed (status %d):\n%s\n%s\n%s" % (
+            name, self.proc.returncode, error, self.proc.stdout[-3000:], self.proc.stderr[-3000:]))
+
+
+def run_yade_scripts(directory, jobs, timeout=1800):
+    """Several scripts of yade_scripts/ in one yade-double (in_one_yade.py gives each a new scene
+    and its own argv): jobs = {name: (script name, arg, ...)}; each writes directory/name.json."""
+    if shutil.which("yade-double") is None:
+        pytest.fail("yade-double is not installed (the test command installs it with apt-get)")
+    outs = {name: str(directory / (name + ".json")) for name in jobs}
+    listed = [[os.path.join(HERE, "yade_scripts", script + ".py"), *map(str, args), outs[name]]
+              for name, (script, *args) in jobs.items()]
+    (directory / "jobs.json").write_text(json.dumps(listed))
+    proc = run_yade(os.path.join(HERE, "yade_scripts", "in_one_yade.py"), str(directory / "jobs.json"),
+                    timeout=timeout)
+    return YadeResults(outs, proc)
+
+
 SCRIPTS = os.path.join(REPO, "pyscripts")
 
 
@@ -69,3 +100,27 @@ def specimen_100(tmp_path_factory):
     path = tmp_path_factory.mktemp("specimen100") / "s100.npz"
     specimen_file.save(str(path), scene, seed=3, parameters=log, summary=specimen.state(scene))
     return path
+
+
+def committed_specimen(name, tmp_path_factory):
+    """A copy of tests/data/NAME (tests/data/README.md says how each was made), first loaded
+    through specimen_file.load: its checksum and every field are checked."""
+    from trueaniso import specimen_file
+    path = tmp_path_factory.mktemp(name.replace(".npz", "")) / name
+    shutil.copyfile(os.path.join(REPO, "tests", "data", name), path)
+    specimen_file.load(str(path))
+    return path
+
+
+@pytest.fixture(scope="session")
+def specimen_300(tmp_path_factory):
+    """A 300-sphere specimen (prepare_spheres(300, seed=3) on one engine thread), committed: the
+    tests of probes, zeta and the YADE peers share it instead of each preparing its own."""
+    return committed_specimen("spheres-300-s3.npz", tmp_path_factory)
+
+
+@pytest.fixture(scope="session")
+def specimen_150(tmp_path_factory):
+    """A 150-sphere specimen (prepare_spheres(150, seed=4) on one engine thread), committed, for
+    the static solves (test_specimen prepares its own: the preparation is what it checks)."""
+    return committed_specimen("spheres-150-s4.npz", tmp_path_factory)

@@ -71,10 +71,10 @@ def test_a_team_of_threads_is_timed_in_wall_seconds(tmp_path, specimen_100):
 
 
 def test_a_tree_against_itself_keeps_two_sides_and_the_asked_particle_steps(specimen_100):
-    """A/A (the same tree as before and after, a check of the noise): the two sides' runs were kept
-    in one list keyed by the tree, so the table said 1.000 (1.000 - 1.000) whatever the runs gave;
-    and --particle-steps was divided by 4000 spheres whatever the specimen (an outside try: 50 steps
-    of 200 spheres for 2e5 asked). The ratios must be the printed runs' own, and the steps n / 100."""
+    """A/A (the same tree as before and after, a check of the noise): the two sides' runs are kept
+    apart (one list keyed by the tree would say 1.000 (1.000 - 1.000) whatever the runs gave), and
+    --particle-steps is divided by the specimen's own count, not 4000. The ratios must be the
+    printed runs' own, and the steps n / 100."""
     import ast
     import statistics
     proc = bench(REPO, REPO, specimen_100, "--particle-steps", "3e4", "--repeats", "3")
@@ -92,7 +92,7 @@ def test_a_tree_against_itself_keeps_two_sides_and_the_asked_particle_steps(spec
 
 
 def test_bad_input_is_one_line_before_any_run(tmp_path, specimen_100):
-    """Each failed inside a worker after starting, with a traceback, or was timed (an outside try)."""
+    """Each is one line before any run, not a worker's traceback after starting, nor timed as a row."""
     from trueaniso import specimen_file
     scene, _ = specimen_file.load(specimen_100)
     clumps = tmp_path / "c.npz"

@@ -47,9 +47,9 @@ def test_machine_names_cpu_and_cores():
 
 
 def test_lammps_peer_takes_a_prepared_specimen(specimen_100, tmp_path):
-    """Before: every prepared specimen (its cell keeps ~1e-8 of shear) was refused as sheared by the
-    stand-alone lammps_peer.py; bench_stepper.py squared it first (found by an outside try). Both
-    now square it the same way (_bench.orthorhombic)."""
+    """A prepared specimen (its cell keeps ~1e-8 of shear) is taken by the stand-alone
+    lammps_peer.py, not refused as sheared: it squares the cell as bench_stepper.py does
+    (_bench.orthorhombic)."""
     from conftest import run_script
     proc = run_script(os.path.join("bench", "lammps_peer.py"), "--specimen", specimen_100, "--out", tmp_path / "l",
                       "--steps", 10)
@@ -60,9 +60,9 @@ def test_lammps_peer_takes_a_prepared_specimen(specimen_100, tmp_path):
 
 
 def test_bench_stepper_refuses_bad_input_before_any_run(specimen_100):
-    """Before: --dt -1 was printed as the table's time step, --threads 99 and 0 were timed as rows,
-    --repeats 0 failed after the runs, --dt nan and --steps -1 failed inside the engine (an outside
-    try). Each is one line and exit 2 now, at once."""
+    """--dt -1 or nan, --threads 99 or 0, --repeats 0 and --steps -1: each is one line and exit 2,
+    at once (not printed as the table's time step, timed as a row, or failed after the runs or
+    inside the engine)."""
     from conftest import one_line_error, run_script
     for args, words in ((["--dt", "-1"], "--dt must be"), (["--dt", "nan"], "--dt must be"),
                         (["--threads", "99"], "thread counts 1 to"), (["--threads", "0"], "thread counts 1 to"),
@@ -84,7 +84,7 @@ def test_bench_state_split_on_the_isotropic_state(specimen_100):
     r = json.loads(proc.stdout.strip().splitlines()[-1])
     assert r["status"] == "reached" and r["ramp"] is not None and r["ramp"] + r["hold"] == r["steps"]
     for args, words in ((["--ids", "40"], "no Table C1 state 40"),
-                        # before: the first gain's state ran, then the second was refused (a second outside try)
+                        # every gain checked before the first state runs
                         (["--ids", "1", "--gains", "0.03,5"], "--gains: 5.0 not in (0, 1]"),
                         (["--ids", "1,1"], "name each value once")):
         proc = run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100, *args, timeout=60)

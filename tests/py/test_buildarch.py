@@ -125,9 +125,9 @@ def _cache(build, key):
 
 
 def test_a_refused_level_leaves_the_build_at_its_level_and_a_plain_configure_works(tmp_path):
-    """An outside try: after TRUEANISO_ARCH=native was refused, the value stayed in the cache and every
-    later plain ./setup.sh failed on it. Now the cache keeps the level the build had (here v3,
-    given as ' X86-64-V3': spaces and case are forgiven), and a plain configure succeeds at it."""
+    """After TRUEANISO_ARCH=native is refused, the cache keeps the level the build had (here v3,
+    given as ' X86-64-V3': spaces and case are forgiven), not the refused value, on which every
+    later plain ./setup.sh would fail: a plain configure succeeds at it."""
     build = tmp_path / "b"
     configure = ["cmake", "-S", REPO, "-B", str(build)]
     subprocess.run(configure + ["-DTRUEANISO_ARCH= X86-64-V3"], check=True, capture_output=True)

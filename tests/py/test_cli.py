@@ -28,7 +28,7 @@ def run(*args, timeout=120):
     (["--assembly", "clump2", "--n", "1001"], "multiple of 4"),  # clump2 is four copies of a layer
     (["--assembly", "clump1", "--n", "4"], "cannot fit the box"),  # a clump is longer than a sphere
     (["--out", "x.txt"], ".npz"),
-    (["--table", "", "--line", "2"], "--table is empty"),  # it said '--line needs --table' (an outside try)
+    (["--table", "", "--line", "2"], "--table is empty"),  # the empty value named, not '--line needs --table'
 ])
 def test_bad_input_one_line_and_nothing_written(tmp_path, args, message):
     out = tmp_path / "s.npz"
@@ -57,7 +57,7 @@ def test_table_line_supplies_parameters(tmp_path):
     assert proc.returncode == 2 and "--phi-cell 0.9" in proc.stderr  # the table's value was used
     proc = run("--table", str(table), "--line", "1", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and "no data on line 1" in proc.stderr
-    # A parameter in two columns: refused (before, the last one won without a word).
+    # A parameter in two columns: refused (not the last one taken without a word).
     dup = tmp_path / "dup.table"
     dup.write_text("n seed n\n100 3 200\n")
     proc = run("--table", str(dup), "--line", "2", "--out", str(tmp_path / "s.npz"))
@@ -65,7 +65,7 @@ def test_table_line_supplies_parameters(tmp_path):
     # A value that starts with '-' (argparse takes it for an option): the message says how to give it
     proc = run("--pressure", "-1e5", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and "goes as --option=VALUE" in proc.stderr, proc.stderr
-    # A --line that is no number: one line too (before, argparse's usage line came first).
+    # A --line that is no number: one line too (argparse's usage line left out).
     proc = run("--table", str(table), "--line", "abc", "--out", str(tmp_path / "s.npz"))
     assert proc.returncode == 2 and proc.stderr == "error: argument --line: invalid int value: 'abc'\n", proc.stderr
 
@@ -88,8 +88,8 @@ def test_a_log_line_is_one_write(monkeypatch):
 
 @pytest.mark.parametrize("script", ["prepare_specimen", "run_study", "run_states"])
 def test_every_script_reads_assembly_the_same_way(script):
-    """One reading of --assembly (cli.assembly): 'spheres', docs/specimens.md's alias, was taken by
-    prepare_specimen.py and run_study.py and refused by run_states.py's choices (an outside try)."""
+    """One reading of --assembly (cli.assembly) in every script: 'spheres', the documented alias, is
+    taken for 'sphere' by each of prepare_specimen.py, run_study.py and run_states.py."""
     sys.path.insert(0, os.path.join(REPO, "pyscripts"))
     module = __import__(script)
     read = module.options if script == "prepare_specimen" else lambda argv: module.parser().parse_args(argv)
@@ -100,7 +100,7 @@ def test_every_script_reads_assembly_the_same_way(script):
 
 def test_a_kept_specimen_says_what_it_was_made_with_that_this_run_asked_otherwise(tmp_path):
     """A specimen is kept when its recipe matches; a --threads or --checkpoint-every given
-    otherwise (each changes its last bits) was passed over without a word (an outside try)."""
+    otherwise (each changes its last bits) is named in a note, not passed over without a word."""
     out = tmp_path / "s.npz"
     first = run("--n", "100", "--seed", "3", "--threads", "1", "--checkpoint-every", "0", "--quiet", "--out", str(out))
     assert first.returncode == 0, first.stderr

@@ -1,15 +1,17 @@
-"""Clump assemblies (issue 13): templates from Python, bad input, clump growth, specimen files,
+"""Clump assemblies: templates from Python, bad input, clump growth, specimen files,
 the static solve against the +/- probe mean, YADE's clumps side by side and through the bridge."""
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from trueaniso import clump_shapes, clump_specimen, dem, engines, specimen, specimen_file, statics, triaxial
+from conftest import REPO
+from trueaniso import clump_shapes, dem, engines, specimen, specimen_file, statics, triaxial
 
 
 def _clump_gas(n, seed, phi=0.55):
@@ -256,17 +258,14 @@ def test_clump_file_with_bad_members_is_refused(tmp_path, edit, message):
 
 @pytest.fixture(scope="module")
 def packing(tmp_path_factory):
-    """A small clump specimen at 100 kPa in force and moment balance, made the quick way (nothing
-    here depends on the packing's history): dimers, rotations blocked through the whole expansion,
-    frictionless, inertial number 0.05 instead of the recipes' 0.01 (30-50 s instead of minutes).
-    200 clumps: at 80 the packing was so fragile (9 rattlers, a hinge) that the +/- probe mean still
-    moved by 1.5e-4 between gamma = 1e-6 and 3e-7; at 200 it agrees with the static solve to 1e-5
-    at both."""
-    scene, log = clump_specimen.prepare_clumps("clump1", 200, seed=4, inertial_number=5e-2, shape="dimer-1.5",
-                                               orientation_weights=(1.0, 1.0, 3.0), stage1_pressure=100e3,
-                                               mu_prep=0.0)
+    """A small clump specimen at 100 kPa in force and moment balance (200 dimers of clump1, made the
+    quick way: fixture_recipes.clump1_200_s4 says how and why), committed as
+    tests/data/clump1-200-s4.npz: its preparation takes longer than all the tests that use it.
+    Loaded through specimen_file.load here (checksum, fields, the clumps' stored volumes against
+    their members), and handed out as a copy."""
     path = tmp_path_factory.mktemp("clumps") / "clump1-200.npz"
-    specimen_file.save(str(path), scene, seed=4, parameters=log, summary=specimen.state(scene))
+    shutil.copyfile(os.path.join(REPO, "tests", "data", "clump1-200-s4.npz"), path)
+    specimen_file.load(str(path))
     return str(path)
 
 
@@ -285,11 +284,10 @@ def test_static_solve_equals_probe_mean_on_clumps(packing, rotations):
     """The +/- probe mean converges to the exact static stiffness on clumps as on spheres
     (tests/py/test_probe_vs_static.py): the clumps' rigid-body DOFs, lever arms from the clump
     centre and rotations free or restrained; E_i against the full compliance, 1/S_ii, within the
-    spheres' 2e-4, nu_ij within 6e-4. The probe holds the state's own six stresses: the packing
-    carried sigma_yz = -54 Pa (before specimens were Morton-ordered; 6.5 Pa now), and a probe that
-    holds the shear stresses at zero (the default for
-    the paper's states, whose shear stresses are zero) first shears it by 54 Pa / G = 6e-7, a
-    different state, whose E_z is 5.4e-4 lower (docs/clumps.md). Measured, rotations free: x, y
+    spheres' 2e-4, nu_ij within 6e-4. The probe holds the state's own six stresses: a packing
+    carries shear stresses of up to tens of Pa, and a probe that holds them at zero (the default
+    for the paper's states, whose shear stresses are zero) would first shear it (54 Pa / G = 6e-7
+    gives a different state, whose E_z is 5.4e-4 lower). Measured, rotations free: x, y
     within 3.1e-5, z 1.5e-4 (the scatter of this 200-clump packing over gamma = 1e-7 ... 3e-6 is
     -3.1e-4 ... +7.9e-5 on z, without a trend)."""
     scene, _ = specimen_file.load(packing)
@@ -333,9 +331,8 @@ def test_run_states_on_a_clump_specimen(packing, tmp_path, rotations):
     """run_states.py on a clump specimen: the isotropic state and its three probes, one row each,
     with E from the dynamic probe within 5e-3 of the static solve, and the assembly in the study's
     fingerprint. The probe is one-sided (gamma 1e-6), so it carries the packing's nonlinearity:
-    measured 1e-4..9e-4 on one fixture packing and 2.4e-3 (x, rotations free) on another (two
-    packings the fixture gave before the clump templates were made bit-reproducible across
-    processes, docs/specimens.md); the +/- mean test above is the tight one."""
+    measured 1e-4..9e-4 on one clump packing and 2.4e-3 (x, rotations free) on another; the +/-
+    mean test above is the tight one."""
     import csv
     import json
     from conftest import run_script
@@ -354,8 +351,16 @@ def test_run_states_on_a_clump_specimen(packing, tmp_path, rotations):
     assert meta["fingerprint"]["assembly"] == "clump1"
 
 
-def test_two_clumps_match_yade_forces_and_torques(yade_json):
-    r = yade_json("peer_two_clumps")
+@pytest.fixture(scope="module")
+def in_yade(packing, tmp_path_factory):
+    """The two YADE scripts of this module in one yade-double, each on a new scene."""
+    from conftest import run_yade_scripts
+    return run_yade_scripts(tmp_path_factory.mktemp("yade"), {"peer_two_clumps": ("peer_two_clumps",),
+                                                               "bridge_clumps": ("bridge_clumps", packing)})
+
+
+def test_two_clumps_match_yade_forces_and_torques(in_yade):
+    r = in_yade["peer_two_clumps"]
     assert r["steps_two_contacts"] > 500  # two member contacts between the clumps most of the path
     assert r["contacts_ours"] == r["contacts_yade"] == 2
     assert r["shear_share"] == pytest.approx(0.5, rel=1e-9)  # the path ends sliding at mu = 0.5
@@ -367,8 +372,8 @@ def test_two_clumps_match_yade_forces_and_torques(yade_json):
     assert r["report"]["max_centre_offset"] > 0.01
 
 
-def test_bridge_round_trip_with_clumps(yade_json, packing):
-    r = yade_json("bridge_clumps", packing)
+def test_bridge_round_trip_with_clumps(in_yade):
+    r = in_yade["bridge_clumps"]
     assert r["yade_clumps"] == r["n"] and r["ids_same"]
     assert r["masses"] == 0  # our mass written into YADE's clump state, read back as it is
     # YADE puts the clump at its members' centroid, ours for these symmetric dimers to round-off
@@ -390,10 +395,9 @@ def test_bridge_round_trip_with_clumps(yade_json, packing):
 
 def test_a_clump_specimen_without_an_assembly_is_not_taken_for_spheres(packing, tmp_path):
     """A clump packing saved without prepare_specimen.py's `assembly` parameter (the YADE bridge, a
-    script) was taken for spheres: its study said sphere and its report compared it with the
-    paper's spheres (found by an outside try). Now its study records `clumps`, --assembly cannot
-    label it, the report asks which of the paper's clumps to compare with, and a recorded assembly
-    that is unknown or contradicts the bodies is refused."""
+    script) is not taken for spheres: its study records `clumps`, --assembly cannot label it, the
+    report asks which of the paper's clumps to compare with (not the paper's spheres), and a
+    recorded assembly that is unknown or contradicts the bodies is refused."""
     import json
     from conftest import one_line_error, run_script
     from analysis import report
@@ -421,10 +425,9 @@ def test_a_clump_specimen_without_an_assembly_is_not_taken_for_spheres(packing, 
 
 
 def test_a_clump_specimen_with_a_wrong_volume_is_refused_before_the_study_begins(packing, tmp_path):
-    """A stored volume that disagrees with the members (checksum resealed) was refused only when the
-    scene was built, after the study had written metadata.json, with the advice to remove the
-    specimen; the directory then refused the right specimen as another study (an outside try).
-    Now read() checks it: refused before anything is written."""
+    """A stored volume that disagrees with the members (checksum resealed) is refused by read(),
+    before the study writes anything (after metadata.json, the directory would refuse the right
+    specimen as another study)."""
     from conftest import one_line_error, run_script
     from test_specimen_file import _rewrite
 

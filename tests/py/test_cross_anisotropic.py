@@ -1,4 +1,4 @@
-"""Fig. 16's cross-anisotropic path (issue 12): sigma_h held at 100 kPa while sigma_v varies, shear
+"""Fig. 16's cross-anisotropic path: sigma_h held at 100 kPa while sigma_v varies, shear
 probes, and the paper's G_vh and G_hh; run_states.py --path cross-anisotropic with its input
 checks and a fingerprint that covers the path. On the 100-sphere specimen, two states."""
 import csv
@@ -32,7 +32,7 @@ def study(specimen_100, tmp_path_factory):
 
 def test_path_holds_sigma_h_and_reports_the_whole_stress(study):
     """Every state: sigma_x = sigma_y = 100 kPa and sigma_z = sigma_v, the principal values those
-    goals and the shear stresses zero, all within the issue's 0.5 kPa; one row per state and each
+    goals and the shear stresses zero, all within 0.5 kPa; one row per state and each
     of the six probes."""
     r = rows(study)
     assert sorted((x["state"], x["probe"]) for x in r) == sorted(
@@ -97,7 +97,7 @@ def test_rerun_on_another_path_is_refused(study, specimen_100):
     (["--ids", "1", "--sigma-v", "80e3"], ["--sigma-v belongs to --path cross-anisotropic"]),
     (["--path", "cross-anisotropic", "--sigma-v", "80e3,-5"], ["sigma_v must be a finite stress > 0"]),
     (["--path", "cross-anisotropic", "--sigma-v", "80e3,8e4"], ["given twice"]),
-    (["--path", "cross-anisotropic", "--sigma-v", "100e3,"], ["'100e3,' has an empty item"]),  # before: ran one
+    (["--path", "cross-anisotropic", "--sigma-v", "100e3,"], ["'100e3,' has an empty item"]),  # not one state alone
     (["--path", "cross-anisotropic", "--sigma-v", "60e3,,140e3"], ["has an empty item"]),
     (["--path", "cross-anisotropic", "--sigma-v", "80e3,1e9"], ["state sv1000000", "of a radius"]),
     # 0.01 Pa apart: one name (ids keep 0.1 Pa), and the message shows both values
@@ -105,7 +105,7 @@ def test_rerun_on_another_path_is_refused(study, specimen_100):
     (["--path", "cross-anisotropic", "--sigma-v", "eighty"], ["expected stresses in Pa"]),
     (["--path", "cross-anisotropic", "--probes", "z,yz,yz"], ["--probes 'z,yz,yz' names yz more than once"]),
     (["--ids", "1", "--probes", "z,zz"], ["--probes 'z,zz': 'zz' is no probe's name"]),
-    # 'yx,' repeats nothing: it was called a repeat (an outside try)
+    # 'yx,' repeats nothing: named as no probe, not as a repeat
     (["--ids", "1", "--probes", "yx,"], ["--probes 'yx,': 'yx' is no probe's name", "yz, xz, xy"]),
     (["--ids", "1", "--probes", "z,,x"], ["--probes 'z,,x': an empty item"]),
     (["--path", "diagonal", "--ids", "1"], ["--path", "invalid choice"]),
@@ -130,9 +130,8 @@ def test_path_state_checks():
 
 
 def test_outputs_go_where_asked_or_are_refused_first(tmp_path):
-    """Before: --out in a directory that did not exist was a FileNotFoundError traceback after the
-    work (found by an outside try). Now missing directories are made, as for every other output,
-    and a place that cannot be written is one line before any work."""
+    """--out and --figure in directories that do not exist yet: made, as for every other output; a
+    place that cannot be written is one line before any work, not a traceback after it."""
     table = os.path.join(REPO, "docs", "data", "fig16-spheres-4000-s1", "probes.csv")
     out, fig = tmp_path / "new" / "ca.json", tmp_path / "other" / "ca.png"
     assert cross_anisotropy.main([table, "--out", str(out), "--figure", str(fig)]) == 0
@@ -148,7 +147,7 @@ def test_outputs_go_where_asked_or_are_refused_first(tmp_path):
 
 def test_a_state_with_two_horizontal_stresses_is_not_fig16(tmp_path):
     """A true-triaxial state (21: sigma_x 100, sigma_y 60 kPa) probed with the six probes was shown
-    as Fig. 16, its sigma_h the mean of the two (an outside try). Refused, naming the state."""
+    is not Fig. 16 (whose sigma_h would be the mean of the two): refused, naming the state."""
     import csv as _csv
     from analysis import cross_anisotropy
     from analysis.results import ResultsError

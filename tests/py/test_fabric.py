@@ -181,7 +181,7 @@ def test_fabric_row_columns_are_the_measures():
 
 
 def test_fabric_row_has_the_gap_tolerant_count():
-    """Zm_gap1e-3 (issue 14) beside Zm: the engine's count at the default tolerance; its column
+    """Zm_gap1e-3 beside Zm: the engine's count at the default tolerance; its column
     name follows the tolerance; a brute-force count of pairs with gap < tol (r1 + r2) gives its
     N_c; tolerance 0 gives back Zm; a tolerance the skin cannot hold is refused."""
     s = _random_network(200, 0.6, 11)

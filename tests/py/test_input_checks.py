@@ -1,6 +1,6 @@
-"""Validation before any work (issue 10) and the scripts' --help (issue 11 item 5): every bad
-input is one line 'error: ...' with exit status 2, before a preparation or a state starts, and
-nothing is written. Each case names what the code before did with it."""
+"""Validation before any work and the scripts' --help: every bad input is one line 'error: ...'
+with exit status 2, before a preparation or a state starts, and nothing is written. A comment on a
+case says what would go wrong later if it were let through."""
 import os
 import shutil
 import signal
@@ -17,24 +17,24 @@ TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (truea
 
 
 @pytest.mark.parametrize("args,words", [
-    (["--pressure", "nan"], ["--pressure", "finite"]),  # before: failed after the preparation started
-    # before: a "specimen" of e 0.08 whose contacts overlapped by about 30 % of a radius
+    (["--pressure", "nan"], ["--pressure", "finite"]),  # else it fails once the preparation has started
+    # else a "specimen" of e 0.08 whose contacts overlap by about 30 % of a radius
     (["--pressure", "1e9"], ["--pressure of 1e+09 Pa", "about 30 % of a radius", "about 6.71e+07 Pa"]),
-    (["--mu", "nan"], ["--mu", "finite"]),  # before: failed after the whole expansion
+    (["--mu", "nan"], ["--mu", "finite"]),  # else it fails after the whole expansion
     (["--d50", "inf"], ["--d50", "finite"]),
-    (["--cu", "0.5"], ["--cu 0.5:", "Cu must lie in (1, 6)"]),  # before: named neither the option nor the value
-    # before: refused without the count that fits (28 does: test_the_least_count_said_is_taken)
+    (["--cu", "0.5"], ["--cu 0.5:", "Cu must lie in (1, 6)"]),  # the option and the value named
+    # the count that fits is said (28 does: test_the_least_count_said_is_taken)
     (["--n", "5"], ["cannot fit the box", "use --n of at least 28"]),
     (["--assembly", "clump1", "--n", "60"], ["60 clump1 clumps", "use --n of at least 98"]),
     # the least count that holds clump2's layers too: the two checks' advice, followed in turn, led
     # from 60 to 67 (not a multiple of its 4 layers) to 80
     (["--assembly", "clump2", "--n", "60"], ["use --n of at least 80"]),
-    (["--seed=-1"], ["--seed", ">= 0"]),  # before: failed after the preparation started
-    (["--n=-5"], ["--n", "'-5' is not >= 1", "empty cell"]),  # before: '>= 0', and --n 0 then said '>= 1'
-    (["--threads", "100000"], ["--threads", "at most"]),  # before: segfault
+    (["--seed=-1"], ["--seed", ">= 0"]),  # else it fails once the preparation has started
+    (["--n=-5"], ["--n", "'-5' is not >= 1", "empty cell"]),  # the bound that --n 0 is held to too
+    (["--threads", "100000"], ["--threads", "at most"]),  # else the OpenMP runtime crashes
     (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
-    (["--n", "1000000000"], ["memory", "this machine allows", "MemTotal"]),  # before: ran away past 7.8 GB
-    # before: after the estimate line, "the layer is thinner than a clump: use fewer layers", exit 1
+    (["--n", "1000000000"], ["memory", "this machine allows", "MemTotal"]),  # else it runs until memory is gone
+    # refused before the estimate line, with the least count that fits
     (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers",
                                                             "--n 124 is the least that fits with this seed"]),
 ])
@@ -56,7 +56,7 @@ def test_the_least_count_said_is_taken(tmp_path, args):
 
 
 def test_prepare_specimen_checks_its_output_before_preparing(tmp_path):
-    """Before: an unwritable --out was found only when the finished specimen was saved."""
+    """An unwritable --out is refused before the preparation, not when the finished specimen is saved."""
     one_line_error(run_script("prepare_specimen.py", "--out", "/sys/trueaniso/s.npz"), "cannot create files in /sys")
     (tmp_path / "d.npz").mkdir()
     one_line_error(run_script("prepare_specimen.py", "--out", tmp_path / "d.npz"), "is a directory")
@@ -73,12 +73,12 @@ def blocker(tmp_path):
 
 
 @pytest.mark.parametrize("args,words", [
-    (["--ids", ""], ["--ids: no state named"]),  # before: ran all 39 states
+    (["--ids", ""], ["--ids: no state named"]),  # not all 39 states
     (["--ids", " , "], ["--ids: no state named"]),
-    (["--ids", "1,5,1"], ["--ids: state 1 is given twice"]),  # before: de-duplicated without a word
-    (["--ids", "1,"], ["--ids: '1,' has an empty item"]),  # before: ran state 1 alone
-    (["--ids", "1_0"], ["--ids: '1_0': Table C1 states are numbers"]),  # before: state 10 (Python's int())
-    (["--ids", "1", "--gamma", "1"], ["--gamma 1 is outside"]),  # before: 2,000,000 steps, then exit 1
+    (["--ids", "1,5,1"], ["--ids: state 1 is given twice"]),  # not de-duplicated without a word
+    (["--ids", "1,"], ["--ids: '1,' has an empty item"]),  # not state 1 alone
+    (["--ids", "1_0"], ["--ids: '1_0': Table C1 states are numbers"]),  # not state 10 (Python's int())
+    (["--ids", "1", "--gamma", "1"], ["--gamma 1 is outside"]),  # else 2,000,000 steps, then exit 1
     (["--ids", "1", "--gamma", "1e-12"], ["--gamma 1e-12 is outside"]),
     (["--ids", "1", "--gamma", "nan"], ["--gamma", "finite"]),
     (["--ids", "1", "--damping", "nan"], ["--damping", "finite"]),
@@ -86,14 +86,14 @@ def blocker(tmp_path):
     (["--ids", "1", "--mu", "0"], ["--mu must be > 0"]),
     (["--ids", "1", "--threads", "100000"], ["--threads", "at most"]),
     (["--states", "0:125e3,0:125e3"], ["given twice"]),
-    (["--states", "0.5:140e3,"], ["'0.5:140e3,' has an empty item"]),  # before: ran the one state
+    (["--states", "0.5:140e3,"], ["'0.5:140e3,' has an empty item"]),  # not the one state alone
     (["--states", ",0.5:140e3"], ["has an empty item"]),
-    (["--states", "0.5:inf"], ["sigma_z = inf Pa", "must be finite"]),  # before: "stresses (-nan, -inf, inf)"
-    # before: the isotropic state reached and probed under both names
+    (["--states", "0.5:inf"], ["sigma_z = inf Pa", "must be finite"]),  # the value as written
+    # one state under two names: not reached and probed twice
     (["--states", "0:100e3,1:100e3"], ["states 1 and b1_sz100000 are one state", "(100000, 100000, 100000)"]),
     (["--ids", "1", "--assembly", "clump1"], ["is a sphere specimen, not clump1"]),  # the file says what it is
     (["--ids", "1", "--assembly", "clump3"], ["--assembly", "unknown assembly 'clump3'"]),
-    # before: ran the normal probes x and y, where the help and the CSV name the shear probe xy
+    # 'xy' is the shear probe's name in the help and the CSV, and also the normal probes x and y
     (["--ids", "1", "--probes", "xy"], ["'xy' is ambiguous", "'xy,' for the shear probe alone", "'x,y'"]),
     (["--ids", "1", "--probes", "yz"], ["'yz' is ambiguous"]),
 ])
@@ -106,8 +106,7 @@ def test_run_states_refuses_before_work(specimen_100, tmp_path, args, words):
 
 def test_checkpoints_given_as_specimen(specimen_100, tmp_path):
     """A preparation checkpoint (a specimen half made, mid-expansion) given as --specimen is refused;
-    a state's checkpoint is taken, with a note that the states start from that state (before, both
-    were taken without a word)."""
+    a state's checkpoint is taken, with a note that the states start from that state."""
     from trueaniso import specimen_file
     scene, meta = specimen_file.load(str(specimen_100))
     prep, state = tmp_path / "prep.npz", tmp_path / "state5.npz"
@@ -122,15 +121,15 @@ def test_checkpoints_given_as_specimen(specimen_100, tmp_path):
 
 
 def test_run_states_out_must_be_a_writable_directory(specimen_100, blocker):
-    """Before: a traceback."""
+    """A file, a place inside a file, /sys or '' as --out: one line each, not a traceback."""
     for out, words in ((blocker, ["is a file"]), (blocker / "sub", ["is a file, not a directory"]),
                        ("/sys/trueaniso-out", ["cannot create files in /sys"]), ("", ["--out must name a directory"])):
         one_line_error(run_script("run_states.py", "--specimen", specimen_100, "--ids", "1", "--out", out), *words)
 
 
 def test_run_study_out_must_be_a_writable_directory(blocker):
-    """Before: a file as --out, or a place inside a file, was read as a study's preparation checkpoint
-    first (NotADirectoryError traceback); '' gave FileNotFoundError (found by an outside try)."""
+    """A file as --out, or a place inside a file, is refused as such in one line before anything
+    looks for a preparation checkpoint in it; '' too."""
     for out, words in ((blocker, ["is a file"]), (blocker / "sub", ["is a file, not a directory"]),
                        ("", ["--out must name a directory"])):
         one_line_error(run_script("run_study.py", "--n", "100", "--out", out), *words)
@@ -138,7 +137,7 @@ def test_run_study_out_must_be_a_writable_directory(blocker):
 
 @pytest.mark.parametrize("args,words", [
     (["--seed=-1"], ["--seed", ">= 0"]),
-    (["--n=-5"], ["--n", "'-5' is not >= 100", "a study specimen"]),  # before: '>= 0', and --n 0 then '>= 100'
+    (["--n=-5"], ["--n", "'-5' is not >= 100", "a study specimen"]),  # the bound --n 0 is held to too
     (["--n", "0"], ["--n", "'0' is not >= 100"]),
     (["--n", "1000000000"], ["memory", "this machine allows"]),
     (["--ids", ""], ["--ids: no state named"]),
@@ -157,8 +156,8 @@ def test_run_study_refuses_before_work(tmp_path, args, words):
 
 
 def test_table_value_false_keeps_a_flag_off(specimen_100, tmp_path):
-    """Before: a table value False (any non-empty string) switched a flag on: here --force would
-    have prepared the specimen again instead of keeping it."""
+    """A table value False, 'no' or 0 keeps a flag off (a non-empty string is true in Python): here
+    --force on would prepare the specimen again instead of keeping it."""
     spec = tmp_path / "s.npz"
     shutil.copy(specimen_100, spec)
     table = tmp_path / "t.table"
@@ -175,14 +174,14 @@ def test_table_value_false_keeps_a_flag_off(specimen_100, tmp_path):
 
 
 def test_required_options_can_come_from_a_table(specimen_100, tmp_path):
-    """Before: --specimen and --out were required on the command line even with a table."""
+    """--specimen and --out, required options, may come from a table instead of the command line."""
     table = tmp_path / "t.table"
     table.write_text("specimen out ids gamma\n'%s' '%s' 1 1e-12\n" % (specimen_100, tmp_path / "o"))
     one_line_error(run_script("run_states.py", "--table", table, "--line", 2), "--gamma 1e-12 is outside")
 
 
 def test_figures_on_missing_or_truncated_tables(tmp_path):
-    """Before: tracebacks."""
+    """A missing, cut or malformed probe table: one line each, naming the file's fault."""
     def figures(path):
         return subprocess.run([sys.executable, "-m", "analysis.figures", str(path), "--out", str(tmp_path / "f")],
                               capture_output=True, text=True, cwd=REPO, timeout=120)
@@ -199,8 +198,8 @@ def test_figures_on_missing_or_truncated_tables(tmp_path):
     proc = figures(tmp_path / "partial.csv")
     assert proc.returncode == 0 and "cut short" in proc.stderr and (tmp_path / "f" / "E_vs_sigma.png").exists()
 
-    # A shear probe's row has G and no E: valid, and not what the figures plot. Before, its empty E
-    # refused the table (found by an outside try on a --path cross-anisotropic study).
+    # A shear probe's row has G and no E: valid, and not what the figures plot (a --path
+    # cross-anisotropic study writes such rows beside normal ones).
     shear = row.replace("1,z,3e8", "1,yz,").replace("0.1,0.1,nu_zx,nu_zy", ",,,")
     (tmp_path / "shear.csv").write_text(header + row + shear)
     proc = figures(tmp_path / "shear.csv")
@@ -210,7 +209,7 @@ def test_figures_on_missing_or_truncated_tables(tmp_path):
 
 
 def test_fabric_of_a_scene_without_contacts_is_refused():
-    """Before: Zm = NaN, quietly."""
+    """No contact: refused by name, not a quiet Zm = NaN."""
     s = specimen.new_scene(np.array([[1e-3, 1e-3, 1e-3], [3e-3, 3e-3, 3e-3]]), np.full(2, 1e-4), np.full(3, 5e-3))
     dem.refresh(s)
     for measure in (fabric.fabric, fabric.fabric_row, fabric.prediction):
@@ -232,12 +231,12 @@ def test_help_shows_defaults_and_a_whole_description(name):
     assert "--table" in text and "--line" in text
     doc = open(os.path.join(SCRIPTS, name)).read().split('"""')[1]
     first = " ".join(doc.strip().split("\n\n")[0].split())
-    assert first in text  # before: bench/bench_statics.py's description stopped at "rotations free and"
+    assert first in text  # the whole first paragraph, not cut at its first line
     if name in ("run_states.py", "prepare_specimen.py", "run_study.py"):
         assert "(default: 0.5)" in text and "--mu" in text  # the loading friction, with its default
         assert "--threads THREADS OpenMP threads" in text
     if name in ("prepare_specimen.py", "run_study.py"):
-        assert "--seed SEED seed of the random packing (>= 0) (default: 1)" in text  # before: no help, no default
+        assert "--seed SEED seed of the random packing (>= 0) (default: 1)" in text  # help and default
 
 
 def test_every_option_must_have_help():
@@ -258,9 +257,9 @@ def test_memory_estimate_bounds_the_measured_peak():
 
 
 def test_a_clump_estimate_beyond_the_measured_sizes_says_it_is_a_lower_bound(tmp_path):
-    """The clumps' step counts were measured at 4000 clumps; the clump1 preparation at 53,004 ran
-    402,000 steps without converging where the estimate assumed 380,000 (docs/runs.md). The
-    estimate line said 7.7 h as if it were a figure."""
+    """The clumps' step counts were measured at 4000 clumps, and a clump1 preparation at 53,004 ran
+    402,000 steps without converging where the estimate assumes 380,000: beyond 4000 clumps the
+    estimate line says it is a lower bound, not a figure."""
     from trueaniso import resources
     assert resources.preparation_caveat("sphere", 53004) == ""
     assert resources.preparation_caveat("clump1", 4000) == ""
@@ -279,9 +278,9 @@ def test_a_clump_estimate_beyond_the_measured_sizes_says_it_is_a_lower_bound(tmp
 
 @pytest.mark.parametrize("name", ["prepare_specimen.py", "run_states.py", "run_study.py"])
 def test_unbuilt_module_is_one_line(tmp_path, name):
-    """A checkout whose engines are not built yet: the scripts printed a traceback around the
-    ImportError's message (an outside try found it). The Python parts alone, beside no build/
-    and without TRUEANISO_BUILD, stand for that checkout."""
+    """A checkout whose engines are not built yet: one line saying so, not a traceback around the
+    ImportError's message. The Python parts alone, beside no build/ and without TRUEANISO_BUILD,
+    stand for that checkout."""
     for part in ("pyscripts", "analysis"):
         shutil.copytree(os.path.join(REPO, part), tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
     env = {k: v for k, v in os.environ.items() if k != "TRUEANISO_BUILD"}
@@ -292,9 +291,8 @@ def test_unbuilt_module_is_one_line(tmp_path, name):
 
 def test_analysis_without_the_build(tmp_path):
     """On a machine without the build, the tools that only read tables work (figures,
-    cross_anisotropy: the package no longer loads the compiled module on import), and those that
-    need the engines (report, path_fidelity) say so in one line: all of them printed a 20-line
-    traceback (an outside try)."""
+    cross_anisotropy: the package does not load the compiled module on import), and those that
+    need the engines (report, path_fidelity) say so in one line, not in a traceback."""
     for part in ("pyscripts", "analysis"):
         shutil.copytree(os.path.join(REPO, part), tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
     env = {k: v for k, v in os.environ.items() if k != "TRUEANISO_BUILD"}
@@ -315,10 +313,10 @@ def test_analysis_without_the_build(tmp_path):
 @pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
 @pytest.mark.parametrize("name", ["prepare_specimen.py", "run_states.py", "run_study.py"])
 def test_ctrl_c_while_starting_is_one_line(tmp_path, name, sig):
-    """Ctrl-C while a script still loads numpy and the engines (0.2-1 s) printed a traceback,
-    numpy's ImportError or crashed (SIGSEGV) before: the scripts' guard was not yet running; a
-    SIGTERM there ended it with no word. A numpy whose import sends the script the signal stands
-    for the key pressed (or the kill) in that window."""
+    """Ctrl-C (or SIGTERM) while a script still loads numpy and the engines (0.2-1 s), before its
+    guard runs: one line and the signal's status, not a traceback, numpy's ImportError, a crash or
+    silence. A numpy whose import sends the script the signal stands for the key pressed (or the
+    kill) in that window."""
     fake = tmp_path / "fake" / "numpy"
     fake.mkdir(parents=True)
     (fake / "__init__.py").write_text("import os, signal, time\nos.kill(os.getpid(), signal.%s)\ntime.sleep(30)\n" % sig)
@@ -330,10 +328,10 @@ def test_ctrl_c_while_starting_is_one_line(tmp_path, name, sig):
 
 @pytest.mark.parametrize("rank", [("OMPI_COMM_WORLD_RANK", "1"), ("PMIX_RANK", "2"), ("OMPI_COMM_WORLD_RANK", "0")])
 def test_an_mpi_worker_interrupted_while_starting_is_silent(tmp_path, rank):
-    """A Ctrl-C on mpiexec in the job's first second reached the workers while they still loaded
-    run_states.py, and each printed 'interrupted while starting; nothing was done' beside the
-    master's line (an outside try, 4 times in 12). A rank other than 0 (a worker) ends silently
-    with the signal's status; rank 0 (mpi4py.futures' master) still says it."""
+    """A Ctrl-C on mpiexec in the job's first second reaches the workers while they still load
+    run_states.py: a rank other than 0 (a worker) ends silently with the signal's status, so the
+    job says 'interrupted while starting; nothing was done' once; rank 0 (mpi4py.futures' master)
+    says it."""
     fake = tmp_path / "fake" / "numpy"
     fake.mkdir(parents=True)
     (fake / "__init__.py").write_text("import os, signal, time\nos.kill(os.getpid(), signal.SIGTERM)\ntime.sleep(30)\n")
@@ -369,10 +367,10 @@ cli.guarded(main, resumable=True)
 @pytest.mark.parametrize("complete,mark,finished", [("True", "", True), ("False", "", False),
                                                    ("False", "cli.work_done()", True)])
 def test_signal_between_the_last_line_and_the_end_of_main(tmp_path, complete, mark, finished):
-    """A Ctrl-C 0-5 ms after a run's last line, still inside main, said 'interrupted; the same
-    command resumes' with status 130 for a run whose every row was written (a second outside try,
-    6 of 6). A script that can tell its work is complete (saves_work_in's complete, or work_done)
-    now ends as finished; one that is not complete still says it resumes."""
+    """A Ctrl-C 0-5 ms after a run's last line, still inside main: a script that can tell its work
+    is complete (saves_work_in's complete, or work_done) ends as finished, status 0, not 'the same
+    command resumes' with 130 for a run whose every row was written; one that is not complete says
+    it resumes."""
     script = tmp_path / "late.py"
     script.write_text(SIGNAL_IN_MAIN % (SCRIPTS, complete, mark))
     proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60, cwd=tmp_path)
@@ -403,10 +401,9 @@ cli.guarded(main, resumable=True)
 
 @pytest.mark.parametrize("sig,status", [("SIGINT", 130), ("SIGTERM", 143)])
 def test_a_signal_a_finalizer_swallowed_ends_the_run_at_its_next_chunk(tmp_path, sig, status):
-    """An outside try once saw a Ctrl-C ignored: the run finished every state and exited 0. A
-    signal's exception raised inside a finalizer (npz archives and files have them) is printed
-    by Python as 'Exception ignored' and the work goes on; the handler now remembers the signal
-    and the next chunk's progress call raises it again."""
+    """A signal's exception raised inside a finalizer (npz archives and files have them) is printed
+    by Python as 'Exception ignored' and the work would go on to the end with status 0: the
+    handler remembers the signal and the next chunk's progress call raises it again."""
     script = tmp_path / "swallowed.py"
     script.write_text(SIGNAL_IN_A_FINALIZER % (SCRIPTS, sig))
     proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60, cwd=tmp_path)
@@ -419,8 +416,8 @@ def test_a_signal_a_finalizer_swallowed_ends_the_run_at_its_next_chunk(tmp_path,
 @pytest.mark.parametrize("runner", ["python3", "yade-double"])
 def test_signal_after_the_work_is_done_keeps_status_0(tmp_path, runner, sig):
     """A run whose work was done and written, interrupted during its exit (python3's 0.03 s,
-    yade-double's 0.4 s), was killed by the signal with no word (status 130) or printed IPython's
-    traceback (found by an outside try, 5 of 5). The signal is now ignored once main() returned."""
+    yade-double's 0.4 s), keeps status 0: the signal is ignored once main() returned, not ending
+    the run with no word (status 130) or IPython's traceback."""
     if runner == "yade-double" and not shutil.which("yade-double"):
         pytest.skip("yade-double not installed")
     script = tmp_path / "finished.py"
@@ -452,17 +449,17 @@ def test_overlap_estimate_bounds_a_prepared_specimen(specimen_100):
 @pytest.mark.parametrize("text,names", [("zxy", ["z", "x", "y"]), ("zx", ["z", "x"]), ("x,y", ["x", "y"]),
                                         ("xy,", ["xy"]), ("yz,xz", ["yz", "xz"]), ("z,", ["z"])])
 def test_probe_names(text, names):
-    """Letters, or names with commas; one name alone with its comma (a shear probe by itself could
-    not be asked for: 'yz,' was refused and 'yz' ran y and z)."""
+    """Letters, or names with commas; one name alone with its comma ('yz,' is the shear probe by
+    itself, 'yz' would be y and z)."""
     sys.path.insert(0, SCRIPTS)
     import run_states
     assert run_states.probe_axes(text, "true-triaxial") == names
 
 
 def test_a_specimen_that_carries_no_stress_is_refused_before_work(tmp_path):
-    """A loose cloud (no loaded contact, as a YADE scene saved before consolidation) was stepped to
-    the servo's 5 % strain limit and reported as 'the specimen fails' at stresses (0, 0, 0) kPa
-    (an outside try); it is refused before any work, saying why."""
+    """A loose cloud (no loaded contact, as a YADE scene saved before consolidation) is refused
+    before any work, saying why, not stepped to the servo's 5 % strain limit and reported as 'the
+    specimen fails' at stresses (0, 0, 0) kPa."""
     from trueaniso import psd, specimen_file
     pos, radii, scale, cell = specimen.random_loose_packing(60, psd.PAPER_SPHERES, 1)
     scene = specimen.new_scene(pos, radii * scale, cell)

@@ -1,4 +1,4 @@
-"""./main.sh on a small study (issues 10 and 11): run twice in a row, then again with a state
+"""./main.sh on a small study: run twice in a row, then again with a state
 added, then killed and resumed; a rerun asking for another specimen refuses; the contrast zeta in
 the summary is checked against an independent route; progress lines reach the job's log.
 
@@ -47,7 +47,7 @@ def test_first_run_writes_everything_and_reports_progress(first):
         assert label in proc.stdout, label
     line = next(x for x in proc.stdout.splitlines() if x.startswith("state 5: step"))
     assert "stress error" in line and "unbalanced" in line and "|shear|" in line
-    # specimen_state.json reports the whole stress (full-cell issue): the principal values of its
+    # specimen_state.json reports the whole stress: the principal values of its
     # six components (numpy here) and the largest off-diagonal, within 0.5 kPa of 100 kPa and of 0
     st = json.loads((out / "specimen_state.json").read_text())
     s = np.array([[st["sigma_x"], st["sigma_xy"], st["sigma_xz"]], [st["sigma_xy"], st["sigma_y"], st["sigma_yz"]],
@@ -57,7 +57,7 @@ def test_first_run_writes_everything_and_reports_progress(first):
     np.testing.assert_allclose(principal, 100e3, atol=500.0)
     assert st["tau_max"] == np.abs([st["sigma_yz"], st["sigma_xz"], st["sigma_xy"]]).max() < 500.0
     # The contrast zeta of two states is weakly fixed: its line gives the standard errors, and says
-    # when the search stopped at a bound. Before, 0.000 (the bound) read as a calibration.
+    # when the search stopped at a bound, so that 0.000 (the bound) does not read as a calibration.
     contrast = json.loads((out / "summary.json").read_text())["zeta_contrast"]
     line = next(x for x in proc.stdout.splitlines() if x.startswith("zeta calibrated"))
     assert "zeta_h = %.3f +/- %.3f" % (contrast["zeta_h"], contrast["se_h"]) in line, line
@@ -75,7 +75,7 @@ def test_rerun_in_a_row_does_nothing_new(first, tmp_path):
 
 
 def test_adding_states_continues_the_study(first, tmp_path):
-    """Before: TypeError: '<' not supported between 'int' and 'str' in contrast_zeta."""
+    """States named by numbers and by text in one study: contrast_zeta orders them (no TypeError)."""
     out = tmp_path / "W"
     shutil.copytree(first[0], out)
     before = (out / "probes.csv").read_bytes()
@@ -89,7 +89,7 @@ def test_adding_states_continues_the_study(first, tmp_path):
     assert summary["states"] == 3 and summary["probes"] == 9 and (out / "figures" / "K_G_vs_Zm.png").exists()
     # state 21 is Table B1's second state: its static solve is kept beside the isotropic one, and shown
     assert (out / "statics_state-21.json").exists() and "| 21 (b = 0.5" in (out / "report" / "report.md").read_text()
-    # ... and its result line, as the isotropic state's (it had none; an outside try)
+    # ... and its result line, as the isotropic state's
     record = json.loads((out / "statics_state-21.json").read_text())
     assert "statics (state 21): E_free = %s MPa" % [round(e / 1e6, 1) for e in record["E_free"]] in proc.stdout
     assert "statics (isotropic state): E_free" in proc.stdout and "this run took" in proc.stdout
@@ -97,9 +97,9 @@ def test_adding_states_continues_the_study(first, tmp_path):
 
 
 def test_a_lost_checkpoint_of_state_21_is_reached_again(first, tmp_path):
-    """Before: with state 21's rows done, a removed states/21.npz (the advice for a damaged one)
-    left the study stuck: 'specimen file not found', each rerun the same, until --force-new.
-    Now the state is reached again along its path and its static solve gives the same numbers
+    """With state 21's rows done, a removed states/21.npz (the advice for a damaged one) does not
+    leave the study stuck ('specimen file not found' at each rerun): the state is reached again
+    along its path and its static solve gives the same numbers
     (a resume reproduces a checkpoint's arrays bit for bit; 1e-9 covers the solver's last
     digits, which depend only on those arrays)."""
     out = tmp_path / "W"
@@ -147,7 +147,7 @@ def check_contrast_against_checkpoints(out, got):
 
 
 def test_other_specimen_recipe_is_refused_before_preparing(first, tmp_path):
-    """Before: --n 300 --seed 9 into the same --out silently kept the 100-sphere specimen."""
+    """--n 300 --seed 9 into the same --out is refused, not answered with the 100-sphere specimen."""
     out = tmp_path / "W"
     shutil.copytree(first[0], out)
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"}
@@ -174,8 +174,8 @@ def test_other_specimen_recipe_is_refused_before_preparing(first, tmp_path):
 
 
 def test_a_path_rate_too_slow_is_refused_before_preparing(tmp_path):
-    """Before: run_study.py prepared the whole specimen (minutes at 4000 spheres), then refused
-    --path-rate 1e-9 and left the specimen behind (an outside try)."""
+    """run_study.py refuses --path-rate 1e-9 before it prepares the specimen (minutes at 4000
+    spheres), not after, and leaves nothing behind."""
     out = tmp_path / "W"
     proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
                            "--ids", "1,5", "--path-rate", "1e-9"], capture_output=True, text=True, timeout=300,
@@ -186,7 +186,7 @@ def test_a_path_rate_too_slow_is_refused_before_preparing(tmp_path):
 
 
 def test_kill_9_leaves_no_stale_summary_and_the_rerun_completes(first, tmp_path):
-    """Before: a kill -9 among the states left the summary of the earlier run beside new rows."""
+    """After a kill -9 among the states, no summary of the earlier run stays beside the new rows."""
     out = tmp_path / "W"
     shutil.copytree(first[0], out)
     env = dict(os.environ, OMP_NUM_THREADS="1")
@@ -205,8 +205,8 @@ def test_kill_9_leaves_no_stale_summary_and_the_rerun_completes(first, tmp_path)
 
 
 def test_killed_while_preparing_resumes_to_the_same_specimen(first, tmp_path):
-    """Before: a kill while the specimen was prepared lost all of that work (82 min for clump1 at
-    4000 clumps). Now the rerun resumes from the last checkpoint, to the same bits."""
+    """A kill while the specimen is prepared loses only the work since the last checkpoint (the whole
+    preparation is 82 min for clump1 at 4000 clumps): the rerun resumes from it, to the same bits."""
     out = tmp_path / "W"
     env = dict(os.environ, OMP_NUM_THREADS="1")
     p = subprocess.Popen(["/usr/bin/python3", os.path.join(SCRIPTS, "run_study.py"), *ARGS, "--out", str(out),
@@ -228,7 +228,7 @@ def test_killed_while_preparing_resumes_to_the_same_specimen(first, tmp_path):
 
 
 def test_two_studies_cannot_share_a_directory(tmp_path):
-    """Before: two run_study.py runs on one --out mixed the specimens of two seeds."""
+    """Two run_study.py runs on one --out: the second is refused, so no study mixes two seeds' specimens."""
     from trueaniso import lock
     out = tmp_path / "W"
     with lock.held(str(out)):
@@ -239,7 +239,7 @@ def test_two_studies_cannot_share_a_directory(tmp_path):
 
 
 def test_run_states_on_a_study_of_run_study_says_whose_it_is(first, tmp_path):
-    """Before: 'recipe.assembly is "sphere" there, absent in this run', a field the user never set."""
+    """A difference is said by the option the user set, not 'recipe.assembly is "sphere" there, absent in this run'."""
     out = tmp_path / "W"
     shutil.copytree(first[0], out)
     proc = subprocess.run(["/usr/bin/python3", os.path.join(SCRIPTS, "run_states.py"), "--specimen",

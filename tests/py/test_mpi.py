@@ -71,7 +71,7 @@ def test_more_threads_than_cores_is_said_before_work(specimen_100, tmp_path):
 
 
 def test_more_one_thread_workers_than_cores_is_said_with_advice_that_applies(specimen_100, tmp_path):
-    """Before: one-thread workers beyond the cores were told to use --threads 1, which they did."""
+    """One-thread workers beyond the cores are not told to use --threads 1, which they do."""
     from trueaniso import resources
     cmd = mpi_cmd(specimen_100, tmp_path / "study", ranks=resources.cores() + 2)
     cmd[cmd.index("--ids") + 1], cmd[cmd.index("--probes") + 1] = "1", "z"
@@ -114,10 +114,9 @@ def kill_job(p):
 
 def test_killed_mpi_job_resumes_to_the_same_values(serial, specimen_100, tmp_path):
     """The whole job (mpiexec, master and workers) killed with SIGKILL as soon as a worker has written
-    a checkpoint, as a scheduler's time limit or a lost node ends it: no handler runs. Before, the
-    test sent Ctrl-C, which mpiexec takes about 1 s to carry out (measured: exit 1.02 s after SIGINT,
-    no rank left), and the 100-sphere study ends about 1 s after its first checkpoint: CI saw it end
-    uninterrupted 4 times in a row. SIGKILL acts at once, so the run is cut at the same point each time."""
+    a checkpoint, as a scheduler's time limit or a lost node ends it: no handler runs. SIGKILL, not
+    Ctrl-C: mpiexec takes about 1 s to carry out a SIGINT, and the 100-sphere study ends about 1 s
+    after its first checkpoint, so a Ctrl-C often interrupts nothing; SIGKILL acts at once."""
     out = tmp_path / "study"
     p = subprocess.Popen(mpi_cmd(specimen_100, out, ranks=3), env=mpi_env(), stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True)
@@ -153,12 +152,12 @@ def test_ctrl_c_on_mpiexec_says_the_job_resumes(specimen_100, tmp_path):
     _, err = p.communicate(timeout=120)
     assert p.returncode != 0, "the job ended before the signal: give it more states"
     # values() holds a row per state and probe (z and x here): count the states. Comparing its rows
-    # with the 13 states failed on CI once 7 states were done before mpiexec acted.
+    # with the 13 states would fail when 7 states are done before mpiexec acts.
     done = {state for state, _ in values(out)} if (out / "probes.csv").exists() else set()
     assert len(done) < 13, "every state was done: the signal interrupted nothing"
     assert "error: interrupted; the same command resumes from the last checkpoint" in err, err[-3000:]
-    # The workers load the script without running it; they kept its start-up guard and each said
-    # 'interrupted while starting; nothing was done' beside the master's line (an outside try found it).
+    # The workers load the script without running it: its start-up guard must not make each of them
+    # say 'interrupted while starting; nothing was done' beside the master's line.
     assert "nothing was done" not in err, err[-3000:]
 
 

@@ -1,4 +1,4 @@
-"""analysis/path_fidelity.py: reversals counted on a hand-made table (issue 14)."""
+"""analysis/path_fidelity.py: reversals counted on a hand-made table."""
 import pytest
 
 from analysis import path_fidelity
@@ -78,7 +78,7 @@ def test_table_row_of_a_study_directory(tmp_path):
 
 
 def test_help_and_bad_gap_tolerances(tmp_path, capsys):
-    """Before: --help was taken for a missing probe table, and a bad --gaps list gave a traceback."""
+    """--help is help, not a missing probe table, and a bad --gaps list is one line, not a traceback."""
     assert path_fidelity.main(["--help"]) == 0
     assert "--table" in capsys.readouterr().out
     for args in (["--gaps"], ["--gaps", "x", str(tmp_path)], ["--gaps", "1e-4"], ["--gaps", "0,1e-3", str(tmp_path)],

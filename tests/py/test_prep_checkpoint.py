@@ -86,10 +86,10 @@ def test_spheres_resume_to_the_same_bits(tmp_path):
 def test_clumps_resume_to_the_same_bits_across_stages(tmp_path):
     # clump1's recipe has four stages (gas, stage 1 with rotations blocked, expansion, consolidation);
     # 60 dimers at inertial number 0.05 take ~20,000 steps. A checkpoint every 500 steps, one chunk
-    # of the gas stage and stage 1, cuts every stage many times. Before: after such a checkpoint the
-    # new controller had measured nothing (p = 0), the gas stage asked it whether it was done and
-    # never ended: 5,000,000 steps, then stage 1 skipped, and a looser specimen saved (an outside
-    # try found it); max_steps stops that here.
+    # of the gas stage and stage 1, cuts every stage many times. After such a checkpoint the new
+    # controller has measured nothing yet (p = 0): a gas stage that asked it whether it was done
+    # would never end (5,000,000 steps, then stage 1 skipped and a looser specimen saved);
+    # max_steps stops that here.
     def prepare(ck, hook):
         return clump_specimen.prepare_clumps("clump1", 60, seed=4, inertial_number=5e-2, shape="dimer-1.5",
                                              checkpoints=ck, progress=hook, max_steps=200_000)
@@ -105,8 +105,8 @@ def test_a_checkpoint_of_other_settings_is_refused(tmp_path, monkeypatch):
         specimen.prepare_spheres(100, seed=7, progress=_stop_after_checkpoints(path, 1),
                                  checkpoints=prep_checkpoint.Checkpoints(path, dict(seed=7, n=100), 20_000))
     other = prep_checkpoint.Checkpoints(path, dict(seed=8, n=100), 20_000)
-    # One full read per version of the file, however often it is asked (before: one per question,
-    # 20 MB each at 53,004 spheres); a file written since is read again (below: "unusable").
+    # One full read per version of the file, however often it is asked (not one per question: 20 MB
+    # each at 53,004 spheres); a file written since is read again (below: "unusable").
     reads = []
     read = specimen_file.read
     monkeypatch.setattr(specimen_file, "read", lambda p: reads.append(p) or read(p))
@@ -122,8 +122,8 @@ def test_a_checkpoint_of_other_settings_is_refused(tmp_path, monkeypatch):
 
 
 def test_a_second_preparation_of_the_same_file_is_refused_naming_the_file(tmp_path):
-    """Before: the refusal named the directory ("specimen output /tmp/x is in use"), which holds
-    other specimens that can be prepared at the same time."""
+    """The refusal names the file, not its directory, which holds other specimens that can be
+    prepared at the same time."""
     from trueaniso import lock
     out = tmp_path / "s.npz"
     with lock.held(str(tmp_path), name=".s.npz.lock"):
@@ -164,7 +164,7 @@ def test_script_killed_then_rerun_writes_the_uninterrupted_specimen(tmp_path):
     assert again.returncode == 0, again.stderr
     assert "its unfinished preparation ran at 1 engine thread, so this run does too" in again.stdout
     assert "resuming the preparation from" in again.stdout
-    # the time said is this run's and the preparation's (it said only its own; an outside try)
+    # the time said is this run's and the whole preparation's
     assert "s (this run; " in again.stdout and "s in all, with the runs before its last checkpoint)" in again.stdout
     assert not os.path.exists(ck)
     a, _ = specimen_file.load(str(tmp_path / "whole.npz"))
@@ -181,7 +181,7 @@ def test_script_refuses_other_options_on_a_checkpoint_and_force_starts_over(tmp_
                                  checkpoints=prep_checkpoint.Checkpoints(ck, dict(seed=9), 20_000))
     proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--out", out)
     one_line_error(proc, "other settings", "--force")
-    assert "preparing" not in proc.stdout  # refused before the estimate line (an outside try read it as a start)
+    assert "preparing" not in proc.stdout  # refused before the estimate line, which reads as a start
     assert os.path.exists(ck) and not out.exists()  # nothing lost by the refusal
     forced = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 0,
                         "--force", "--out", out)
@@ -191,8 +191,8 @@ def test_script_refuses_other_options_on_a_checkpoint_and_force_starts_over(tmp_
 
 
 def test_an_existing_specimen_of_other_settings_is_refused_and_a_checkpoint_beside_it_kept(tmp_path, specimen_100):
-    """Before: an existing --out was kept whatever the options asked (seed 5 kept for --seed 1),
-    and a checkpoint of an interrupted --force remake beside it was deleted without a word."""
+    """An existing --out made with other options is refused, not kept (seed 5 for --seed 1), and a
+    checkpoint of an interrupted --force remake beside it is kept, not deleted without a word."""
     import shutil
     out = tmp_path / "s.npz"
     shutil.copy(specimen_100, out)  # 100 spheres, seed 3
@@ -227,15 +227,15 @@ def test_force_resumes_a_checkpoint_of_its_own_settings_and_adopts_its_interval(
     assert again.returncode == 0, again.stderr
     assert "resuming the preparation from" in again.stdout and not os.path.exists(ck)
     assert specimen_file.read(str(out))[1]["parameters"]["checkpoint_every"] == 20000
-    # and says so, as it says the thread count it took (it was silent; an outside try)
+    # and says so, as it says the thread count it took
     assert ("--checkpoint-every not given: its unfinished preparation wrote checkpoints every 20000 steps, so this "
             "run does too") in again.stdout
     assert "where a chunk of" not in again.stdout  # 20000 is a multiple of the chunks: nothing to explain
 
 
 def test_an_interval_between_chunks_is_said_as_the_one_that_runs(tmp_path):
-    """A checkpoint falls where a chunk of steps ends: --checkpoint-every 3000 wrote one every 4000
-    steps of an expansion without a word (an outside try asked for 100 and got 500 or 2000)."""
+    """A checkpoint falls where a chunk of steps ends: --checkpoint-every 3000 writes one every 4000
+    steps of an expansion, and the run says so (asked for 100, a user gets 500 or 2000)."""
     proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 3000,
                       "--progress-every", 0, "--out", tmp_path / "s.npz")
     assert proc.returncode == 0, proc.stderr
@@ -252,7 +252,7 @@ def test_an_interval_between_chunks_is_said_as_the_one_that_runs(tmp_path):
     assert prep_checkpoint.rounding_said(0, clumps=True) is None and prep_checkpoint.rounding_said(4000, False) is None
     quiet = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--checkpoint-every", 3000,
                        "--quiet", "--force", "--out", tmp_path / "s.npz")
-    assert quiet.returncode == 0 and "chunk" not in quiet.stdout, quiet.stderr  # --quiet is quiet (an outside try)
+    assert quiet.returncode == 0 and "chunk" not in quiet.stdout, quiet.stderr  # --quiet is quiet
 
 
 def test_the_leftover_checkpoint_of_the_kept_specimen_is_removed_quietly(tmp_path):
@@ -280,9 +280,9 @@ def test_the_leftover_checkpoint_of_the_kept_specimen_is_removed_quietly(tmp_pat
 
 
 def test_beside_a_kept_specimen_a_remake_checkpoint_and_a_broken_one_are_kept(tmp_path, specimen_100):
-    """The checkpoint of an interrupted --force remake with other threads and interval was taken for
-    the leftover of the specimen's own run and removed; a damaged one ended the run with an error
-    whose advice, --force, replaced the good specimen (both an outside try)."""
+    """The checkpoint of an interrupted --force remake with other threads and interval is not the
+    leftover of the specimen's own run: kept. A damaged one is named and the run ends well, not in
+    an error whose advice, --force, would replace the good specimen."""
     import shutil
     out = tmp_path / "s.npz"
     shutil.copy(specimen_100, out)  # 100 spheres, seed 3, 1 thread, made without checkpoints
@@ -306,8 +306,8 @@ def test_beside_a_kept_specimen_a_remake_checkpoint_and_a_broken_one_are_kept(tm
 
 
 def test_the_time_estimate_is_for_the_threads_that_run(tmp_path):
-    """Without --threads the engines run OMP_NUM_THREADS threads; the estimate divided by all the
-    cores (an outside try: 16 s said for 31 s under OMP_NUM_THREADS=1 on 2 cores)."""
+    """Without --threads the engines run OMP_NUM_THREADS threads, and the estimate is for that
+    count, not for all the cores (16 s would be said for 31 s under OMP_NUM_THREADS=1 on 2 cores)."""
     from trueaniso import resources
     proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--checkpoint-every", 0, "--out",
                       tmp_path / "s.npz", env=dict(OMP_NUM_THREADS="1"))
@@ -329,9 +329,9 @@ def _settings_of(n, seed):
 
 
 def test_force_takes_nothing_from_a_checkpoint_it_removes_nor_is_refused_by_a_broken_one(tmp_path):
-    """--force --seed 2 took the threads and interval of a seed-1 checkpoint it then removed, so
-    one command made different specimens by what lay beside it; a damaged checkpoint was refused
-    with "or use --force", and --force refused it too (both found by an outside try)."""
+    """--force --seed 2 takes nothing (threads, interval) from a seed-1 checkpoint it removes, so one
+    command makes one specimen whatever lies beside it; a damaged checkpoint's refusal offers
+    --force, and --force then goes through."""
     out = tmp_path / "s.npz"
     ck = prep_checkpoint.path_for(str(out))
     with pytest.raises(Interrupt):
@@ -369,8 +369,8 @@ def _running(out, every, *extra):
 
 
 def test_sigterm_promises_a_resume_only_when_a_checkpoint_was_written(tmp_path):
-    """Before: 'the same command resumes from the last checkpoint' also when none was written (the
-    rerun then started over, found by an outside try)."""
+    """'the same command resumes from the last checkpoint' only when one was written (else the rerun
+    starts over)."""
     out = tmp_path / "none.npz"
     proc = _running(out, 0)  # --checkpoint-every 0: no checkpoint, ever
     proc.send_signal(signal.SIGTERM)
@@ -391,9 +391,9 @@ def test_sigterm_promises_a_resume_only_when_a_checkpoint_was_written(tmp_path):
 
 
 def test_closed_output_is_one_line_not_a_traceback(tmp_path):
-    """`prepare_specimen.py ... | head -2`: before, the first progress line after head had gone
-    ended the run in a BrokenPipeError traceback. Now one line on stderr says what was kept, and
-    the status is SIGPIPE's (141)."""
+    """`prepare_specimen.py ... | head -2`: the first progress line after head has gone ends the run
+    with one line on stderr saying what was kept, and SIGPIPE's status (141), not a BrokenPipeError
+    traceback."""
     proc = _running(tmp_path / "s.npz", 0)
     proc.stdout.close()  # the reader goes away
     err = proc.stderr.read()
@@ -403,9 +403,9 @@ def test_closed_output_is_one_line_not_a_traceback(tmp_path):
 
 
 def test_a_checkpoint_of_another_build_level_says_which_build_continues_it(tmp_path, monkeypatch):
-    """An outside try: a checkpoint written by a v3 build, resumed by the baseline build, was refused
-    with two code hashes only, and offered --force (throwing away up to 82 minutes of clump
-    preparation). The recipe now names the level, and the refusal says which build goes on."""
+    """A checkpoint written by a v3 build, resumed by the baseline build: the recipe names the level,
+    and the refusal says which build goes on, not two code hashes and --force (which would throw
+    away up to 82 minutes of clump preparation)."""
     path = str(tmp_path / "ck")
     with pytest.raises(Interrupt):
         specimen.prepare_spheres(100, seed=7, progress=_stop_after_checkpoints(path, 1),
@@ -425,10 +425,9 @@ def test_a_checkpoint_of_another_build_level_says_which_build_continues_it(tmp_p
 
 
 def test_a_kept_clump_specimen_reports_the_summary_it_was_saved_with(tmp_path):
-    """Rerun on a finished clump preparation, prepare_specimen.py printed a summary recomputed from
-    the reloaded scene: its unbalanced force (a residual) came out 4.59e-7 where the save had said
-    and stored 4.20e-7 (100 clump1 clumps; 5.59e-7 against 5.17e-7 at 200 in an outside try). Both
-    runs now print the file's own summary."""
+    """Rerun on a finished clump preparation, prepare_specimen.py prints the file's own summary, as
+    the first run did: one recomputed from the reloaded scene gives another unbalanced force (a
+    residual: 4.59e-7 where the save said and stored 4.20e-7, 100 clump1 clumps)."""
     import json
     from conftest import run_script
     out = tmp_path / "c.npz"

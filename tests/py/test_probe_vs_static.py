@@ -1,5 +1,5 @@
-"""The dynamic stress probe converges to the exact static stiffness (issue 5), and the affine part
-of the static solve equals the micromechanical stiffness of Eq. 35 with zeta = 1 (issue 4 x 5)."""
+"""The dynamic stress probe converges to the exact static stiffness, and the affine part of the
+static solve equals the micromechanical stiffness of Eq. 35 with zeta = 1."""
 import os
 
 import numpy as np
@@ -37,14 +37,14 @@ def test_dynamic_probe_converges_to_static(held, rotations):
         up = triaxial.probe(scene, hold, axis, **tight)
         down = triaxial.probe(scene, hold, axis, sign=-1, **tight)
         mean = 0.5 * (up["E"] + down["E"])
-        # The issue asks 0.5 % at the tightest setting; the +/- mean removes the secant error of
+        # 0.5 % is required at the tightest setting; the +/- mean removes the secant error of
         # the finite increment, what is left is equilibrium error (~1e-5, docs/speed-vs-error.md).
         assert up["E"] == pytest.approx(st["E"][axis], rel=5e-3)
         assert mean == pytest.approx(st["E"][axis], rel=2e-4)
         for j in range(3):
             if j != axis:
                 name = "nu_%s%s" % ("xyz"[axis], "xyz"[j])
-                # Poisson's ratios of ~0.12: the issue's 0.5 % of that is 6e-4 absolute; the
+                # Poisson's ratios of ~0.12: 0.5 % of that is 6e-4 absolute; the
                 # +/- mean measured within 3e-4 of the static value
                 assert 0.5 * (up[name] + down[name]) == pytest.approx(st["nu"][axis, j], abs=6e-4)
 
@@ -52,7 +52,7 @@ def test_dynamic_probe_converges_to_static(held, rotations):
 @pytest.mark.parametrize("rotations", [True, False])
 def test_shear_probes_converge_to_static_shear_moduli(held, rotations):
     """Dynamic shear probes on gamma_yz, gamma_xz, gamma_xy against the static solve on a random
-    packing, within 2e-4 with the +/- mean (the full-cell issue's tolerance; one probe alone within
+    packing, within 2e-4 with the +/- mean (as for the normal moduli; one probe alone within
     5e-3, its second-order part). Two probes, two static answers:
      - the five other strains held at zero (hold_other_strains): d tau / d gamma is C_44, C_55, C_66;
      - the five other stresses held (the paper's probe): 1/S_44, 1/S_55, 1/S_66 of S = C^-1.

@@ -138,7 +138,7 @@ def test_report_from_a_small_fixed_table(small_table, tmp_path):
     assert n["table2"]["K"] == pytest.approx(fits["K"])
     assert "| K ours | %.1f | %.1f | %.1f | %.4f |" % fits["K"] in text
     assert "| zeta = 0.552 (paper) |" in text and "| paper (spheres, 0.552) | | | 0.003 |" in text
-    # Zm of these states spans the contact loss; zeta follows it (issue 14's finding)
+    # Zm of these states spans the contact loss; zeta follows it
     assert 5.59 < n["Zm"][0] < 5.7 and 5.94 < n["Zm"][1] < 5.96
     assert 0.3 < n["m"] < 0.5
     for fig in ("fig3-E-vs-sigma.png", "fig11-K-G-vs-Zm.png", "fig13-a2.png", "fig14-E.png", "fig15-nu.png", "fig4a.png", "zeta-vs-Zm.png"):
@@ -236,7 +236,7 @@ def test_table_b1_at_the_isotropic_state_and_state_21(specimen_100, tmp_path):
     given = subprocess.run([sys.executable, "-m", "analysis.report", str(out / "probes.csv"), "--out",
                             str(tmp_path / "rep2")], cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
     assert given.returncode == 0, given.stderr
-    assert "Study: 100 spheres (seed 3)" in (tmp_path / "rep2" / "report.md").read_text()  # before: no study line
+    assert "Study: 100 spheres (seed 3)" in (tmp_path / "rep2" / "report.md").read_text()  # the study line, from the table alone
 
 
 def test_fig16_section_from_the_committed_cross_anisotropic_data(small_table, tmp_path):
@@ -296,7 +296,7 @@ def test_figures_5_to_12_plot_the_table_s_own_numbers(small_table, tmp_path):
 
 def test_bad_optional_inputs_are_refused_before_anything_is_written(small_table, tmp_path):
     """--fig16 and --clumps given the wrong file, a missing one or a study without shear probes:
-    one line of error, and no output directory (before: a KeyError traceback after the figures)."""
+    one line of error before the figures, and no output directory."""
     from conftest import one_line_error
     fig16 = os.path.join(REPO, "docs", "data", "fig16-spheres-1000.json")
     clumps = os.path.join(REPO, "docs", "data", "anisotropy-clumps-4000.json")
@@ -315,10 +315,10 @@ def test_bad_optional_inputs_are_refused_before_anything_is_written(small_table,
 
 
 def test_no_quadratic_through_two_distinct_zm(small_table, tmp_path):
-    """States of one contact network share Zm exactly. Before, three states with two distinct Zm got
-    a Table 2 (numpy's RankWarning, an R^2 of 0.87 for what is any parabola through two points;
-    found by an outside try on a short cross-anisotropic path). Now the report and the figures say
-    there is no fit."""
+    """States of one contact network share Zm exactly: three states with two distinct Zm get no
+    Table 2 (a fit would warn RankWarning and give an R^2 of 0.87 for what is any parabola through
+    two points, as a short cross-anisotropic path can give); the report and the figures say there
+    is no fit."""
     with open(small_table) as f:
         rows = list(csv.reader(f))
     s, z = rows[0].index("state"), rows[0].index("Zm")
@@ -343,8 +343,8 @@ def test_no_quadratic_through_two_distinct_zm(small_table, tmp_path):
 
 
 def test_states_without_rows_are_named(small_table, tmp_path):
-    """Before: a study whose run stopped at states it could not reach got a report that counted the
-    states it had and said nothing of the others (found by an outside try)."""
+    """A study whose run stopped at states it could not reach gets a report that names the states
+    without rows, not only a count of those it has."""
     study = tmp_path / "study"
     study.mkdir()
     shutil.copy(small_table, study / "probes.csv")
@@ -359,8 +359,8 @@ def test_states_without_rows_are_named(small_table, tmp_path):
 
 
 def test_a_study_is_compared_with_its_own_assembly(tmp_path):
-    """Before: every report compared with the paper's spheres unless told, also run_study.py's on a
-    clump study (the sphere fit read 36,627 MPa at clump1's Zm 10.3; found by an outside try)."""
+    """A report compares a study with the paper's values for its own assembly, not the spheres'
+    unless told (the sphere fit would read 36,627 MPa at clump1's Zm 10.3)."""
     study = os.path.join(REPO, "docs", "data", "clump1-4000-s1")
     assert report.study_assembly(study) == "clump1"
     path, _ = report.build(study, str(tmp_path / "rep"), log=lambda m: None)
@@ -370,8 +370,7 @@ def test_a_study_is_compared_with_its_own_assembly(tmp_path):
 
 
 def test_the_study_line_names_the_path_rate(small_table, tmp_path):
-    """A study made with --path-rate gets a report that says so (before: nothing told it from the
-    default's; an outside try)."""
+    """A study made with --path-rate gets a report that says so, telling it from the default's."""
     study = tmp_path / "study"
     study.mkdir()
     shutil.copy(small_table, study / "probes.csv")
@@ -383,8 +382,8 @@ def test_the_study_line_names_the_path_rate(small_table, tmp_path):
 
 
 def test_the_study_line_names_the_probe_settings(small_table, tmp_path):
-    """A study probed with --skip-detection or rotations restrained read like any other in its
-    report (a second outside try); the probes' strain, rotations and detection are said."""
+    """A study probed with --skip-detection or rotations restrained does not read like any other in
+    its report: the probes' strain, rotations and detection are said."""
     study = tmp_path / "study"
     study.mkdir()
     shutil.copy(small_table, study / "probes.csv")
@@ -400,8 +399,8 @@ def test_the_study_line_names_the_probe_settings(small_table, tmp_path):
 
 def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path):
     """clump2 (docs/data/clump2-4000-s1): the contrast fit stops at zeta_v = 0 and every state's own
-    fit at 0. Before, the report printed 'zeta_h = 0.051, zeta_v = 0.000 (fitted)' like a result and
-    a Spearman correlation of -0.36 over per-state values of 1e-20 (an outside try)."""
+    fit at 0: the report says zeta is undetermined, not 'zeta_h = 0.051, zeta_v = 0.000 (fitted)'
+    like a result, nor a Spearman correlation over per-state values of 1e-20."""
     from analysis import report
     path, _ = report.build(os.path.join(REPO, "docs", "data", "clump2-4000-s1"), str(tmp_path / "r"), "clump2",
                            log=lambda m: None)
@@ -436,7 +435,7 @@ def test_three_states_say_their_r2_is_one_by_construction(small_table, tmp_path)
 
 
 def test_counts_of_states_are_said_in_good_english():
-    """'0.010 (1 states)' in the sphere report's zeta rows (an outside try)."""
+    """'1 state', not '1 states', in the sphere report's zeta rows."""
     assert [report._states(n) for n in (0, 1, 2)] == ["0 states", "1 state", "2 states"]
 
 
@@ -469,12 +468,12 @@ def _set_E(value):
 
 @pytest.mark.parametrize("edit,words", [
     (lambda rows: rows.extend(rows[1:3]), ["state 1 probe z", "lines 2 and 8", "one row a probe"]),
-    # the same state written '1.0' (by hand, or a spreadsheet) passed as another (a second outside try)
+    # the same state written '1.0' (by hand, or a spreadsheet) is the same state, not another
     (_restate(1, "1.0"), ["state 1.0 probe z", "lines 2 and 8", "one row a probe"]),
     (_set_E("nan"), ["E = 'nan', not a positive number (line 3)"]),
     (_set_E("-1e8"), ["E = '-1e8', not a positive number"]),
     (_set_E("inf"), ["not a positive number"]),
-    (_set_E(""), ["E = '', not a number (line 3)"]),  # before: no line named (a second outside try)
+    (_set_E(""), ["E = '', not a number (line 3)"]),  # the line named
     (lambda rows: rows[2].__setitem__(rows[0].index("nu_1"), "nan"), ["nu_1 = 'nan', not a finite number (line 3)"]),
 ])
 def test_every_analysis_refuses_a_bad_row_the_same_way(tmp_path, edit, words):
@@ -506,8 +505,8 @@ def test_a_study_directory_is_taken_for_its_probe_table(tmp_path):
 
 def test_study_line_of_a_specimen_saved_without_summary(specimen_100, tmp_path):
     """A specimen saved from a YADE scene (specimen_file.save with no summary) gave the report's
-    header '? spheres (seed None), e = nan and Zm = nan' although state 1's row held them (an
-    outside try); they are taken from that row, and said so."""
+    header: e and Zm are taken from state 1's row, and said so, not '? spheres (seed None),
+    e = nan and Zm = nan'."""
     from conftest import run_script
     from trueaniso import specimen_file
     scene, _ = specimen_file.load(str(specimen_100))
@@ -522,8 +521,8 @@ def test_study_line_of_a_specimen_saved_without_summary(specimen_100, tmp_path):
 
 
 def test_an_os_error_is_said_by_its_file_and_reason(tmp_path):
-    """'[Errno 30] Read-only file system: ...' was the tools' line for an output they could not
-    write (an outside try); the file and the reason now, also through the figures tool."""
+    """An output the tools cannot write is said by its file and the reason, not '[Errno 30]
+    Read-only file system: ...', also through the figures tool."""
     from analysis.results import said
     assert said(OSError(30, "Read-only file system", "/x/report")) == "/x/report: Read-only file system"
     assert said(ResultsError("no rows")) == "no rows"
@@ -565,7 +564,7 @@ def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
     assert proc.returncode == 2 and "mixes rotations" in proc.stderr and "--rotations" in proc.stderr
     proc = tool(str(bare), *material, "--rotations", "free")
     assert proc.returncode == 0 and "zeta_h = 0.116 +/- 0.015, zeta_v = 0.111 +/- 0.015" in proc.stdout, proc.stderr
-    # a torn last row (a run killed mid-write) is left out of the fit, and the command says so (it was silent)
+    # a torn last row (a run killed mid-write) is left out of the fit, and the command says so
     torn = tmp_path / "torn.csv"
     text = open(os.path.join(REPO, "docs", "data", "spheres-4000-s1", "probes.csv")).read()
     torn.write_text(text + text.splitlines()[1][:40])
@@ -575,8 +574,8 @@ def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
 
 
 def test_report_says_in_itself_that_a_torn_row_was_left_out(tmp_path):
-    """A torn last row (a run killed mid-write) is left out; the note went to the terminal only, and
-    report.md counted one complete state fewer without saying why (an outside try)."""
+    """A torn last row (a run killed mid-write) is left out, and report.md itself says so, not the
+    terminal only (it would count one complete state fewer without saying why)."""
     study = tmp_path / "study"
     study.mkdir()
     src = os.path.join(REPO, "docs", "data", "spheres-4000-s1")
@@ -592,8 +591,8 @@ def test_report_says_in_itself_that_a_torn_row_was_left_out(tmp_path):
 
 
 def test_a_refused_material_leaves_no_output_directory(tmp_path):
-    """--shear-modulus -1 was refused after report/ had been made, which stayed behind empty (an
-    outside try); the material is checked first."""
+    """--shear-modulus -1 is refused before report/ is made: the material is checked first, so no
+    empty directory stays behind."""
     for args, words in ((["--shear-modulus", "-1"], "--shear-modulus must be > 0"),
                         (["--poisson", "0.7"], "--poisson must lie in")):
         out = tmp_path / "out"

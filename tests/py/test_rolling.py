@@ -1,4 +1,4 @@
-"""Rolling resistance through the Python module and the study scripts (issue 14, docs/rolling.md):
+"""Rolling resistance through the Python module and the study scripts (docs/rolling.md):
 the scene's parameters and their refusals, the specimen file's rolling moments, the static
 solve's refusal, and run_states.py with --rolling-stiffness/--rolling-friction (the moments reach
 the checkpoints, the settings enter the study's fingerprint, half-given settings are refused)."""

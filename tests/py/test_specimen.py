@@ -88,8 +88,10 @@ def test_same_seed_one_thread_is_bit_identical(tmp_path):
     assert _prepare_in_subprocess(tmp_path, "a.npz") == _prepare_in_subprocess(tmp_path, "b.npz")
 
 
+@pytest.mark.long
 def test_paper_void_ratio_and_coordination_at_4000():
-    """The paper's sphere specimen: e = 0.584 and Zm in 5.94-5.99; the issue asks 2 % at N >= 4000."""
+    """The paper's sphere specimen: e = 0.584 and Zm in 5.94-5.99, within 2 % at N >= 4000. Long
+    (minutes on one core): the full-size preparation is what is checked, no smaller one stands in."""
     scene, _ = specimen.prepare_spheres(4000, seed=1)
     st = specimen.state(scene)
     assert st["void_ratio"] == pytest.approx(0.584, rel=0.02)

@@ -1,6 +1,6 @@
-"""Specimen files (issue 10): the checksum covers the whole content, metadata included; every
-field is validated on load with one clear line; a specimen never stays without its .json
-summary; rotation blocking cannot mislabel rows. Each case names what the code before accepted."""
+"""Specimen files: the checksum covers the whole content, metadata included; every field is
+validated on load with one clear line; a specimen never stays without its .json summary; rotation
+blocking cannot mislabel rows. A comment on a case says what the edit would do if accepted."""
 import json
 import os
 import shutil
@@ -21,8 +21,8 @@ def nan_at_first(name):
 
 
 @pytest.mark.parametrize("edit_meta", [
-    lambda m: m["material"].update(shear_modulus=28e9),  # before: accepted, and E moved by 15 %
-    lambda m: m.update(block_rotations=True),  # before: rows labelled rotations=free with the blocked answer
+    lambda m: m["material"].update(shear_modulus=28e9),  # accepted, E would move by 15 %
+    lambda m: m.update(block_rotations=True),  # rows labelled rotations=free, the blocked answer
     lambda m: m.update(dt=m["dt"] * 2),
     lambda m: m["parameters"].update(n=5000),
 ], ids=["shear_modulus", "block_rotations", "dt", "parameters"])
@@ -53,16 +53,16 @@ def _huge_shift(a):
 
 
 @pytest.mark.parametrize("edit_meta,edit_arrays,message", [
-    (_pop_material, None, "metadata lacks material"),  # before: KeyError traceback
+    (_pop_material, None, "metadata lacks material"),  # not a KeyError traceback
     (lambda m: m["material"].update(poisson=float("nan")), None, "material.poisson"),
-    (lambda m: m.update(dt=float("nan")), None, "dt must be a finite number"),  # before: 'cell sizes must be > 0'
+    (lambda m: m.update(dt=float("nan")), None, "dt must be a finite number"),  # the field at fault named
     (lambda m: m.update(block_rotations="yes"), None, "block_rotations must be true or false"),
-    (None, nan_at_first("velocity_gradient"), "non-finite values in velocity_gradient"),  # before: failed mid-run
+    (None, nan_at_first("velocity_gradient"), "non-finite values in velocity_gradient"),  # not mid-run
     (None, lambda a: a.update(cell=a["cell"] @ np.diag([1.0, 1.0, -1.0])), "singular or inverted cell"),
-    (None, nan_at_first("c_normal"), "non-finite values in c_normal"),  # before: failed mid-run
-    (None, _duplicate_body, "duplicate bodies"),  # before: failed mid-run, misleading message
-    (None, _self_contact, "with itself"),  # before: silently replaced
-    (None, _huge_shift, "do not touch"),  # before: silently replaced
+    (None, nan_at_first("c_normal"), "non-finite values in c_normal"),  # not mid-run
+    (None, _duplicate_body, "duplicate bodies"),  # not mid-run with another reason
+    (None, _self_contact, "with itself"),  # not silently replaced
+    (None, _huge_shift, "do not touch"),  # not silently replaced
 ])
 def test_sealed_but_invalid_fields_are_refused(specimen_100, tmp_path, edit_meta, edit_arrays, message):
     """Fields that pass the checksum (resealed by whoever edited them) are validated one by one."""
@@ -88,8 +88,8 @@ def test_version_1_files_are_refused_with_the_way_out(specimen_100, tmp_path):
 
 
 def test_missing_summary_and_stray_temporaries_are_repaired(specimen_100, tmp_path):
-    """Before: a kill between the .npz and .json renames left the specimen without its .json
-    forever, and the .tmp-* files of the killed run stayed."""
+    """A kill between the .npz and .json renames leaves the specimen without its .json and the
+    .tmp-* files of the killed run behind: the next run writes the summary and removes them."""
     spec = tmp_path / "s.npz"
     shutil.copy(specimen_100, spec)
     strays = [tmp_path / ".tmp-k2j4-s.npz", tmp_path / ".tmp-x9a1-s.json"]

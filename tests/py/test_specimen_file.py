@@ -83,8 +83,9 @@ def test_missing_file_is_refused(tmp_path):
 
 
 def test_what_is_not_a_specimen_file_is_named(tmp_path):
-    """Before: a directory was 'not found', and an empty or text file 'Cannot load file containing
-    pickled data when allow_pickle=False' (numpy reads what is no zip as a pickle; an outside try)."""
+    """A directory, an empty file or a text file is named as what it is, not 'not found' or numpy's
+    'Cannot load file containing pickled data when allow_pickle=False' (numpy reads what is no zip
+    as a pickle)."""
     (tmp_path / "empty.npz").write_bytes(b"")
     (tmp_path / "text.npz").write_text("positions 1 2 3\n")
     for name, message in (("", "is a directory, not a specimen file"), ("empty.npz", "(.npz, a zip archive): it is empty"),

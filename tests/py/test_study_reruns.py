@@ -1,9 +1,9 @@
-"""A results directory is one study (issue 10): reruns prove they continue it or refuse in one
+"""A results directory is one study: reruns prove they continue it or refuse in one
 line; a resumed run gives exactly the rows of an uninterrupted one; a torn row is redone; two runs
 on one directory lose no row (a lock: refusal, or an orderly wait).
 
 Every study here runs on the 100-sphere specimen with few states and probes; each test says
-which behaviour of the code before this issue it catches."""
+which wrong behaviour it catches."""
 import csv
 import json
 import os
@@ -52,8 +52,9 @@ def copy(base, tmp_path):
 
 
 def test_resume_from_checkpoints_is_bit_identical(base, specimen_100, tmp_path):
-    """Before: probes after a resume came from a reloaded checkpoint while the uninterrupted run
-    probed the scene in memory; rows differed by up to 1.9e-4 and recorded state_steps = 0."""
+    """Rows after a resume equal those of the uninterrupted run cell for cell: probes from a
+    reloaded checkpoint against probes of the scene in memory would differ by up to 1.9e-4, and
+    state_steps must not read 0."""
     out = copy(base, tmp_path)
     text = (out / "probes.csv").read_text().splitlines(True)
     (out / "probes.csv").write_text("".join(text[:4]))  # header, state 1 z and x, state 2 z
@@ -71,10 +72,9 @@ def test_resume_from_checkpoints_is_bit_identical(base, specimen_100, tmp_path):
 
 def test_states_added_later_start_from_the_study_s_checkpoints(base, specimen_100, tmp_path):
     """A state added by a later run is reached from the nearest state before it on its path that
-    the study holds, so a study grown in path order has the rows of one run. Before, the paths
-    held only the states asked: --ids 1,2,3 then --ids 5 reached 5 from the specimen, not from 3,
-    unlike --ids 1,2,3,5 (an outside try: 234 cells differed, E_z by 3e-6). Serially and on an
-    executor's worker processes, as under --mpi."""
+    the study holds, so a study grown in path order has the rows of one run: --ids 1,2,3 then
+    --ids 5 reaches 5 from 3, as --ids 1,2,3,5 does (from the specimen, 234 cells would differ,
+    E_z by 3e-6). Serially and on an executor's worker processes, as under --mpi."""
     import concurrent.futures
     from trueaniso import study
     whole = tmp_path / "whole"
@@ -97,7 +97,7 @@ def test_states_added_later_start_from_the_study_s_checkpoints(base, specimen_10
         study.engines.set_threads(threads)
     assert values(pooled) == values(whole)
     # an earlier state's checkpoint removed (as a refusal of a damaged one advises): reached again
-    # on the way, so state 5 still starts from 3 (it started from 2 in a third outside try)
+    # on the way, so state 5 still starts from 3, not from 2
     gone = copy(base, tmp_path / "gone")
     (gone / "states" / "3.npz").unlink()
     proc = states(specimen_100, gone, "--ids", "5", "--probes", "zx")
@@ -125,8 +125,8 @@ def test_a_checkpoint_reached_again_starts_where_its_rows_came_from(specimen_100
 
 def test_a_checkpoint_of_another_study_is_refused(base, specimen_100, tmp_path):
     """A checkpoint records its study's key (the fingerprint without the probe options): one
-    copied from a study at --mu 0.3 into this one was taken up and state 5 reached from it
-    without a word (a third outside try); it is refused on load, naming the file."""
+    copied from a study at --mu 0.3 into this one is refused on load, naming the file, not taken
+    up without a word to reach state 5 from it."""
     other = tmp_path / "mu"
     assert states(specimen_100, other, "--ids", "2,3", "--probes", "z", "--mu", "0.3").returncode == 0
     out = copy(base, tmp_path)
@@ -162,8 +162,8 @@ def test_kill_9_then_rerun_gives_the_uninterrupted_rows(base, specimen_100, tmp_
 
 
 def test_sigterm_says_the_study_resumes_and_it_does(specimen_100, tmp_path):
-    """SIGTERM (kill's default, a scheduler's time limit) ended a study with no word before: Python's
-    default action. Now one line says the same command resumes, exit 143 (128 + 15), and it does."""
+    """SIGTERM (kill's default, a scheduler's time limit), whose default action ends Python with no
+    word: one line says the same command resumes, exit 143 (128 + 15), and it does."""
     out = tmp_path / "study"
     ids = ("--ids", "1,2,3,4,5,6,7,8", "--probes", "z")
     p = running_until_first_row(specimen_100, out, *ids)
@@ -178,7 +178,7 @@ def test_sigterm_says_the_study_resumes_and_it_does(specimen_100, tmp_path):
 
 
 def test_torn_row_is_redone_not_counted(base, specimen_100, tmp_path):
-    """Before: a row cut mid-line (kill -9 during a write, a full disk) counted as done forever."""
+    """A row cut mid-line (kill -9 during a write, a full disk) is redone, not counted as done."""
     out = copy(base, tmp_path)
     text = (out / "probes.csv").read_text()
     lines = text.splitlines(True)
@@ -191,7 +191,7 @@ def test_torn_row_is_redone_not_counted(base, specimen_100, tmp_path):
 
 
 def test_stray_temporaries_of_dead_runs_are_removed(base, specimen_100, tmp_path):
-    """Before: .tmp-* files of killed runs stayed forever."""
+    """.tmp-* files of killed runs are removed by the next run."""
     out = copy(base, tmp_path)
     for p in (out / ".tmp-abc-probes.csv", out / "states" / ".tmp-def-2.npz"):
         p.write_text("half")
@@ -206,8 +206,8 @@ def test_rerun_of_a_finished_study_does_nothing(base, specimen_100, tmp_path):
     proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
     assert proc.returncode == 0, proc.stderr
     assert "probe" not in proc.stdout
-    assert "no state to run" in proc.stdout, proc.stdout  # it used to say only that it continued the study
-    # and changes nothing, as docs/runs.md says: before, metadata.json added the run to its runs
+    assert "no state to run" in proc.stdout, proc.stdout  # said, beyond continuing the study
+    # and changes nothing, as the manual says: metadata.json does not add the run to its runs
     after = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"}
     assert sorted(after) == sorted(before) and [p for p in before if after[p] != before[p]] == []
 
@@ -215,14 +215,14 @@ def test_rerun_of_a_finished_study_does_nothing(base, specimen_100, tmp_path):
 @pytest.mark.parametrize("args,field", [
     (["--gamma", "2e-6"], ("--gamma; probe.gamma",)),
     (["--rotations", "restrained"], ("--rotations; probe.rotations",)),
-    (["--mu", "0.3"], ("--mu; state.friction",)),  # before: the field alone, the option unnamed
+    (["--mu", "0.3"], ("--mu; state.friction",)),  # the option named beside its field
     (["--damping", "0.3"], ("--damping", "damping")),
     (["--skip-detection"], ("--skip-detection; probe.detection",)),
     (["--rolling-stiffness", "0.25", "--rolling-friction", "0.1"], ("--rolling-", "state.rolling_")),
 ])
 def test_other_settings_are_refused_in_one_line(base, specimen_100, tmp_path, args, field):
-    """Before: rows made with other settings were appended, and metadata listed only the last.
-    The refusal names the option that sets what differs, beside its field in metadata.json."""
+    """Rows made with other settings are refused, not appended (metadata would list only the
+    last). The refusal names the option that sets what differs, beside its field in metadata.json."""
     out = copy(base, tmp_path)
     before = (out / "probes.csv").read_bytes(), (out / "metadata.json").read_bytes()
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", *args)
@@ -232,9 +232,9 @@ def test_other_settings_are_refused_in_one_line(base, specimen_100, tmp_path, ar
 
 
 def test_a_rerun_without_threads_continues_at_the_study_s_count(base, specimen_100, tmp_path):
-    """Before: a rerun that did not give --threads took all cores and was refused ('threads is 1
-    there, 2 in this run') though the user never chose a count. Now it adopts the study's; an
-    explicit other count is still refused (the last bits depend on it)."""
+    """A rerun that does not give --threads adopts the study's count, not all cores (which would be
+    refused: 'threads is 1 there, 2 in this run', for a count the user never chose); an explicit
+    other count is refused (the last bits depend on it)."""
     out = copy(base, tmp_path)
     before = (out / "probes.csv").read_bytes()
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", env=dict(OMP_NUM_THREADS="2"))
@@ -245,7 +245,7 @@ def test_a_rerun_without_threads_continues_at_the_study_s_count(base, specimen_1
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", "--threads", "2")
     one_line_error(proc, "another study", "thread count", "--threads 1")
     # --threads 0 is OpenMP's count, OMP_NUM_THREADS's when set: the refusal says where this run's
-    # came from (an outside try typed 0, read 'all cores' in the help, and was told '2 in this run')
+    # came from (0 reads 'all cores' in the help; '2 in this run' alone would not explain it)
     proc = states(specimen_100, out, "--ids", "1,2,3,4", "--probes", "zx", "--threads", "0",
                   env=dict(OMP_NUM_THREADS="2"))
     one_line_error(proc, "thread count (threads) is 1 there, 2 in this run (OMP_NUM_THREADS=2)", "--threads 1")
@@ -257,7 +257,7 @@ def test_a_rerun_without_threads_continues_at_the_study_s_count(base, specimen_1
 
 
 def test_other_specimen_is_refused(base, specimen_100, tmp_path):
-    """Before: --specimen other.npz --ids 2,3 computed state 3 from the old specimen's checkpoint."""
+    """Another --specimen is refused: state 3 would be computed from the old specimen's checkpoint."""
     scene, meta = specimen_file.load(str(specimen_100))
     other = tmp_path / "other.npz"
     specimen_file.save(str(other), scene, seed=99, parameters=meta["parameters"])  # same grains, another file
@@ -288,8 +288,8 @@ def test_force_new_moves_the_old_study_aside(base, specimen_100, tmp_path):
 
 
 def test_states_ids_come_from_the_definition(specimen_100, tmp_path):
-    """Before: --states ids were list positions, so --states 0:125e3 then --states 0.5:85e3 made
-    both 's1': the second run computed nothing and metadata said s1 was 0.5:85 kPa."""
+    """--states ids come from the state's definition, not its place in the list: --states 0:125e3
+    then --states 0.5:85e3 are two states, not both 's1' (the second run would compute nothing)."""
     out = tmp_path / "study"
     assert states(specimen_100, out, "--states", "0:125e3", "--probes", "z").returncode == 0
     proc = states(specimen_100, out, "--states", "0.5:85e3,0.5:140e3", "--probes", "z")
@@ -301,7 +301,7 @@ def test_states_ids_come_from_the_definition(specimen_100, tmp_path):
 
 
 def test_second_run_refuses_while_the_directory_is_locked(base, specimen_100, tmp_path):
-    """Before: two runs on one --out both exited 0 and the CSV lost rows (15 of 27)."""
+    """A second run on a locked --out is refused: two runs on one directory would lose rows."""
     from trueaniso import lock
     out = copy(base, tmp_path)
     before = (out / "probes.csv").read_bytes()
@@ -358,9 +358,8 @@ def _fail_at(monkeypatch, sigma_z):
 
 
 def test_a_state_not_reached_ends_its_own_path_only(specimen_100, tmp_path, monkeypatch):
-    """Before: the first state not reached stopped the study, and the states of every later path
-    were never run. Now its path ends (the later state 7 starts from 6 and is left too), the
-    other paths are run, and the run fails at the end naming the state."""
+    """A state not reached ends its own path (the later state 7 starts from 6 and is left too),
+    not the study: the other paths are run, and the run fails at the end naming the state."""
     from trueaniso import study, triaxial
     _fail_at(monkeypatch, 90e3)  # state 6 (b = 0, sigma_z = 90 kPa): the path 6, 7
     out = tmp_path / "study"
@@ -406,7 +405,7 @@ def test_differences_are_named_one_way_for_studies_checkpoints_and_specimens():
     assert study_dir.said(study_dir.differences(dict(a="clump1"), dict(a="clump2"), rel_tol=0.5)) == [
         'a: "clump1" there, "clump2" here']
     # A non-finite number as typed, whether a float (this run) or metadata's text: JSON's
-    # 'Infinity' in a refusal line was not what the user wrote (an outside try).
+    # 'Infinity' in a refusal line would not be what the user wrote.
     assert study_dir.said(study_dir.differences(dict(r="inf"), dict(r=2.0))) == ["r: inf there, 2.0 here"]
     assert study_dir.said(study_dir.differences(dict(r=2.0), dict(r=float("inf")))) == ["r: 2.0 there, inf here"]
 
@@ -428,9 +427,9 @@ def test_saved_work_is_a_row_or_a_state_checkpoint(tmp_path):
 
 def test_the_path_rate_is_checked_from_where_each_state_starts():
     """A state is reached from the state before it on its loading path (triaxial.paths), so the
-    path rate is checked over that distance. Measured from the specimen, state 3 (sigma_z 120 kPa,
-    after state 2 at 110 kPa) was refused at rates that reach it from state 2's checkpoint, and a
-    study holding state 2 could never be grown (an outside try)."""
+    path rate is checked over that distance: measured from the specimen, state 3 (sigma_z 120 kPa,
+    after state 2 at 110 kPa) would be refused at rates that reach it from state 2's checkpoint,
+    and a study holding state 2 could never be grown."""
     from trueaniso import study
     s2, s3 = study.table_states([2, 3])
     p = (100e3, 100e3, 100e3)
@@ -447,8 +446,8 @@ def test_the_path_rate_is_checked_from_where_each_state_starts():
     s4, = study.table_states([4])  # sigma_z 130 kPa: 20 kPa beyond state 2
     with pytest.raises(study.InputError, match="state 4 is 20000 Pa from state 2's stress, the state before it"):
         study.refuse_slow_paths([s2, s4], "true-triaxial", p, dict(path_rate=0.005))
-    # A ramp that ends within the servo's 200 settling steps of its limit cannot be reached (an
-    # outside try ran 3,000,000 steps at 0.0066629 for state 3, then 'no equilibrium').
+    # A ramp that ends within the servo's 200 settling steps of its limit cannot be reached (it
+    # would run 3,000,000 steps at 0.0066629 for state 3, then say 'no equilibrium').
     with pytest.raises(study.InputError, match="less the 200 it holds a state"):
         study.refuse_slow_paths([s2], "true-triaxial", p, dict(path_rate=10e3 / 2_999_900))
     # Before the specimen exists its stress is known to within the preparation's tolerance: state 1
@@ -460,9 +459,9 @@ def test_the_path_rate_is_checked_from_where_each_state_starts():
 
 
 def test_a_specimen_saved_without_summary_is_checked_too(specimen_100, tmp_path):
-    """A specimen saved from a YADE scene (yade_bridge, then specimen_file.save) has no summary, and
-    the path-rate check, which read the stresses there, was skipped: --path-rate 1e-9 started
-    loading (an outside try). Its stresses are now measured on the file's scene."""
+    """A specimen saved from a YADE scene (yade_bridge, then specimen_file.save) has no summary: the
+    path-rate check measures its stresses on the file's scene, so --path-rate 1e-9 is refused
+    before loading starts."""
     from trueaniso import specimen_file
     scene, meta = specimen_file.load(str(specimen_100))
     bare = tmp_path / "bare.npz"

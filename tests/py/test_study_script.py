@@ -58,8 +58,8 @@ def test_one_row_per_state_and_probe(finished):
         assert float(x["E"]) > 1e8 and float(x["gamma"]) >= 1e-6
         goal = {"1": (100e3, 100e3, 100e3), "2": (95e3, 95e3, 110e3)}[x["state"]]
         for k, g in zip(("sigma_x", "sigma_y", "sigma_z"), goal):
-            assert abs(float(x[k]) - g) <= 500.0  # the issue's 0.5 kPa, measured before the probe
-        # the row is the state's record (full-cell issue): principal values and the largest
+            assert abs(float(x[k]) - g) <= 500.0  # the servo's 0.5 kPa, measured before the probe
+        # the row is the state's record: principal values and the largest
         # off-diagonal, recomputed here by numpy from the row's six stresses, all within 0.5 kPa
         s = {k: float(x["sigma_" + k]) for k in ("x", "y", "z", "yz", "xz", "xy")}
         tensor = np.array([[s["x"], s["xy"], s["xz"]], [s["xy"], s["y"], s["yz"]], [s["xz"], s["yz"], s["z"]]])
@@ -117,7 +117,7 @@ def test_resume_adds_only_the_missing_probe(finished, small_specimen, tmp_path):
     (["--ids", "40"], "40"),
     (["--ids", "1", "--path-rate", "0"], "--path-rate"),
     (["--ids", "1", "--path-rate", "nan"], "--path-rate"),
-    # before: 3,000,000 steps (6 min on 200 spheres), then "no equilibrium" (an outside try)
+    # else 3,000,000 steps (6 min on 200 spheres), then "no equilibrium"
     (["--ids", "5", "--path-rate", "1e-9"], "--path-rate 1e-09: state 5 is"),
     (["--ids", "1", "--bogus"], "unrecognized"),
 ])

@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from trueaniso import dem, engines, specimen, triaxial
+from trueaniso import dem, engines, specimen_file, triaxial
 
 
 def test_equation_9_reproduces_table_c1():
@@ -57,7 +57,7 @@ def simple_cubic(n=4, r=1e-4, sigma=100e3):
 
 
 def test_simple_cubic_probe_gives_closed_form():
-    """E = (12 E*^2 sigma)^(1/3)/2 (406.7 MPa) within 0.5 %, nu_ij = 0 within 1e-3 (issue 3)."""
+    """E = (12 E*^2 sigma)^(1/3)/2 (406.7 MPa) within 0.5 %, nu_ij = 0 within 1e-3."""
     s, estar = simple_cubic()
     sigma = engines.stress(s)
     assert np.diag(sigma) == pytest.approx([100e3] * 3, rel=1e-9)
@@ -73,7 +73,7 @@ def test_simple_cubic_probe_gives_closed_form():
 
 
 def test_simple_cubic_micromechanics_equals_probe():
-    """Issue 4: Eq. (40) with zeta = 1 on the simple cubic packing gives E = k_n / a (k_n/(2r) to
+    """Eq. (40) with zeta = 1 on the simple cubic packing gives E = k_n / a (k_n/(2r) to
     O(delta/r)), the same as the stress probe measures with rotations restrained. The +/- probe
     mean removes the secant error of the finite increment; 4e-7 measured, 1e-5 allowed."""
     from trueaniso import fabric
@@ -90,8 +90,8 @@ def test_simple_cubic_micromechanics_equals_probe():
 
 
 @pytest.fixture(scope="module")
-def specimen300():
-    scene, _ = specimen.prepare_spheres(300, seed=3)
+def specimen300(specimen_300):
+    scene, _ = specimen_file.load(str(specimen_300))
     return scene
 
 
@@ -187,7 +187,7 @@ def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, si
     for k, v in held_state.items():
         np.testing.assert_array_equal(_state(s)[k], v, err_msg=k)
     np.testing.assert_allclose(np.diag(engines.stress(s)), goal, atol=500.0)
-    # the principal stresses are the goal's and the shear stresses zero, to the 0.5 kPa of the issue
+    # the principal stresses are the goal's and the shear stresses zero, to the servo's 0.5 kPa
     # (principal values computed here by numpy, independently of the engines)
     sig = engines.stress(s)
     principal = np.sort(np.linalg.eigvalsh(0.5 * (sig + sig.T)))
@@ -221,7 +221,7 @@ def test_state_that_never_settles_is_reported(specimen300):
 
 
 def test_shear_goal_on_a_path_that_fixes_the_shear_is_refused(specimen300):
-    """Bad input of the full-cell issue: a shear stress goal on a path that holds the cell's shear
+    """Bad input: a shear stress goal on a path that holds the cell's shear
     strains (control_shear=False) is refused with one clear message before any step runs."""
     s = specimen300.copy()
     step = s.step
@@ -233,9 +233,9 @@ def test_shear_goal_on_a_path_that_fixes_the_shear_is_refused(specimen300):
 
 
 def test_measures_of_an_imported_scene_need_a_force_evaluation(specimen_100):
-    """Before: a scene whose contacts came in with forces only (yade_bridge.scene_from_yade's way)
-    gave specimen.state p = 0 with Zm 4.8 and no warning. Now it is refused until dem.refresh,
-    after which the state is the specimen's own (1e-9: refresh recomputes the same forces)."""
+    """A scene whose contacts came in with forces only (yade_bridge.scene_from_yade's way) is refused
+    until dem.refresh (its state would read p = 0 with Zm 4.8), after which the state is the
+    specimen's own (1e-9: refresh recomputes the same forces)."""
     from trueaniso import dem, specimen, specimen_file
     scene, _ = specimen_file.load(str(specimen_100))
     want = specimen.state(scene)
@@ -249,8 +249,8 @@ def test_measures_of_an_imported_scene_need_a_force_evaluation(specimen_100):
 
 
 def test_a_probe_refuses_stresses_the_scene_is_not_at(specimen_100):
-    """Before: a probe told to hold 100 kPa on a scene at another stress travelled there and
-    returned that path's slope as E (63 MPa and nu 0.57 on a 579 kPa scene), without a word."""
+    """A probe told to hold 100 kPa on a scene at another stress is refused: it would travel there
+    and return that path's slope as E (63 MPa and nu 0.57 on a 579 kPa scene)."""
     from trueaniso import specimen_file
     scene, _ = specimen_file.load(str(specimen_100))
     with pytest.raises(ValueError, match="not at the stresses the probe is told to hold"):

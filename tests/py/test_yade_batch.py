@@ -1,4 +1,4 @@
-"""YADE habits (issue 11 items 2 and 3): a real yade-batch run of a two-line table through
+"""YADE habits: a real yade-batch run of a two-line table through
 run_states.py; importing a script inside a YADE session runs nothing; our table reader and
 YADE's agree on YADE's conventions (editor line numbers, '#', '=', '!' columns, evaluated values)."""
 import csv
@@ -48,7 +48,7 @@ def test_import_inside_yade_and_table_readers_agree(yade_json, tmp_path):
                      "=     2     =         True   'b.npz'   =\n"
                      "300   =     2*50e3    =      =         2    # a trailing comment\n")
     got = yade_json("import_and_tables", SCRIPTS, str(table))
-    assert got["imported"]  # before: the import ran main(), which ended the session with an error
+    assert got["imported"]  # the import does not run main(), which would end the session with an error
     assert sorted(got["lines"]) == ["3", "6", "7"]  # numbered as a text editor shows them
     for line, d in got["lines"].items():
         assert d["raw_equal"], d

@@ -1,20 +1,39 @@
 """Side by side with YADE 2023.02a (Law2_ScGeom_MindlinPhys_Mindlin) in yade-double."""
+import os
+
 import numpy as np
 import pytest
 
-from trueaniso import specimen, specimen_file
+from conftest import run_yade_scripts
 
 
 @pytest.fixture(scope="module")
-def specimen_path(tmp_path_factory):
-    scene, log = specimen.prepare_spheres(300, seed=3)
-    path = tmp_path_factory.mktemp("peer") / "s300.npz"
-    specimen_file.save(str(path), scene, seed=3, parameters=log)
-    return str(path)
+def specimen_path(specimen_300):
+    return str(specimen_300)
 
 
-def test_two_sphere_path_matches_yade_step_by_step(yade_json):
-    r = yade_json("peer_two_spheres")
+@pytest.fixture(scope="module")
+def in_yade(specimen_path, specimen_100, tmp_path_factory):
+    """Every YADE script of this module in one yade-double, each on a new scene; peer_oload alone
+    runs in a yade-double of its own, since what it checks is O.load in a fresh process."""
+    d = tmp_path_factory.mktemp("yade")
+    return run_yade_scripts(d, {
+        "peer_two_spheres": ("peer_two_spheres",),
+        "peer_stress": ("peer_stress", 300),
+        "peer_stress_sheared": ("peer_stress", 300, 15, "100e3"),
+        "peer_probe": ("peer_probe", specimen_path),
+        "adapter_servo": ("adapter_servo", specimen_path),
+        "bridge_roundtrip": ("bridge_roundtrip", specimen_path),
+        "peer_damping": ("peer_damping",),
+        "adapter_probe_restore": ("adapter_probe_restore", specimen_path),
+        "yade_save_packing": ("yade_save_packing", 300, d / "pack.yade.gz"),
+        "peer_rolling": ("peer_rolling",),
+        "bridge_checks": ("bridge_checks", specimen_100),
+    })
+
+
+def test_two_sphere_path_matches_yade_step_by_step(in_yade):
+    r = in_yade["peer_two_spheres"]
     assert r["steps"] == 900
     # YADE turns the shear force with a small-angle update, we with an exact rotation: the two
     # differ by O(angle^2) per step (angle ~1e-5 here), far below 1e-6 over the path.
@@ -24,11 +43,11 @@ def test_two_sphere_path_matches_yade_step_by_step(yade_json):
     assert r["yade_sliding_steps"] == r["ours_sliding_steps"] > 100
 
 
-def test_stress_of_yade_packing_matches_get_stress(yade_json):
-    r = yade_json("peer_stress", "300")
+def test_stress_of_yade_packing_matches_get_stress(in_yade):
+    r = in_yade["peer_stress"]
     assert r["contacts_ours"] == r["contacts_yade"] > 300
     assert r["max_rel_normal_force"] < 1e-8  # same Hertz law; round-off of tiny overlaps
-    assert r["rel_stress"] < 1e-6  # the issue's tolerance; ours is minus YADE's (sign convention)
+    assert r["rel_stress"] < 1e-6  # the required agreement; ours is minus YADE's (sign convention)
     assert abs(r["yade_stress"][0][0]) > 10e3  # a loaded packing, not a trivial one
     assert r["shear_share"] > 0.05  # tangential forces take part
     # Zm of Eq. (14) and YADE's avgNumInteractions(skipFree=True) count the same here
@@ -39,12 +58,12 @@ def test_stress_of_yade_packing_matches_get_stress(yade_json):
     assert r["ours_unbalanced"] == pytest.approx(r["yade_unbalanced"], rel=1e-6)
 
 
-def test_stress_of_a_sheared_yade_cell_matches(yade_json):
-    """The full-cell issue's peer: a YADE cell sheared through a general velGrad (hSize with
+def test_stress_of_a_sheared_yade_cell_matches(in_yade):
+    """A YADE cell sheared through a general velGrad (hSize with
     off-diagonal terms, stress with shear components) at 100 kPa, imported through the bridge:
     every component of our Love-Weber tensor against utils.getStress(), to 1e-6 of 100 kPa
     (measured 1e-3 Pa, 1e-8 of it)."""
-    r = yade_json("peer_stress", "300", "15", "100e3")
+    r = in_yade["peer_stress_sheared"]
     h = np.array(r["hSize"])
     assert np.abs(h - np.diag(np.diag(h))).max() > 0.04 * h[0, 0]  # sheared by several per cent
     np.testing.assert_array_equal(np.array(r["ours_cell"]), h)  # the matrix copied as it is
@@ -56,9 +75,9 @@ def test_stress_of_a_sheared_yade_cell_matches(yade_json):
     assert r["max_abs_error"] < 1e-6 * 100e3
 
 
-def test_probe_matches_yade_user_probe_and_adapter(yade_json, specimen_path):
-    r = yade_json("peer_probe", specimen_path)
-    # issue 3: a probe done the YADE way (PeriTriaxController, Mindlin law) within 2 % of ours
+def test_probe_matches_yade_user_probe_and_adapter(in_yade):
+    r = in_yade["peer_probe"]
+    # a probe done the YADE way (PeriTriaxController, Mindlin law) within 2 % of ours
     assert r["yade"]["E"] == pytest.approx(r["ours"]["E"], rel=0.02)
     assert r["yade"]["nu_zx"] == pytest.approx(r["ours"]["nu_zx"], abs=0.01)
     # our StressProbe driving YADE's dynamics: same controller, same law (to 7e-9), same answer
@@ -66,17 +85,17 @@ def test_probe_matches_yade_user_probe_and_adapter(yade_json, specimen_path):
     assert r["adapter"]["E"] == pytest.approx(r["ours"]["E"], rel=1e-3)
 
 
-def test_servo_drives_yade_through_adapter(yade_json, specimen_path):
-    r = yade_json("adapter_servo", specimen_path)
+def test_servo_drives_yade_through_adapter(in_yade):
+    r = in_yade["adapter_servo"]
     assert r["status"] == "reached"
     for got, want in zip(r["yade_stress"], r["goal"]):
-        assert abs(got - want) < 500.0  # the issue's 0.5 kPa, measured by YADE's getStress()
+        assert abs(got - want) < 500.0  # the servo's 0.5 kPa, measured by YADE's getStress()
     assert max(r["overshoot"]) < 500.0
     assert r["unbalanced"] < 1e-3
 
 
-def test_bridge_round_trip(yade_json, specimen_path):
-    r = yade_json("bridge_roundtrip", specimen_path)
+def test_bridge_round_trip(in_yade):
+    r = in_yade["bridge_roundtrip"]
     assert r["positions"] == 0 and r["radii"] == 0 and r["cell"] == 0  # doubles copied, not converted
     assert r["contacts"][0] == r["contacts"][1]
     assert r["stress_rel"] < 1e-9          # tangential forces carried through YADE's interactions
@@ -97,10 +116,10 @@ def test_bridge_round_trip(yade_json, specimen_path):
     assert r["cell_first_step"] == 0 and abs(r["cell_second_step_rel"]) < 1e-6
 
 
-def test_local_damping_matches_yade_newton_integrator(yade_json):
+def test_local_damping_matches_yade_newton_integrator(in_yade):
     """Our NewtonIntegrator damping against YADE's (cundallDamp2nd) on a free oblique collision,
     from a state imported through the bridge (velocities included)."""
-    r = yade_json("peer_damping")
+    r = in_yade["peer_damping"]
     assert r["steps_in_contact"] > 100  # the collision lasts: forces, torques and damping act
     # the damping matters: without it the spheres leave 30 % faster
     assert r["undamped_final_speed"] > 1.2 * r["final_speed"]
@@ -111,57 +130,57 @@ def test_local_damping_matches_yade_newton_integrator(yade_json):
     assert r["max_angular_velocity_diff"] < 1e-9 * r["angular_velocity_scale"]
 
 
-def test_adapter_probe_workflow_restores_with_yade_tools(yade_json, specimen_path):
+def test_adapter_probe_workflow_restores_with_yade_tools(in_yade):
     """docs/yade-peer.md's recipe: O.saveTmp, mu = 1e23, probe z through the adapter, O.loadTmp,
     probe x. Each probe starts from the held state (positions and cell exact, mu 0.5 again) and
     agrees with ours (the adapter reached 6e-8 on z in the peer above; 1e-3 asserted)."""
-    r = yade_json("adapter_probe_restore", specimen_path)
+    r = in_yade["adapter_probe_restore"]
     for axis in "zx":
         assert r["pos_diff_" + axis] == 0 and r["cell_diff_" + axis] == 0
         assert r["mu_after_" + axis] == pytest.approx(0.5, rel=1e-12)
         assert r["adapter"][axis] == pytest.approx(r["ours"][axis], rel=1e-3)
-        assert r["steps_after_done_" + axis] == 20  # 1 before: a finished controller paused every O.run
+        assert r["steps_after_done_" + axis] == 20  # not 1: a finished controller must not pause every O.run
 
 
-def test_scene_saved_by_yade_and_o_loaded_imports(yade_json, tmp_path):
+def test_scene_saved_by_yade_and_o_loaded_imports(in_yade, yade_json):
     """A YADE user's packing: made in YADE (makeCloud, PeriTriaxController to 100 kPa), saved with
     O.save, restored with O.load in a fresh yade-double and imported through the bridge. A loaded
-    scene hands out a new wrapper at every b.material access, which the bridge once took for
-    different materials and refused."""
-    pack = str(tmp_path / "pack.yade.gz")
-    saved = yade_json("yade_save_packing", "300", pack)
+    scene hands out a new wrapper at every b.material access, which the bridge must not take for
+    different materials."""
+    saved = in_yade["yade_save_packing"]
+    pack = os.path.join(os.path.dirname(in_yade.outs["yade_save_packing"]), "pack.yade.gz")
     assert saved["n"] > 200 and saved["materials"] == 1
     assert all(abs(saved["stress"][k][k] + 100e3) < 1e3 for k in range(3))  # YADE reached 100 kPa
     r = yade_json("peer_oload", pack)
     assert r["n"] == saved["n"]
     assert r["friction"] == pytest.approx(0.5, rel=1e-12)  # tan(frictionAngle) read by value
-    # same forces on the same configuration: the issue's 1e-6 of 100 kPa (2e-8 measured)
+    # same forces on the same configuration: 1e-6 of 100 kPa required (2e-8 measured)
     assert r["stress_error"] < 1e-6 * 100e3
-    assert r["unbalanced"] > 0 and min(r["stiffness"][:3]) > 0  # exactly 0 before the import evaluated the scene
+    assert r["unbalanced"] > 0 and min(r["stiffness"][:3]) > 0  # the import evaluates the scene
     # our probe on the import against YADE's own probe on the loaded scene: within 0.5 %
     # (0.14 % measured; YADE's PeriTriaxController stops at its 1e-5 relative stress tolerance)
     assert r["yade"]["E"] == pytest.approx(r["ours"]["E"], rel=5e-3)
     assert r["ours"]["E"] > 20e6  # a loaded network, not a trivial one
 
 
-def test_rolling_resistance_matches_yade_include_moment(yade_json):
+def test_rolling_resistance_matches_yade_include_moment(in_yade):
     """Our rolling resistance (docs/rolling.md) against YADE 2023.02a's Law2_ScGeom_MindlinPhys_Mindlin
     (includeMoment=True) with Ip2's krot set to our k_r and the cap to our eta_r rbar N: a sphere
     spun off the normal for 400 steps, 37 elastic then at the cap. Same incremental law, same
     frame (no rotation of the pair): the moments agree to round-off (measured 3.5e-16; 1e-12)."""
-    r = yade_json("peer_rolling")
+    r = in_yade["peer_rolling"]
     assert r["yade_kr"] == pytest.approx(r["kr"], rel=1e-15)
     assert r["R_yade"] == pytest.approx(0.9e-4, rel=1e-12)  # YADE's cap lever: eta times the mean radius
     assert r["max_rel_moment"] < 1e-12
     assert r["capped_steps_yade"] == r["capped_steps_ours"] > 300
 
 
-def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json, specimen_100):
-    """Found by an outside try: yade_scene_from dropped our strain and strain rate (setting hSize
-    resets YADE's refHSize); a cell YADE flipped imported with a shear it never underwent; a
-    ViscElMat scene and a linear law's interactions were converted without a word (ViscEl's
-    50 kPa read 226 kPa); blocked and fixed bodies became free."""
-    r = yade_json("bridge_checks", specimen_100)
+def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(in_yade):
+    """yade_scene_from keeps our strain and strain rate (setting hSize resets YADE's refHSize); a
+    cell YADE flipped imports without a shear it never underwent; a ViscElMat scene and a linear
+    law's interactions are refused, not converted without a word (ViscEl's 50 kPa would read
+    226 kPa); blocked and fixed bodies are refused, not freed."""
+    r = in_yade["bridge_checks"]
     assert max(abs(v) for v in r["strain"][:3]) > 5e-3
     np.testing.assert_allclose(r["strain_back"], r["strain"], rtol=0, atol=1e-12)
     assert r["velocity_gradient_back"] == 0
@@ -173,7 +192,7 @@ def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json,
     assert r["linear_positions_only"] is True
     assert "not periodic" in r["write_not_periodic"] and "yade_scene_from" in r["write_not_periodic"]
     assert "betan" in refusals["damped"] and "determinant 0" in refusals["singular_trsf"]
-    # saved with our controller attached, loaded without it: O.run says why (a bare NameError before)
+    # saved with our controller attached, loaded without it: O.run says why (not a bare NameError)
     said = r["loaded_without_controller"]
     assert said is not None and "a YADE scene file does not keep" in said and "yade_adapter.attach" in said, said
     assert r["reattached_steps"] >= 2
@@ -188,20 +207,20 @@ def test_bridge_carries_the_strain_and_refuses_what_it_cannot_convert(yade_json,
     assert refusals["nan_velocity"].startswith("body #7 has velocity (nan")
     assert "bodies #4 and #" in refusals["on_an_image"] and "one point" in refusals["on_an_image"]
     assert "O has no body #" in r["write_missing_bodies"]
-    # A second outside try: scene_from_yade (which now evaluates, so wraps bodies into the cell)
-    # then write_to_yade lost 20-50 % of YADE's contacts: the interactions kept their old images.
+    # scene_from_yade (which evaluates, so wraps bodies into the cell) then write_to_yade keeps
+    # every YADE contact: interactions that kept their old images would lose 20-50 % of them.
     assert r["wrapped_on_import"] > 0
     assert r["contacts_before_after"][0] == r["contacts_before_after"][1] > 0
     assert r["stress_change"] < 1e-9
     # ... and continued in YADE under a strain rate, it follows the original (6.1e-13 measured; bodies
-    # written wrapped made YADE's collider miss contacts later, a third outside try)
+    # written wrapped would make YADE's collider miss contacts later)
     assert r["written_moved"] == 0  # each body at the image nearest YADE's own position
     assert r["continued_contacts"][0] == r["continued_contacts"][1]
     assert r["continued_stress_change"] < 1e-9
     # After 1000 of our steps, YADE goes on with our shear forces: its stress after a step at rest
-    # within 1e-5 of ours (3.7e-7 measured; 0.44 % before, with YADE's own history from before)
+    # within 1e-5 of ours (3.7e-7 measured; YADE's own history from before our run gives 0.44 %)
     assert r["after_our_dynamics"][0] == r["after_our_dynamics"][1]
     assert r["after_our_dynamics"][2] < 1e-5
-    # YADE's own forces right after the export include our shear forces (0.086 against 1.7e-5 before)
+    # YADE's own forces right after the export include our shear forces (0.086, not 1.7e-5)
     yade_unbalanced, ours = r["unbalanced_after_export"]
     assert yade_unbalanced == pytest.approx(ours, rel=1e-6)

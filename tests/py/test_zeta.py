@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from trueaniso import dem, fabric, specimen, statics, zeta
+from trueaniso import dem, fabric, specimen_file, statics, zeta
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 # Stretches of the branch vectors (L -> D L, normals kept) that turn the isotropic specimen's
@@ -18,8 +18,8 @@ STRETCHES = ((1.0, 1.0, 1.0), (1.1, 1.0, 0.9), (0.9, 1.05, 1.1), (1.0, 0.9, 1.15
 
 
 @pytest.fixture(scope="module")
-def scene():
-    s, _ = specimen.prepare_spheres(300, seed=3)
+def scene(specimen_300):
+    s, _ = specimen_file.load(str(specimen_300))
     dem.refresh(s)  # contacts of the final positions, the state the static solve linearises
     return s
 

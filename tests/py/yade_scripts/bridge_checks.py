@@ -1,4 +1,4 @@
-"""What the bridge refuses and what strain it carries, as an outside try found them wrong:
+"""What the bridge refuses and what strain it carries:
  - the strain (refHSize, trsf) and strain rate of our scene survive yade_scene_from and come back;
  - a cell YADE flipped imports with the strain of YADE's motion (trsf), not a shear that never was;
  - another material (ViscElMat), another law's interactions (FrictPhys) and bodies that are not
@@ -87,7 +87,7 @@ def singular_trsf():
     O.cell.trsf = Matrix3(1, 0, 0, 0, 1, 0, 0, 0, 0)
 
 
-def wall():  # a fixed wall: named as a wall, not told to be freed (an outside try)
+def wall():  # a fixed wall: named as a wall, not told to be freed
     O.bodies.append(utils.wall((0, 0, 0), axis=2))
 
 
@@ -105,7 +105,7 @@ def nan_position():
     O.bodies[6].state.pos = Vector3(float("nan"), 0, 0)
 
 
-def nan_young():  # NaN != NaN: each sphere was counted as its own material
+def nan_young():  # NaN != NaN: each sphere would count as its own material
     for b in O.bodies:
         b.material.young = float("nan")
 
@@ -163,8 +163,8 @@ res["written_moved"] = float(max((O.bodies[i].state.pos - Vector3(*p)).norm() fo
                                                                                              scene.cell))))
 
 
-# Continued in YADE under a strain rate, the written-back scene follows the original (a third outside
-# try: bodies written wrapped made YADE's collider miss 2 of 314 contacts after 1500 steps).
+# Continued in YADE under a strain rate, the written-back scene follows the original (bodies written
+# wrapped would make YADE's collider miss contacts, 2 of 314 after 1500 steps).
 def continued(steps):
     for b in O.bodies:
         b.state.vel = Vector3(0, 0, 0)
@@ -203,7 +203,7 @@ try:
     res["linear_positions_only"] = True
 except yade_bridge.BridgeError as exc:
     res["linear_positions_only"] = str(exc)
-# write_to_yade into a periodic O without the scene's bodies: one BridgeError (an IndexError before).
+# write_to_yade into a periodic O without the scene's bodies: one BridgeError, not an IndexError.
 yade_bridge.yade_scene_from(ours, O, import_contacts=False)
 O.bodies.erase(len(O.bodies) - 1)
 try:
@@ -249,7 +249,7 @@ yade_adapter.detach(O, label="servoX")
 start = O.iter
 O.run(3, True)
 res["detached_steps"] = O.iter - start
-# write_to_yade into an O that is not periodic: one BridgeError (an AttributeError traceback before).
+# write_to_yade into an O that is not periodic: one BridgeError, not an AttributeError traceback.
 O.reset()
 try:
     yade_bridge.write_to_yade(ours, O)

@@ -1,12 +1,12 @@
-"""Inside a yade-double session: `import run_states` must only import (issue 11 item 3), and
-trueaniso.param_table must read a table exactly as YADE's own readers do (item 2).
+"""Inside a yade-double session: `import run_states` must only import, and
+trueaniso.param_table must read a table exactly as YADE's own readers do.
 Arguments: pyscripts directory, table path, output JSON."""
 import json
 import sys
 
 pyscripts, table, out = sys.argv[1], sys.argv[2], sys.argv[3]
 sys.path.insert(0, pyscripts)
-import run_states  # noqa: E402 - before the fix this ran main() and ended the session
+import run_states  # noqa: E402 - must not run main(), which would end the session
 
 from trueaniso import param_table  # noqa: E402
 from yade import utils  # noqa: E402

@@ -34,8 +34,8 @@ for e in moving:
     e.dead = False
 O.dt = dt
 yade_stress = -np.array(utils.getStress())
-scene, ids = yade_bridge.scene_from_yade(O)  # evaluated by our law at the loaded positions (no dem.refresh:
-ours = engines.stress(scene)                   # before, this read zero until the caller refreshed the scene)
+scene, ids = yade_bridge.scene_from_yade(O)  # evaluated by our law at the loaded positions (no dem.refresh
+ours = engines.stress(scene)                   # needed: unevaluated, this would read zero)
 res["unbalanced"] = float(engines.unbalanced_force(scene))
 res["stiffness"] = [float(v) for v in engines.cell_stiffness(scene)]
 res.update(n=len(ids), yade_stress=yade_stress.tolist(), ours_stress=ours.tolist(),
