@@ -1,6 +1,6 @@
 """What this machine can run: cores, memory, and the cost of a specimen of N spheres.
 
-The per-sphere costs are measured (docs/runs.md, "Costs"), not derived; they are upper bounds
+The per-sphere costs are measured (docs/specimens.md, "Files" and "Preparation cost"), not derived; they are upper bounds
 with a margin so that a refusal is never wrong by a factor, and an estimate is printed before
 long work so a user can stop it.
 """
@@ -8,14 +8,14 @@ import os
 
 from .refusal import InputError
 
-THREADS_PER_CORE = 4  # more threads than this only slow the contact loops (measured: docs/runs.md)
+THREADS_PER_CORE = 4  # more threads than this only slow the contact loops (measured)
 
 # Measured on 1,000-16,000 spheres (peak RSS of the preparation above the interpreter's, with the
 # contact list of the dense state): 1.7 kB per sphere; 2.5 kB leaves a margin.
 PREPARATION_BYTES_PER_SPHERE = 2500
 # The interpreter with numpy and the module loaded (peak RSS, measured): python3 37 MB,
 # yade-double 252 MB (YADE loads its own libraries and plugins). With a margin each; one figure for
-# both made every python3 estimate 2.7 times the measured peak (docs/runs.md).
+# both would make every python3 estimate 2.7 times the measured peak (docs/specimens.md, "Files").
 INTERPRETER_BYTES = {"python3": 60e6, "yade": 300e6}
 # The exact static solve (statics.static_stiffness, run by run_study.py on its specimen):
 # 7.6 GB at 53,004 spheres (docs/statics.md) = 143 kB per sphere; 160 kB with a margin.
@@ -23,7 +23,7 @@ STATICS_BYTES_PER_SPHERE = 160e3
 # Preparation time: random placement ~3.5 ms per sphere (pure Python), then the recipe's steps at
 # ~0.45 us per member sphere on one thread: 53,004 spheres took 80 min of CPU for 180,000 steps
 # (0.50 us, beside other jobs), the 53,004-clump1 preparation 0.27-0.33 us a member
-# (docs/runs.md). A figure of a slower force loop (0.75 us) would give estimates 2-5 times the wall
+# (docs/runs.md, "The paper's size"). A figure of a slower force loop (0.75 us) would give estimates 2-5 times the wall
 # time (51 s said, 11 s taken, at 300 spheres, whose recipe takes half the steps of a large one).
 PLACEMENT_SECONDS_PER_SPHERE = 3.5e-3
 STEP_SECONDS_PER_SPHERE = 0.45e-6
