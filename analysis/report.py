@@ -20,6 +20,7 @@ import numpy as np
 
 from . import chain, figures, hyperelastic, zeta_contrast
 from .results import ResultsError, read_metadata, read_probes, said, table_path
+from trueaniso import validate  # noqa: E402 (results put pyscripts/ on the path)
 
 AXES = "xyz"
 DEFAULT_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)  # the paper's particles (section 2.1)
@@ -561,8 +562,7 @@ def table_b1(results, paper):
             path = next((statics.state_file(results, c) for c in candidates
                          if os.path.exists(statics.state_file(results, c))), None)
             if path:
-                with open(path) as f:
-                    found.append((label, json.load(f)))
+                found.append((label, validate.load_json(path, "statics_record", ResultsError)))
     if not found:
         return out + ["Not in this study (run_study.py writes the statics records; `python3 -m analysis.report "
                       "DIR --statics` solves them from the state checkpoints).", ""]
@@ -587,9 +587,23 @@ def solve_statics(results, log=print):
     from trueaniso import statics, study_dir
     if not os.path.isdir(os.path.join(results, "states")):
         raise ResultsError("%s: --statics needs a study directory with state checkpoints (states/*.npz)" % results)
+    from trueaniso import specimen_file, study_checks
+    meta = read_metadata(results, required=True)
     done = 0
     for sid in ("1", "21"):
-        if os.path.exists(study_dir.checkpoint_path(results, sid)):
+        path = study_dir.checkpoint_path(results, sid)
+        if os.path.exists(path):
+            # The study's own checks first, as run_states.py applies them: a checkpoint copied in from
+            # another study was solved, and Table B1 showed that study's moduli.
+            if not os.path.exists(statics.state_file(results, sid)):
+                try:
+                    ck = specimen_file.read(path)[1]
+                except specimen_file.SpecimenFileError as exc:
+                    raise ResultsError(study_dir.checkpoint_problem(exc, sid)) from None
+                problem = study_checks.checkpoint_problem(meta, ck, sid)
+                if problem:
+                    raise ResultsError("%s: %s; it is not this study's state %s (remove it; run_states.py or "
+                                       "run_study.py reaches it again)" % (path, problem, sid))
             statics.cached_record(results, sid, log=log)
             done += 1
     if not done:
