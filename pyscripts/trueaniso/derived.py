@@ -29,6 +29,10 @@ def clump_problem(arrays, meta):
     if assembly not in ("clump1", "clump2"):
         return None
     from . import clump_shapes, clump_specimen
+    for other, r in clump_specimen.RECIPES.items():  # a prepared file records its recipe: another's is a relabel
+        if other != assembly and all(k in params and _same(params[k], r[k]) for k in RECIPE_KEYS):
+            return ("parameters.assembly: %s, but its parameters record the %s recipe (%s): the assembly label does "
+                    "not match the members" % (assembly, other, ", ".join(RECIPE_KEYS)))
     shape = params.get("shape") or clump_specimen.recipe(assembly)["shape"]
     try:
         t = clump_shapes.template(shape)
@@ -62,6 +66,13 @@ def clump_problem(arrays, meta):
             return ("body %d: its %s %s disagree with its members and the density (%s: the %s template's, scaled)"
                     % (b, what, _said(stored[b]), _said(expected[b]), assembly))
     return None
+
+
+RECIPE_KEYS = ("shape", "orientation_weights", "layers")  # what makes one assembly's clumps another's
+
+
+def _same(recorded, recipe):
+    return list(recorded) == list(recipe) if isinstance(recipe, tuple) else recorded == recipe
 
 
 def _said(v):

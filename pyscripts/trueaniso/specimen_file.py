@@ -192,8 +192,8 @@ def read(path):
         for new, old in (("cell", "cell_size"), ("cell_ref", "cell_ref_size"), ("velocity_gradient", "strain_rate")):
             v = np.asarray(data.pop(old))
             data[new] = np.diag(v) if v.shape == (3,) else v  # a wrong shape is named by contents_problem
-    problem = (meta_problem(meta) or contents_problem(data) or volumes_problem(data)
-               or derived.clump_problem(data, meta))
+    problem = (meta_problem(meta) or contents_problem(data) or derived.clump_problem(data, meta)
+               or volumes_problem(data))
     if problem:
         raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     return data, meta

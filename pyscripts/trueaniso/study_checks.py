@@ -73,7 +73,7 @@ def rows_problem(study_meta, rows):
         if path and r.get("path") not in (None, "") and r["path"] != path:
             return "line %d: state %s is on the %s path, this study on the %s path" % (line, sid, r["path"], path)
     if strange:
-        ids = sorted({s for _, s in strange})
+        ids = sorted({s for _, s in strange}, key=lambda s: (not s.isdigit(), int(s) if s.isdigit() else 0, s))
         return ("rows of state%s %s (line %d%s) that this study's metadata.json does not define (rows of another "
                 "study?)" % ("" if len(ids) == 1 else "s", ", ".join(ids[:8]) + (" ..." if len(ids) > 8 else ""),
                             strange[0][0], " and more" if len(strange) > 1 else ""))
