@@ -187,8 +187,12 @@ def arrays_problem(arrays):
             np.issubdtype(a.dtype, np.integer) and not a.dtype == np.bool_)
         if not ok:
             return name, "must hold %s, not %s" % ("floating-point numbers" if kind == "float" else "integers", a.dtype)
+        if name == "positions" and a.ndim >= 1 and a.shape[0] == 0:
+            return name, "no bodies"
         shape = tuple(_dimension(d, counts) for d in spec["shape"])
         if len(shape) != a.ndim or any(d is not None and d != s for d, s in zip(shape, a.shape)):
+            if shape == (3, 3):
+                return name, "must be a 3x3 matrix, not of shape %s" % (a.shape,)
             words = "(%s)" % ", ".join(str(d) for d in spec["shape"])
             return name, "has shape %s, not %s" % (a.shape, words.replace("nb", str(counts.get("nb", "nb")))
                                                    .replace("nc", str(counts.get("nc", "nc"))))
