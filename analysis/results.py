@@ -163,8 +163,9 @@ def read_metadata(results, required=False):
             raise ResultsError("%s: no readable metadata.json (%s)" % (results, exc)) from None
         return None
     # A metadata.json that parses but does not fit its schema is refused, not taken for a bare
-    # table: its states and specimen are what the rows are checked against.
-    return validate.check(meta, "study", path, ResultsError)
+    # table: its states and specimen are what the rows are checked against. Each field is taken
+    # as optional here (the analysis uses what is there); `required`: the whole study.
+    return validate.check(meta, "study", path, ResultsError, required=required)
 
 
 def number(row, column, path="probe table"):

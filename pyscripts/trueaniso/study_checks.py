@@ -52,7 +52,9 @@ def rows_problem(study_meta, rows):
     """Why rows of a probe table (dicts of text, line 2 on) are not this study's, or None: a state
     its metadata.json does not define, a row whose b or sigma_z goal is not the state's
     definition, a row on another loading path."""
-    states = study_meta.get("states") or {}
+    if "states" not in study_meta:  # a metadata.json made by hand without them: nothing to check against
+        return None
+    states = study_meta["states"]
     path = (study_meta.get("fingerprint") or {}).get("path")
     strange = []
     for line, r in enumerate(rows, start=2):

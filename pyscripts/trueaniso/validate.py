@@ -53,11 +53,16 @@ def schema(name):
         return json.load(f)
 
 
+# The same schemas with no field required: what a reader that takes every field as optional
+# checks (the analysis reads a study's metadata.json for what it holds; run_states.py requires it whole).
+_Present = jsonschema.validators.extend(_Validator, validators={"required": lambda *args: iter(())})
+
+
 @functools.lru_cache(maxsize=None)
-def _validator(name):
+def _validator(name, required=True):
     store = {schema(n)["$id"]: schema(n) for n in NAMES}
     resolver = jsonschema.RefResolver.from_schema(schema(name), store=store)
-    return _Validator(schema(name), resolver=resolver)
+    return (_Validator if required else _Present)(schema(name), resolver=resolver)
 
 
 def _path(error):
@@ -118,9 +123,10 @@ def _what(error):
     return error.message
 
 
-def problem(instance, name):
-    """(field, what) of the first way `instance` does not fit schema `name`, or None."""
-    errors = sorted(_validator(name).iter_errors(instance), key=lambda e: (len(e.absolute_path), list(map(str, e.absolute_path))))
+def problem(instance, name, required=True):
+    """(field, what) of the first way `instance` does not fit schema `name`, or None; with
+    required=False the fields it holds are checked and none is required."""
+    errors = sorted(_validator(name, required).iter_errors(instance), key=lambda e: (len(e.absolute_path), list(map(str, e.absolute_path))))
     if not errors:
         return None
     e = jsonschema.exceptions.best_match(errors)
@@ -137,10 +143,10 @@ def problem(instance, name):
     return _path(e) or "(whole file)", _what(e)
 
 
-def check(instance, name, file, error=FileInvalid):
+def check(instance, name, file, error=FileInvalid, required=True):
     """`instance` itself when it fits schema `name`; else raises `error` with one line naming
     the file and the field."""
-    found = problem(instance, name)
+    found = problem(instance, name, required)
     if found:
         raise error("%s: %s: %s" % (file, *found))
     return instance
