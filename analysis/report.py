@@ -588,7 +588,8 @@ def solve_statics(results, log=print):
     if not os.path.isdir(os.path.join(results, "states")):
         raise ResultsError("%s: --statics needs a study directory with state checkpoints (states/*.npz)" % results)
     from trueaniso import specimen_file, study_checks
-    meta = read_metadata(results, required=True)
+    meta = validate.check(read_metadata(results, required=True), "study", os.path.join(results, "metadata.json"),
+                          ResultsError)  # the whole study: its checkpoints are checked against it
     done = 0
     for sid in ("1", "21"):
         path = study_dir.checkpoint_path(results, sid)

@@ -164,8 +164,8 @@ def read_metadata(results, required=False):
         return None
     # A metadata.json that parses but does not fit its schema is refused, not taken for a bare
     # table: its states and specimen are what the rows are checked against. Each field is taken
-    # as optional here (the analysis uses what is there); `required`: the whole study.
-    return validate.check(meta, "study", path, ResultsError, required=required)
+    # as optional here: the analysis uses what is there.
+    return validate.check(meta, "study", path, ResultsError, required=False)
 
 
 def number(row, column, path="probe table"):
