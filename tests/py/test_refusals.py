@@ -217,3 +217,12 @@ def test_an_exploded_packing_is_refused_before_stepping(specimen_100, tmp_path):
                       "--path-rate", "inf", timeout=120)
     one_line_error(proc, "exploded or over-compressed", "times the largest stress")
     assert not out.exists()
+
+
+def test_damping_0_is_refused_at_once_with_the_reason(specimen_100, tmp_path):
+    """Before: accepted, then Table C1's state 5 was held 200,000 steps without settling (the
+    unbalanced force stays above the servo's tolerance with nothing to dissipate it)."""
+    out = tmp_path / "out"
+    one_line_error(run_script("run_states.py", "--specimen", specimen_100, "--ids", "5", "--damping", "0",
+                              "--out", out), "--damping 0", "no viscous damping")
+    assert not out.exists()
