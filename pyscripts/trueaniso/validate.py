@@ -138,8 +138,8 @@ def problem(instance, name, required=True):
     if e.validator == "required":
         missing = next((k for k in e.validator_value if isinstance(e.instance, dict) and k not in e.instance), "?")
         return ".".join(filter(None, (_path(e), missing))), "missing"
-    if e.validator == "propertyNames":
-        return _path(e) or "(names)", "%s is not a valid name" % _shown(e.instance)
+    if e.validator == "propertyNames" or (e.schema_path and "propertyNames" in e.schema_path):
+        return str(e.instance), "is not a valid name: %s" % expected(e.schema)
     return _path(e) or "(whole file)", _what(e)
 
 
