@@ -119,6 +119,8 @@ def test_a_nan_cell_leaves_its_row_out_and_the_report_says_so(tmp_path):
     assert "1 row with a NaN or infinite cell left out: line 5 (state 6 probe z: Zm = nan)" in text, text[:3000]
     proc = _module("analysis.figures", out / "probes.csv", "--out", tmp_path / "f")
     assert proc.returncode == 0 and "left out: line 5" in proc.stderr, proc.stderr
+    proc = _module("analysis.path_fidelity", out / "probes.csv")  # before: left out without a word
+    assert proc.returncode == 0 and "left out: line 5" in proc.stderr, proc.stderr
 
 
 def test_an_infinite_cell_in_every_row_is_refused(tmp_path):
