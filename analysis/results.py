@@ -144,10 +144,11 @@ def _fitting_rows(path, rows):
         raise ResultsError("%s: line %d: %s: %s" % (path, line, field, what))
     if left and not kept:
         raise ResultsError("%s: every row has a NaN or infinite cell (%s)" % (path, left[0]))
-    notes = ["%s: %d row%s with a NaN or infinite cell left out: %s" % (path, len(left), "" if len(left) == 1 else "s",
-                                                                        ", ".join(left[:5]) + (" ..." if len(left) > 5
-                                                                                               else ""))] if left else []
-    return kept, notes
+    if not left:
+        return kept, []
+    shown = ", ".join(left[:5]) + (" ..." if len(left) > 5 else "")
+    return kept, ["%s: %d row%s with a NaN or infinite cell left out: %s"
+                  % (path, len(left), "" if len(left) == 1 else "s", shown)]
 
 
 def read_metadata(results, required=False):

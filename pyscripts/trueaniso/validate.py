@@ -126,7 +126,7 @@ def _what(error):
 def problem(instance, name, required=True):
     """(field, what) of the first way `instance` does not fit schema `name`, or None; with
     required=False the fields it holds are checked and none is required."""
-    errors = sorted(_validator(name, required).iter_errors(instance), key=lambda e: (len(e.absolute_path), list(map(str, e.absolute_path))))
+    errors = list(_validator(name, required).iter_errors(instance))
     if not errors:
         return None
     e = jsonschema.exceptions.best_match(errors)
