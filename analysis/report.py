@@ -271,7 +271,7 @@ FIG16_KEYS = ("sigma_v", "sigma_h", "G_ratio", "E_ratio_root")
 CLUMP_KEYS = ("assembly", "n", "e", "probe_restrained", "static_restrained")
 
 
-def _json_list(source, keys, what):
+def _json_list(source, keys, what, schema):
     try:
         with open(source) as f:
             rows = json.load(f)
@@ -280,7 +280,7 @@ def _json_list(source, keys, what):
     if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) and all(k in r for k in keys)
                                                          for r in rows):
         raise ResultsError("%s is not %s: a JSON list of objects with %s" % (source, what, ", ".join(keys)))
-    return rows
+    return validate.check(rows, schema, source, ResultsError)  # and of the types its sections read
 
 
 def fig16_rows(source):
@@ -288,14 +288,15 @@ def fig16_rows(source):
     study directory) or of the JSON analysis/cross_anisotropy.py --out wrote; checked."""
     from . import cross_anisotropy
     if source.endswith(".json"):
-        return _json_list(source, FIG16_KEYS, "the output of analysis/cross_anisotropy.py --out")
+        return _json_list(source, FIG16_KEYS, "the output of analysis/cross_anisotropy.py --out", "fig16_states")
     return cross_anisotropy.states(source)  # a study directory or its probes.csv (results.table_path)
 
 
 def clump_entries(source):
     """The entries of pyscripts/bench/anisotropy_clumps.py --json, checked (clump1, clump2)."""
     from . import chain
-    entries = _json_list(source, CLUMP_KEYS, "the output of pyscripts/bench/anisotropy_clumps.py --json")
+    entries = _json_list(source, CLUMP_KEYS, "the output of pyscripts/bench/anisotropy_clumps.py --json",
+                         "clump_anisotropy")
     bad = [m["assembly"] for m in entries if m["assembly"] not in chain.PAPER or m["assembly"] == "spheres"]
     if bad:
         raise ResultsError("%s: assemblies %s are not the paper's clump1 or clump2" % (source, bad))

@@ -4,7 +4,8 @@ The schemas are JSON Schema (draft 7) files in ``schemas/``, checked with Debian
 python3-jsonschema: ``specimen`` (the metadata of a specimen file), ``checkpoint`` (a study's
 state checkpoint: a specimen whose parameters name its state and study), ``study`` (a study's
 metadata.json), ``probes`` (a row of probes.csv, its cells as text), ``statics_record`` (a
-study's statics_*.json) and ``param_table`` (a line of a yade-batch table). The arrays of a
+study's statics_*.json) and ``param_table`` (a line of a yade-batch table), ``fig16_states`` and ``clump_anisotropy`` (the
+JSON the report's --fig16 and --clumps read). The arrays of a
 specimen file are a declarative table beside them (``specimen_arrays.json``: kind, shape in the
 file's own counts, finiteness). Every property has a description: the formats' reference pages
 are made from these files.
@@ -24,7 +25,8 @@ import jsonschema
 from .refusal import InputError
 
 SCHEMAS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "schemas")
-NAMES = ("specimen", "checkpoint", "study", "probes", "statics_record", "param_table")
+NAMES = ("specimen", "checkpoint", "study", "probes", "statics_record", "param_table", "fig16_states",
+         "clump_anisotropy")
 
 
 class FileInvalid(InputError):

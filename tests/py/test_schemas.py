@@ -182,3 +182,25 @@ def test_a_statics_record_of_the_wrong_shape_is_refused_by_the_report(tmp_path):
     (tmp_path / "statics_isotropic.json").write_text("[]")
     with pytest.raises(ResultsError, match="must be a table"):
         report.table_b1(str(tmp_path), chain.PAPER["spheres"])
+
+
+@pytest.mark.parametrize("name,source,edit,words", [
+    # before: a TypeError traceback from the Fig. 16 section ('%.2f' of a text)
+    ("fig16.json", "fig16-spheres-4000.json", lambda rows: rows[1].update(sigma_v="50e3"), "1.sigma_v: must be"),
+    ("fig16.json", "fig16-spheres-4000.json", lambda rows: rows[0].update(nu_ratio=[1]), "0.nu_ratio: must be"),
+    ("clumps.json", "anisotropy-clumps-4000.json", lambda rows: rows[0].update(probe_restrained=[1e8, 1e8]),
+     "0.probe_restrained: must have at least 3 items"),
+    ("clumps.json", "anisotropy-clumps-4000.json", lambda rows: rows[1].update(n="4000"), "1.n: must be an integer"),
+])
+def test_the_report_s_optional_json_inputs_are_checked_by_their_schemas(tmp_path, name, source, edit, words):
+    from analysis import report
+    from analysis.results import ResultsError
+    rows = json.loads(open(os.path.join(REPO, "docs", "data", source)).read())
+    read = report.fig16_rows if name == "fig16.json" else report.clump_entries
+    assert read(os.path.join(REPO, "docs", "data", source))  # the committed files fit
+    edit(rows)
+    path = tmp_path / name
+    path.write_text(json.dumps(rows))
+    with pytest.raises(ResultsError) as exc:
+        read(str(path))
+    assert str(exc.value).startswith("%s: %s" % (path, words)), str(exc.value)
