@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 PACKAGES=(g++ cmake make yade libeigen3-dev libboost-python-dev libboost-numpy-dev libgtest-dev
           libsuitesparse-dev libcgal-dev python3-numpy python3-scipy python3-matplotlib python3-pytest
           python3-mpi4py openmpi-bin python3-sphinx python3-myst-parser python3-sphinx-rtd-theme
-          python3-pytest-xdist ninja-build)
+          python3-pytest-xdist ninja-build python3-jsonschema)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -52,6 +52,8 @@ def states(path):
     """[{state, sigma_v, sigma_h, measures...}] of the states with all six probes, in file order."""
     rows = read_probes(path, ("state", "probe", "E", "G", "sigma_x", "sigma_y", "sigma_z", "nu_1", "nu_2",
                               "nu_1_name", "nu_2_name"))
+    if rows.note:  # rows left out (a NaN cell, a torn last row) are said, as the report and figures say them
+        print("note: %s" % rows.note, file=sys.stderr)
     per = {}
     for r in rows:
         per.setdefault(r["state"], {})[r["probe"]] = r

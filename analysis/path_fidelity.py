@@ -68,6 +68,13 @@ def summary(rows, path="probe table"):
     return out
 
 
+def _say_note(rows):
+    """Rows left out of the table (a NaN cell, a torn last row), said on stderr as the report says them."""
+    if rows.note:
+        sys.stderr.write("note: %s\n" % rows.note)
+    return rows
+
+
 def study_row(study):
     """One row of the path-fidelity table from a study directory (metadata.json, probes.csv)."""
     import os
@@ -77,6 +84,7 @@ def study_row(study):
     fp, spec = meta["fingerprint"], meta["specimen"]
     csv_path = os.path.join(study, "probes.csv")
     rows = read_probes(csv_path, need=zeta_contrast.NEEDED + ["b", "sigma_z_goal", "Zm", "probe_steps", "state_steps"])
+    _say_note(rows)
     s = summary(rows, csv_path)
     rev = reversals(rows, path=csv_path)
     strong = [r for r in rev if r[4] < 0.99 * r[3]]
@@ -171,7 +179,7 @@ def main(argv):
         return 0
     for p in argv:
         try:
-            s = summary(read_probes(p, need=("state", "probe", "E", "b", "sigma_z_goal", "Zm")), p)
+            s = summary(_say_note(read_probes(p, need=("state", "probe", "E", "b", "sigma_z_goal", "Zm"))), p)
         except ResultsError as exc:
             sys.stderr.write("error: %s\n" % exc)
             return 2

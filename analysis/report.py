@@ -20,6 +20,7 @@ import numpy as np
 
 from . import chain, figures, hyperelastic, zeta_contrast
 from .results import ResultsError, read_metadata, read_probes, said, table_path
+from trueaniso import validate  # noqa: E402 (results put pyscripts/ on the path)
 
 AXES = "xyz"
 DEFAULT_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)  # the paper's particles (section 2.1)
@@ -270,7 +271,7 @@ FIG16_KEYS = ("sigma_v", "sigma_h", "G_ratio", "E_ratio_root")
 CLUMP_KEYS = ("assembly", "n", "e", "probe_restrained", "static_restrained")
 
 
-def _json_list(source, keys, what):
+def _json_list(source, keys, what, schema):
     try:
         with open(source) as f:
             rows = json.load(f)
@@ -279,7 +280,7 @@ def _json_list(source, keys, what):
     if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) and all(k in r for k in keys)
                                                          for r in rows):
         raise ResultsError("%s is not %s: a JSON list of objects with %s" % (source, what, ", ".join(keys)))
-    return rows
+    return validate.check(rows, schema, source, ResultsError)  # and of the types its sections read
 
 
 def fig16_rows(source):
@@ -287,14 +288,15 @@ def fig16_rows(source):
     study directory) or of the JSON analysis/cross_anisotropy.py --out wrote; checked."""
     from . import cross_anisotropy
     if source.endswith(".json"):
-        return _json_list(source, FIG16_KEYS, "the output of analysis/cross_anisotropy.py --out")
+        return _json_list(source, FIG16_KEYS, "the output of analysis/cross_anisotropy.py --out", "fig16_states")
     return cross_anisotropy.states(source)  # a study directory or its probes.csv (results.table_path)
 
 
 def clump_entries(source):
     """The entries of pyscripts/bench/anisotropy_clumps.py --json, checked (clump1, clump2)."""
     from . import chain
-    entries = _json_list(source, CLUMP_KEYS, "the output of pyscripts/bench/anisotropy_clumps.py --json")
+    entries = _json_list(source, CLUMP_KEYS, "the output of pyscripts/bench/anisotropy_clumps.py --json",
+                         "clump_anisotropy")
     bad = [m["assembly"] for m in entries if m["assembly"] not in chain.PAPER or m["assembly"] == "spheres"]
     if bad:
         raise ResultsError("%s: assemblies %s are not the paper's clump1 or clump2" % (source, bad))
@@ -561,8 +563,7 @@ def table_b1(results, paper):
             path = next((statics.state_file(results, c) for c in candidates
                          if os.path.exists(statics.state_file(results, c))), None)
             if path:
-                with open(path) as f:
-                    found.append((label, json.load(f)))
+                found.append((label, validate.load_json(path, "statics_record", ResultsError)))
     if not found:
         return out + ["Not in this study (run_study.py writes the statics records; `python3 -m analysis.report "
                       "DIR --statics` solves them from the state checkpoints).", ""]
@@ -587,9 +588,24 @@ def solve_statics(results, log=print):
     from trueaniso import statics, study_dir
     if not os.path.isdir(os.path.join(results, "states")):
         raise ResultsError("%s: --statics needs a study directory with state checkpoints (states/*.npz)" % results)
+    from trueaniso import specimen_file, study_checks
+    meta = validate.check(read_metadata(results, required=True), "study", os.path.join(results, "metadata.json"),
+                          ResultsError)  # the whole study: its checkpoints are checked against it
     done = 0
     for sid in ("1", "21"):
-        if os.path.exists(study_dir.checkpoint_path(results, sid)):
+        path = study_dir.checkpoint_path(results, sid)
+        if os.path.exists(path):
+            # The study's own checks first, as run_states.py applies them: a checkpoint copied in from
+            # another study was solved, and Table B1 showed that study's moduli.
+            if not os.path.exists(statics.state_file(results, sid)):
+                try:
+                    ck = specimen_file.read(path)[1]
+                except specimen_file.SpecimenFileError as exc:
+                    raise ResultsError(study_dir.checkpoint_problem(exc, sid)) from None
+                problem = study_checks.checkpoint_problem(meta, ck, sid)
+                if problem:
+                    raise ResultsError("%s: %s; it is not this study's state %s (remove it; run_states.py or "
+                                       "run_study.py reaches it again)" % (path, problem, sid))
             statics.cached_record(results, sid, log=log)
             done += 1
     if not done:

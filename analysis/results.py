@@ -7,7 +7,7 @@ wrong with the file is one ``ResultsError`` line, never a traceback.
 import math
 import os
 
-from trueaniso import results_csv
+from trueaniso import results_csv, study_checks, validate
 
 
 class ResultsError(ValueError):
@@ -100,11 +100,51 @@ def read_probes(path, need=("state", "probe", "E")):
     if missing:
         raise ResultsError("%s lacks the columns %s" % (path, ", ".join(missing[:6]) + (" ..." if len(missing) > 6 else "")))
     _check_rows(path, table.rows, table.columns)
-    out = Probes(table.rows)
+    if os.path.basename(path) == "probes.csv":  # a study's table: its rows are the study's states
+        meta = read_metadata(os.path.dirname(os.path.abspath(path)))
+        problem = meta and study_checks.rows_problem(meta, table.rows)
+        if problem:
+            raise ResultsError("%s: %s" % (path, problem))
+    kept, notes = _fitting_rows(path, table.rows)
+    out = Probes(kept)
     if table.torn is not None:
-        out.note = ("%s: the last row was cut short (an interrupted run; the next run of the study redoes it) "
-                    "and is left out" % path)
+        notes.insert(0, "%s: the last row was cut short (an interrupted run; the next run of the study redoes it) "
+                        "and is left out" % path)
+    out.note = "; ".join(notes) or None
     return out
+
+
+def _non_finite(text):
+    try:
+        return not math.isfinite(float(text))
+    except (TypeError, ValueError):
+        return False
+
+
+def _fitting_rows(path, rows):
+    """(rows that fit schemas/probes.schema.json, notes on those left out). A row with a NaN or
+    infinite cell (not its modulus: _check_rows refuses that) is left out and said, naming its line
+    and column: one such cell made the fits fail with a LinAlgError. Anything else that does not
+    fit (a text where a number belongs, an unknown probe axis) is refused, naming the same."""
+    kept, left = [], []
+    for line, r in enumerate(rows, start=2):
+        found = validate.problem(r, "probes")
+        if found is None:
+            kept.append(r)
+            continue
+        field, what = found
+        if _non_finite(r.get(field)):
+            left.append("line %d (state %s probe %s: %s = %s)" % (line, r.get("state"), r.get("probe"), field,
+                                                                   r.get(field)))
+            continue
+        raise ResultsError("%s: line %d: %s: %s" % (path, line, field, what))
+    if left and not kept:
+        raise ResultsError("%s: every row has a NaN or infinite cell (%s)" % (path, left[0]))
+    if not left:
+        return kept, []
+    shown = ", ".join(left[:5]) + (" ..." if len(left) > 5 else "")
+    return kept, ["%s: %d row%s with a NaN or infinite cell left out: %s"
+                  % (path, len(left), "" if len(left) == 1 else "s", shown)]
 
 
 def read_metadata(results, required=False):
@@ -114,11 +154,15 @@ def read_metadata(results, required=False):
     path = os.path.join(results, "metadata.json")
     try:
         with open(path) as f:
-            return json.load(f)
+            meta = json.load(f)
     except (OSError, ValueError) as exc:
         if required:
             raise ResultsError("%s: no readable metadata.json (%s)" % (results, exc)) from None
         return None
+    # A metadata.json that parses but does not fit its schema is refused, not taken for a bare
+    # table: its states and specimen are what the rows are checked against. Each field is taken
+    # as optional here: the analysis uses what is there.
+    return validate.check(meta, "study", path, ResultsError, required=False)
 
 
 def number(row, column, path="probe table"):

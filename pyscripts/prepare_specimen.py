@@ -92,6 +92,11 @@ def validate(o):
             clump_specimen.check_count(o.assembly, o.n)
         except ValueError as exc:
             raise cli.InputError(str(exc)) from None
+    # Before anything of size n is drawn (the layers' check below draws every clump): memory goes
+    # with the member spheres (contacts, cell lists), not with the bodies.
+    spheres = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
+    memory, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
+    resources.check_memory(memory, "a specimen of %d %s (%d member spheres)" % (o.n, o.assembly, spheres))
     if o.d50 <= 0:
         raise cli.InputError("--d50 must be > 0 (a radius <= 0 is not a particle)")
     if o.pressure <= 0:
@@ -135,10 +140,6 @@ def validate(o):
     problem = cli.output_problem(o.out, directory=False)
     if problem:
         raise cli.InputError(problem)
-    # Memory goes with the member spheres (contacts, cell lists), not with the bodies.
-    spheres = o.n * (1 if o.assembly == "sphere" else clump_specimen.members_per_clump(o.assembly))
-    memory, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
-    resources.check_memory(memory, "a specimen of %d %s (%d member spheres)" % (o.n, o.assembly, spheres))
     return dist
 
 

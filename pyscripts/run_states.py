@@ -66,7 +66,7 @@ def parser():
                    help="particle rotations during probes")
     p.add_argument("--skip-detection", action="store_true",
                    help="no contact detection during probes (nothing slides, the network cannot change)")
-    p.add_argument("--damping", type=cli.finite, default=0.4, help="local non-viscous damping, in [0, 1)")
+    p.add_argument("--damping", type=cli.finite, default=0.4, help="local non-viscous damping, in (0, 1)")
     p.add_argument("--mu", type=cli.finite, default=0.5,
                    help="friction coefficient while states are reached (the paper's 0.5; probes always suppress "
                         "sliding)")
@@ -219,6 +219,13 @@ def check_probe_options(o):
                              "increment nears the stress noise of a held state (docs/triaxial.md)" % (o.gamma, lo, hi))
     if not 0 <= o.damping < 1:
         raise cli.InputError("--damping must lie in [0, 1)")
+    if o.damping == 0:
+        # The contact law dissipates nothing itself (no viscous damping): without local damping the
+        # kinetic energy stays, and a state never meets the servo's unbalanced-force criterion
+        # (150 spheres, state 5: 2e-4 against 1e-4 after 200,000 steps held).
+        raise cli.InputError("--damping 0: the contact law has no viscous damping, so without local damping nothing "
+                             "dissipates the packing's kinetic energy and no state settles below the servo's "
+                             "unbalanced-force tolerance; give a damping in (0, 1) (default 0.4)")
     if not o.mu > 0:
         raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
     resources.check_threads(o.threads)

@@ -77,6 +77,7 @@ def validate(o):
             clump_specimen.check_count(o.assembly, o.n)
         except ValueError as exc:
             raise cli.InputError(str(exc)) from None
+        check_memory(o)  # before the layers' check, which draws every clump
         problem = clump_specimen.layers_problem(o.assembly, o.n, o.seed)
         if problem:
             raise cli.InputError(problem)
@@ -94,13 +95,17 @@ def validate(o):
     study.refuse_slow_paths(states, "true-triaxial", (defaults["pressure"].default,) * 3, dict(path_rate=o.path_rate),
                             start_within=defaults["stress_tolerance"].default)
     resources.check_threads(o.threads)
+    check_memory(o)
+    return states
+
+
+def check_memory(o):
     spheres = o.n * members(o.assembly)
     prep, _ = resources.preparation_estimate(spheres, o.threads or resources.cores())
     # The static solve's memory goes with the bodies' degrees of freedom and the contacts (members).
     statics_memory = resources.interpreter_bytes() + resources.STATICS_BYTES_PER_SPHERE * spheres
     resources.check_memory(max(prep, statics_memory), "a study of %s (its exact static solve)"
                            % clump_specimen.particles(o.n, o.assembly))
-    return states
 
 
 def members(assembly):

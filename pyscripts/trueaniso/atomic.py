@@ -27,9 +27,11 @@ def atomic_open(path, mode="w"):
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and not exc.filename:  # a write's error names no file: this one
+            raise OSError(exc.errno, exc.strerror or str(exc), path) from None
         raise
 
 

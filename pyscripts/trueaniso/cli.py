@@ -495,6 +495,11 @@ def guarded(main, resumable=False):
             os._exit(0)
         status = 128 + (signal.SIGTERM if isinstance(exc, Terminated) else signal.SIGINT)
         fail(_interrupted_line() if resumable else "interrupted", status)
+    except MemoryError:
+        # The estimates refuse a run of a size the machine cannot hold before it starts; this is
+        # a run that met less free memory than that (other jobs), or an estimate that fell short.
+        fail("out of memory: the run needs more than this machine could give it now (the results already "
+             "written are kept); give a smaller size, or run it when more memory is free", 1)
     except BrokenPipeError:
         # The reader of the output went away (`| head`, a closed terminal): a Unix tool ends
         # quietly on SIGPIPE, not with a traceback. Output to nowhere from here on, then the
@@ -502,3 +507,26 @@ def guarded(main, resumable=False):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         what = "output closed (broken pipe)"
         fail(_interrupted_line(what) if resumable else what, 128 + signal.SIGPIPE)
+    except OSError as exc:  # a full disk, a file system turned read-only, a permission taken away
+        fail(io_error_line(exc, resumable), 1)
+
+
+def io_error_line(exc, resumable=False):
+    """The one line of an I/O error mid-run: the file, the reason, that what was written stays
+    (results are written atomically or appended row by row) and how to go on."""
+    import errno
+    where = "%s: %s" % (exc.filename, exc.strerror) if exc.filename else (exc.strerror or str(exc))
+    fix = {errno.ENOSPC: "free space there", errno.EDQUOT: "free space there (disk quota)",
+           errno.EROFS: "make that file system writable", errno.EACCES: "make it writable for this user",
+           errno.EPERM: "make it writable for this user"}.get(exc.errno, "fix that")
+    if resumable:
+        return "%s; the results already written are kept; %s and run the same command again: %s" % (
+            where, fix, "it resumes from the last checkpoint" if _saved() else "it starts over")
+    return "%s; files already written are kept; %s and run the same command again" % (where, fix)
+
+
+def _saved():
+    try:
+        return bool(_saved_work and _saved_work())
+    except Exception:
+        return False

@@ -46,7 +46,12 @@ def held(directory, wait=False, log=print, name=LOCK_NAME, what=None):
         finally:
             _held[path][1] -= 1
         return
-    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError as exc:  # a directory, or a file this user cannot write, where the lock file goes
+        raise Refusal("%s cannot be locked: its lock file %s cannot be opened (%s)%s"
+                      % (what, path, exc.strerror, "; remove or rename that directory" if os.path.isdir(path)
+                         else "")) from None
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

@@ -94,7 +94,20 @@ def read_line(path, line):
     for h, text in zip(head, values[line]):
         if h in names and text != KEEP_DEFAULT:
             out[names[h]] = evaluate(text, "parameter table %s line %d column %s" % (path, line, h))
-    return out
+    return checked(out, path, line)
+
+
+def checked(values, path, line):
+    """`values` when they fit schemas/param_table.schema.json (numbers, texts, flags, lists of
+    them; an infinite number, as in --path-rate inf, is taken as its text); else one InputError
+    naming the line and the column."""
+    from . import validate
+    plain = {k: repr(v) if isinstance(v, float) and not math.isfinite(v) else v for k, v in values.items()}
+    found = validate.problem(plain, "param_table")
+    if found:
+        field, what = found
+        raise InputError("parameter table %s line %d: column %s: %s" % (path, line, field, what))
+    return values
 
 
 def read_line_in_yade(path, line, defaults):
@@ -115,4 +128,4 @@ def read_line_in_yade(path, line, defaults):
         if h in names and text != KEEP_DEFAULT:
             # YADE drops a trailing '!' from the headings unless the table has a description column.
             out[names[h]] = getattr(table, h) if h != names[h] and hasattr(table, h) else getattr(table, names[h])
-    return out
+    return checked(out, path, line)

@@ -83,6 +83,10 @@ def append(path, row, columns):
             n = os.write(fd, data)
             data = data[n:]
         os.fsync(fd)
+    except OSError as exc:  # a write's error names no file: this one
+        if exc.filename:
+            raise
+        raise OSError(exc.errno, exc.strerror or str(exc), path) from None
     finally:
         os.close(fd)
     if new:

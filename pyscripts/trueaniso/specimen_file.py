@@ -38,7 +38,7 @@ import zipfile
 
 import numpy as np
 
-from . import FORMAT_VERSION, atomic, engines
+from . import FORMAT_VERSION, atomic, derived, engines, validate
 from .provenance import versions
 
 FORMAT = "trueaniso-specimen"
@@ -160,6 +160,8 @@ def read(path):
         meta = json.loads(str(data.pop("meta")))
     except json.JSONDecodeError:
         raise SpecimenFileError("corrupt specimen file %s (metadata unreadable)" % path) from None
+    if not isinstance(meta, dict):
+        raise SpecimenFileError("%s: metadata: must be a table (JSON object), not %s" % (path, type(meta).__name__))
     if meta.get("format") != FORMAT:
         raise SpecimenFileError("%s is not a trueaniso specimen (format %r)" % (path, meta.get("format")))
     if meta.get("format_version") == 1:
@@ -182,11 +184,16 @@ def read(path):
     if not isinstance(meta.get("sha256"), str) or _checksum(data, meta, names) != meta["sha256"]:
         raise SpecimenFileError("corrupt specimen file %s (checksum mismatch: arrays or metadata were changed "
                                 "after it was written)" % path)
+    validate.check(meta, "specimen", path, SpecimenFileError)
+    found = validate.arrays_problem(data)
+    if found:
+        raise SpecimenFileError("%s: %s: %s" % (path, *found))
     if meta["format_version"] == 2:
         for new, old in (("cell", "cell_size"), ("cell_ref", "cell_ref_size"), ("velocity_gradient", "strain_rate")):
             v = np.asarray(data.pop(old))
             data[new] = np.diag(v) if v.shape == (3,) else v  # a wrong shape is named by contents_problem
-    problem = meta_problem(meta) or contents_problem(data) or volumes_problem(data)
+    problem = (meta_problem(meta) or contents_problem(data) or derived.clump_problem(data, meta)
+               or volumes_problem(data))
     if problem:
         raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     return data, meta
@@ -217,47 +224,14 @@ def _number(x, low=-math.inf, high=math.inf, low_open=False, high_open=False):
     return (x > low if low_open else x >= low) and (x < high if high_open else x <= high)
 
 
-_META_KEYS = ("format", "format_version", "created", "seed", "parameters", "summary", "versions", "material",
-              "dt", "time", "step", "block_rotations")
-
-
 def meta_problem(meta):
-    """What makes the metadata unusable, or None (every field the loader uses, and their types)."""
-    missing = [k for k in _META_KEYS if k not in meta]
-    if missing:
-        return "metadata lacks %s" % ", ".join(missing)
-    m = meta["material"]
-    if not isinstance(m, dict):
-        return "material is not a table of shear_modulus, poisson, density, friction"
-    missing = [k for k in ("shear_modulus", "poisson", "density", "friction") if k not in m]
-    if missing:
-        return "material lacks %s" % ", ".join(missing)
-    if not _number(m["shear_modulus"], 0, low_open=True):
-        return "material.shear_modulus must be a finite number > 0, not %r" % (m["shear_modulus"],)
-    if not _number(m["poisson"], -1, 0.5, low_open=True, high_open=True):
-        return "material.poisson must be a finite number in (-1, 0.5), not %r" % (m["poisson"],)
-    if not _number(m["density"], 0, low_open=True):
-        return "material.density must be a finite number > 0, not %r" % (m["density"],)
-    if not _number(m["friction"], 0):
-        return "material.friction must be a finite number >= 0, not %r" % (m["friction"],)
-    for k in ("rolling_stiffness", "rolling_friction"):
-        if k in m and not _number(m[k], 0):
-            return "material.%s must be a finite number >= 0, not %r" % (k, m[k])
-    if not _number(meta["dt"], 0):
-        return "dt must be a finite number >= 0, not %r" % (meta["dt"],)
-    if not _number(meta["time"], 0):
-        return "time must be a finite number >= 0, not %r" % (meta["time"],)
-    if isinstance(meta["step"], bool) or not isinstance(meta["step"], int) or meta["step"] < 0:
-        return "step must be an integer >= 0, not %r" % (meta["step"],)
-    if not isinstance(meta["block_rotations"], bool):
-        return "block_rotations must be true or false, not %r" % (meta["block_rotations"],)
-    if meta["seed"] is not None and (isinstance(meta["seed"], bool) or not isinstance(meta["seed"], int)
-                                     or meta["seed"] < 0):
-        return "seed must be an integer >= 0 or null, not %r" % (meta["seed"],)
-    for k in ("parameters", "summary", "versions"):
-        if not isinstance(meta[k], dict):
-            return "%s must be a table, not %r" % (k, type(meta[k]).__name__)
-    return None
+    """What makes the metadata unusable, or None: the first field that does not fit
+    schemas/specimen.schema.json, as 'field: what' (a metadata not yet sealed is checked as if it
+    were)."""
+    if not isinstance(meta, dict):
+        return "metadata: must be a table (JSON object)"
+    found = validate.problem(dict(meta, sha256=meta.get("sha256", "0" * 64)), "specimen")
+    return "%s: %s" % found if found else None
 
 
 def contents_problem(a):

@@ -7,7 +7,6 @@ Love-Weber stress against the cell's log strain (both compression positive; Voig
 zz, yz, xz, xy; engineering shear strains). docs/statics.md has the definitions and derivations.
 """
 
-import json
 import math
 import os
 
@@ -112,5 +111,5 @@ def cached_record(out, state=None, scene=None, log=print):
         log("statics (%s): solving the contact network's stiffness, rotations free and blocked ..."
             % ("isotropic state" if state is None else "state %s" % state))
         atomic.write_json(path, state_record(scene))
-    with open(path) as f:
-        return json.load(f)
+    from . import validate
+    return validate.load_json(path, "statics_record")

@@ -13,13 +13,17 @@ each probe. A run that was interrupted and resumed therefore computes exactly wh
 uninterrupted run computes, bit for bit: both start every piece of work from the same bytes.
 Rows already in probes.csv are not run again.
 """
+import contextlib
 import inspect
 import math
 import os
 import sys
 import time
 
-from . import dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_dir, triaxial
+import numpy as np
+
+from . import (dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_dir, triaxial,
+               validate)
 from .progress import EVERY, Progress, chunk_for, say
 from .refusal import InputError
 from .triaxial import AXES
@@ -122,13 +126,17 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
     if len(set(probes)) != len(probes):
         raise InputError("each probe axis may be given once")
     axes = [AXES[a] for a in probes]
-    arrays, spec_meta = specimen_file.read(specimen_path)
-    assembly = assembly_of(spec_meta, arrays["member_begin"])
+    # The whole load (the scene built, its contacts checked against its positions), not only the
+    # file's read: a specimen refused at its load after metadata.json was written left a study
+    # behind in a new --out, and --force-new had moved the old study aside for it.
+    scene, spec_meta = specimen_file.load(specimen_path)
+    assembly = assembly_of(spec_meta, scene.member_begin)
     if "checkpoint" in (spec_meta.get("parameters") or {}):  # prep_checkpoint's: mid-preparation, not at rest
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
     summary = _summary(specimen_path, spec_meta)
     _refuse_unloaded(specimen_path, summary)
+    _refuse_exploded(specimen_path, scene, states, path)
     _refuse_unreachable(states, path, dict(spec_meta, summary=summary), state_options)
     if spec_meta["block_rotations"] and not restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
@@ -172,6 +180,31 @@ def _refuse_unloaded(specimen_path, summary):
                          "scene (in YADE, say) before saving it" % (specimen_path, summary.get("Nc", 0),
                                                                    "%.3g" % summary["void_ratio"]
                                                                    if "void_ratio" in summary else "unknown"))
+
+
+EXPLODED = 100.0  # a specimen stressed this many times the largest stress its study asks for is refused
+
+
+def _refuse_exploded(specimen_path, scene, states, path):
+    """InputError for a specimen whose contacts carry far more than any stress the study asks for
+    (an exploded or over-compressed packing, measured on its contacts, whatever its summary says):
+    at 800 MPa against 100-200 kPa states the servo would run its 3,000,000 steps and give up. A
+    specimen prepared at 1 MPa for a study at 100 kPa (10 times) is still taken."""
+    if not states:
+        return
+    try:
+        sig = np.linalg.eigvalsh(np.asarray(engines.stress(scene)))
+    except (ValueError, RuntimeError):
+        return
+    largest = float(np.max(np.abs(sig)))
+    asked = max(max(abs(x) for x in triaxial.path_stresses(path, b, sz)) for _, b, sz in states)
+    if np.isfinite(largest) and asked > 0 and largest > EXPLODED * asked:
+        raise InputError("specimen %s carries a stress of %.4g kPa on its contacts (largest principal, measured), %.0f "
+                         "times the largest stress this study asks for (%.4g kPa): an exploded or over-compressed "
+                         "packing, which the servo cannot bring back; prepare it again (prepare_specimen.py)"
+                         % (specimen_path, largest / 1e3, largest / asked, asked / 1e3))
+    if not np.isfinite(largest):
+        raise InputError("specimen %s carries a non-finite stress on its contacts: prepare it again" % specimen_path)
 
 
 def _refuse_unreachable(states, path, spec_meta, state_options):
@@ -293,10 +326,11 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         log("note: %s was made with rolling resistance (beta %g), which this run turns off; give "
             "--rolling-stiffness and --rolling-friction to keep it (docs/rolling.md)" % (specimen_path, had))
     csv_path = os.path.join(out, CSV_NAME)
-    with lock.held(out, wait=wait, log=log):
-        if force_new:
+    with lock.held(out, wait=wait, log=log), contextlib.ExitStack() as undo:
+        if force_new:  # only now: every input passed its checks (_study)
             study_dir.supersede(out, log)
         previous = study_dir.check(out, fp, states)  # a refusal changes nothing
+        undo.enter_context(study_dir.undone_if_nothing_saved(out, previous is None, log))
         study_dir.clean_strays(out, log)
         try:
             table = results_csv.repair(results_csv.read(csv_path), log)
@@ -513,6 +547,11 @@ class _Run:
             raise study_dir.StudyMismatch("%s; the specimen changed since this study began: restore it, or start a "
                                           "new study with --force-new" % exc if sid is None
                                           else study_dir.checkpoint_problem(exc, sid)) from None
+        if sid is not None:
+            found = validate.problem(meta, "checkpoint")
+            if found:
+                raise study_dir.StudyMismatch("%s: %s: %s (not a checkpoint of a state); remove it and rerun"
+                                              % (path, *found))
         p = meta["parameters"]
         if sid is None:
             ok = meta["sha256"] == self.fp["specimen"]

@@ -11,13 +11,14 @@ All of this runs under the directory's lock (trueaniso/lock.py). Under the lock,
 files (``.tmp-*``) that a killed run left behind are removed: no live writer can own them.
 docs/runs.md states the contract.
 """
+import contextlib
 import json
 import math
 import os
 import shutil
 import time
 
-from . import atomic, lock, resources
+from . import atomic, lock, resources, validate
 from .refusal import Refusal
 
 METADATA = "metadata.json"
@@ -116,23 +117,52 @@ def supersede(out, log=print):
     return target
 
 
+@contextlib.contextmanager
+def undone_if_nothing_saved(out, new, log=print):
+    """For the block that starts a study in `out`: when it ends in an error before a row or a
+    checkpoint is saved and the study is `new` (no metadata.json before), the metadata.json and
+    the empty states/ it wrote are removed, so that the directory holds no study that was never
+    run (the next run there, with other settings, was refused as 'another study')."""
+    try:
+        yield
+    except Exception:
+        if new and not has_saved_work(out):
+            for name in (METADATA, CSV_NAME):
+                path = os.path.join(out, name)
+                if os.path.isfile(path):
+                    os.unlink(path)
+            states = os.path.join(out, "states")
+            if os.path.isdir(states) and not os.listdir(states):
+                os.rmdir(states)
+        raise
+
+
 def read_metadata(out):
     path = os.path.join(out, METADATA)
     if not os.path.exists(path):
         return None
     try:
         with open(path) as f:
-            return json.load(f)
+            meta = json.load(f)
     except (OSError, ValueError) as exc:
         raise StudyMismatch("%s is unreadable (%s): the study in %s cannot be checked; %s"
                             % (path, exc, out, _way_out(out))) from None
+    if isinstance(meta, dict) and meta.get("layout") != LAYOUT:
+        return meta  # an older layout: require_layout names it as such
+    found = validate.problem(meta, "study")
+    if found:
+        raise StudyMismatch("%s: %s: %s; the study in %s cannot be checked; %s"
+                            % (path, *found, out, _way_out(out)))
+    return meta
 
 
 def checkpoint_problem(exc, state):
     """The message for a study's checkpoint (states/ID.npz) that specimen_file cannot read: named
     as the checkpoint it is, with the way out (a removed one is reached again)."""
-    return "%s; remove it and rerun to compute it again" % str(exc).replace(
-        "specimen file", "checkpoint of state %s," % state, 1)
+    text = str(exc)
+    text = (text.replace("specimen file", "checkpoint of state %s," % state, 1) if "specimen file" in text
+            else "checkpoint of state %s: %s" % (state, text))
+    return "%s; remove it and rerun to compute it again" % text
 
 
 def threads_of(out):
@@ -234,6 +264,10 @@ def require_layout(out, meta):
 def check(out, fingerprint, states):
     """The existing metadata when the directory holds this study (or None when it holds none);
     raises StudyMismatch naming the first difference."""
+    states_dir = os.path.join(out, "states")
+    if os.path.lexists(states_dir) and not os.path.isdir(states_dir):
+        raise StudyMismatch("%s is not a directory: a study keeps its state checkpoints there; move it away, or %s"
+                            % (states_dir, _way_out(out)))
     meta = read_metadata(out)
     if meta is None:
         others = [n for n in os.listdir(out) if n in (CSV_NAME, "states")]

@@ -270,6 +270,8 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     (Eq. 12, or the engineering shear strain of a shear probe), steps, time.
     """
     axis = validate_probe(axis, gamma)
+    if scene.num_bodies == 0:
+        raise ValueError("probe: the scene has no bodies (a stress probe needs a loaded packing)")
     p = engines.StressProbe()
     p.axis, p.sign, p.gamma_target, p.increment = axis, sign, gamma, increment
     p.control_shear = bool(control_shear)

@@ -148,7 +148,9 @@ def test_a_study_of_another_level_says_which_and_how_to_continue_it(tmp_path):
     that continues it (the sources may be the same)."""
     from trueaniso import study_dir
     other = "x86-64-v3" if engines.build_arch() == buildarch.BASELINE else buildarch.BASELINE
-    there = dict(code="src-aaaa", threads=1)
+    # a whole fingerprint (metadata.json is checked against its schema before it is compared)
+    there = dict(specimen="a" * 64, assembly="sphere", code="src-aaaa", threads=1, path="true-triaxial", state={},
+                 probe={})
     study_dir.write_metadata(str(tmp_path), there, [(1, 0.0, 100e3)], ["z"],
                              dict(versions=dict(code="src-aaaa", build=other)))
     with pytest.raises(study_dir.StudyMismatch) as refused:

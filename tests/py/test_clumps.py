@@ -197,7 +197,7 @@ def test_stored_volumes_are_checked_and_version_3_files_still_load(tmp_path):
         specimen_file.read(str(tmp_path / "bad-s.npz"))
     _rewrite(str(tmp_path / "s.npz"), str(tmp_path / "int-s.npz"),
              edit_arrays=lambda a: a.update(volumes=np.ones(2, dtype=int)), reseal=True)
-    with pytest.raises(specimen_file.SpecimenFileError, match="volumes must hold floating-point numbers, not int64"):
+    with pytest.raises(specimen_file.SpecimenFileError, match="volumes: must hold floating-point numbers, not int64"):
         specimen_file.read(str(tmp_path / "int-s.npz"))  # it was called "non-finite"
 
     def version_3(meta, arrays):
@@ -238,7 +238,7 @@ def _negative_radius(a):
 
 @pytest.mark.parametrize("edit,message", [
     (_spread_members, "clump 0: its 2 members do not overlap into one body"),
-    (_nan_offset, "non-finite values in member_offsets"),
+    (_nan_offset, "member_offsets: non-finite values"),
     (_negative_radius, "radius <= 0"),
 ], ids=["members_apart", "nan", "negative_radius"])
 def test_clump_file_with_bad_members_is_refused(tmp_path, edit, message):

@@ -348,7 +348,9 @@ def test_states_without_rows_are_named(small_table, tmp_path):
     study = tmp_path / "study"
     study.mkdir()
     shutil.copy(small_table, study / "probes.csv")
-    defined = {sid: dict(b=0.0, sigma_z=1e5) for sid in STATES + ("30", "sv50")}
+    with open(small_table) as f:  # the states as the rows define them: rows of other definitions are refused
+        defined = {r["state"]: dict(b=float(r["b"]), sigma_z=float(r["sigma_z_goal"])) for r in csv.DictReader(f)}
+    defined.update({sid: dict(b=0.0, sigma_z=1e5) for sid in ("30", "sv50")})
     (study / "metadata.json").write_text(json.dumps(dict(states=defined)))
     path, _ = report.build(str(study), str(tmp_path / "rep"), log=lambda m: None)
     assert "States 30 and sv50 of this study have no row in its table (not reached" in open(path).read()

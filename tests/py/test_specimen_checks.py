@@ -53,13 +53,13 @@ def _huge_shift(a):
 
 
 @pytest.mark.parametrize("edit_meta,edit_arrays,message", [
-    (_pop_material, None, "metadata lacks material"),  # not a KeyError traceback
+    (_pop_material, None, "material: missing"),  # not a KeyError traceback
     (lambda m: m["material"].update(poisson=float("nan")), None, "material.poisson"),
-    (lambda m: m.update(dt=float("nan")), None, "dt must be a finite number"),  # the field at fault named
-    (lambda m: m.update(block_rotations="yes"), None, "block_rotations must be true or false"),
-    (None, nan_at_first("velocity_gradient"), "non-finite values in velocity_gradient"),  # not mid-run
+    (lambda m: m.update(dt=float("nan")), None, "dt: must be a finite number"),  # the field at fault named
+    (lambda m: m.update(block_rotations="yes"), None, "block_rotations: must be true or false"),
+    (None, nan_at_first("velocity_gradient"), "velocity_gradient: non-finite values"),  # not mid-run
     (None, lambda a: a.update(cell=a["cell"] @ np.diag([1.0, 1.0, -1.0])), "singular or inverted cell"),
-    (None, nan_at_first("c_normal"), "non-finite values in c_normal"),  # not mid-run
+    (None, nan_at_first("c_normal"), "c_normal: non-finite values"),  # not mid-run
     (None, _duplicate_body, "duplicate bodies"),  # not mid-run with another reason
     (None, _self_contact, "with itself"),  # not silently replaced
     (None, _huge_shift, "do not touch"),  # not silently replaced
@@ -118,7 +118,7 @@ def test_specimen_that_blocks_rotations_cannot_give_free_rows(specimen_100, tmp_
 
 def test_save_refuses_what_load_would_refuse(specimen_100, tmp_path):
     scene, meta = specimen_file.load(str(specimen_100))
-    with pytest.raises(specimen_file.SpecimenFileError, match="seed must be an integer >= 0"):
+    with pytest.raises(specimen_file.SpecimenFileError, match="seed: must be an integer >= 0"):
         specimen_file.save(str(tmp_path / "x.npz"), scene, seed=-1, parameters=meta["parameters"])
     assert not os.path.exists(tmp_path / "x.npz")
 
