@@ -9,11 +9,19 @@ A page holding a line ``<!-- generated: KIND -->`` gets Markdown in its place (`
   whose docstrings (plain text) are shown as written.
 
 The lists are discovered from the files, so a new script or module has its page without an edit.
+
+The directive ``schema-table`` (```` ```{schema-table} NAME``` ````) renders the fields of one of
+the schemas trueaniso checks its input files against (``trueaniso.validate``) as a table: the format
+pages show what the check asks for in the schema's own words.
 """
 import glob
+import json
 import os
 import re
 import subprocess
+
+from docutils import nodes
+from docutils.parsers.rst import Directive
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PYTHON = "/usr/bin/python3"
@@ -94,6 +102,228 @@ def generate(kind):
     raise ValueError("unknown generated section %r" % kind)
 
 
+# --- ```{schema-table} NAME```: a schema's fields as a table -------------------------------------
+
+def _schema(name):
+    """Schema `name` of trueaniso.validate (its file in pyscripts/trueaniso/schemas/)."""
+    from trueaniso import validate
+    if name not in validate.NAMES + ("specimen_arrays",):
+        raise ValueError("schema-table: unknown schema %r (known: %s, specimen_arrays)"
+                         % (name, ", ".join(validate.NAMES)))
+    return validate.schema(name)
+
+
+def schema_file(name):
+    """The file name of schema `name`, as the page shows it."""
+    return name + (".json" if name == "specimen_arrays" else ".schema.json")
+
+
+def _resolved(sub, root):
+    """`sub` with a local $ref (#/definitions/X) merged in, its own keys winning."""
+    ref = sub.get("$ref", "")
+    if ref.startswith("#/"):
+        target = root
+        for key in ref[2:].split("/"):
+            target = target[key]
+        merged = dict(_resolved(target, root))
+        merged.update((k, v) for k, v in sub.items() if k != "$ref")
+        if "description" in target and target is not sub:
+            merged["_kind"] = target["description"]
+        return merged
+    return sub
+
+
+def _value(v):
+    return json.dumps(v)
+
+
+def _type_words(sub, root):
+    """(type, constraints) of a (sub)schema in words: ('number', ['finite', '> 0'])."""
+    sub = _resolved(sub, root)
+    if "anyOf" in sub:
+        parts = [_type_words(s, root) for s in sub["anyOf"]]
+        constrained = [(t, c) for t, c in parts if c]
+        if len(constrained) == 1:
+            return _alternatives([t for t, _ in parts]), constrained[0][1]
+        # each alternative's own constraints, said with its type: "number: finite, > 0; or string: ..."
+        return _alternatives([t for t, _ in parts]), ["%s%s: %s" % ("or " if k else "", t, ", ".join(c))
+                                                      for k, (t, c) in enumerate(constrained)]
+    constraints = []
+    types = sub.get("type", [])
+    types = [types] if isinstance(types, str) else list(types)
+    if "const" in sub:
+        types = types or [type(sub["const"]).__name__.replace("str", "string").replace("int", "integer")]
+        constraints.append("always %s" % _value(sub["const"]))
+    if "enum" in sub:
+        kinds = sorted({type(v).__name__ for v in sub["enum"]})
+        types = types or ["string" if kinds == ["str"] else "integer" if kinds == ["int"] else "any"]
+        constraints.append("one of " + ", ".join(_value(v) for v in sub["enum"]))
+    if "number" in types:
+        constraints.append("finite")
+    for key, op in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="), ("exclusiveMaximum", "<")):
+        if key in sub:
+            constraints.append("%s %s" % (op, _value(sub[key])))
+    if "_kind" in sub:
+        constraints.append(sub["_kind"])
+    elif "pattern" in sub:
+        constraints.append("matches %s" % sub["pattern"])
+    if sub.get("minLength") == 1:
+        constraints.append("not empty")
+    elif sub.get("minLength"):
+        constraints.append("at least %d characters" % sub["minLength"])
+    if "array" in types:
+        if sub.get("minItems") is not None and sub.get("minItems") == sub.get("maxItems"):
+            constraints.append("%d items" % sub["minItems"])
+        else:
+            if "minItems" in sub:
+                constraints.append("at least %d items" % sub["minItems"])
+            if "maxItems" in sub:
+                constraints.append("at most %d items" % sub["maxItems"])
+        if "items" in sub:
+            item_type, item_constraints = _type_words(sub["items"], root)
+            types[types.index("array")] = "array of %s" % ("(%s)" % item_type if " or " in item_type else item_type)
+            constraints.extend("each %s" % c for c in item_constraints)
+    return _alternatives(types) or "any", constraints
+
+
+def _alternatives(words):
+    return " or ".join(words) if len(words) < 3 else ", ".join(words[:-1]) + " or " + words[-1]
+
+
+def _object_parts(sub, root, extends):
+    """The properties, required names and additionalProperties of an object schema, allOf merged;
+    a $ref to another schema file is recorded in `extends` (its fields are that schema's table)."""
+    sub = _resolved(sub, root)
+    properties, required, additional = dict(sub.get("properties", {})), set(sub.get("required", [])), \
+        sub.get("additionalProperties")
+    for part in sub.get("allOf", []):
+        if "$ref" in part and not part["$ref"].startswith("#"):
+            extends.append(part["$ref"])
+            required |= set(_schema(part["$ref"].split(".")[0]).get("required", []))
+            continue
+        p, r, a = _object_parts(part, root, extends)
+        for key, value in p.items():
+            properties[key] = dict(properties.get(key, {}), **value)
+        required |= r
+        additional = additional if a is None else a
+    return properties, required, additional
+
+
+def schema_rows(name):
+    """(field, type, constraints, required, description) of every field of schema `name` (required
+    None for the arrays of specimen_arrays, which the format's version decides), nested
+    objects and the objects of lists followed into: a field is a dotted path into the file, ``*``
+    stands for any key and ``[]`` for each item of a list. Also the schema's title, description and
+    the schema files it extends."""
+    root = _schema(name)
+    rows, extends = [], []
+    if "arrays" in root:  # specimen_arrays.json: a declarative table, not JSON Schema
+        for key, spec in root["arrays"].items():
+            shape = "(%s)" % ", ".join(str(n) for n in spec["shape"]) if len(spec["shape"]) > 1 \
+                else "(%s,)" % spec["shape"][0]
+            rows.append((key, "%s array %s" % (spec["kind"], shape), ["finite"] if spec.get("finite") else [],
+                         None, spec["description"]))
+        return root, rows, extends
+
+    def walk(sub, prefix, required_names):
+        sub = _resolved(sub, root)
+        if sub.get("type") == "array" and "items" in sub and \
+                (_resolved(sub["items"], root).get("properties") or _resolved(sub["items"], root).get("allOf")):
+            walk(sub["items"], prefix + "[]", required_names)
+            return
+        properties, required, additional = _object_parts(sub, root, extends)
+        for key, prop in properties.items():
+            path = prefix + ("." if prefix else "") + key
+            kind, constraints = _type_words(prop, root)
+            rows.append((path, kind, constraints, "required" if key in required else "optional",
+                         _resolved(prop, root).get("description", "")))
+            inner = _resolved(prop, root)
+            if inner.get("properties") or isinstance(inner.get("additionalProperties"), dict) or \
+                    (inner.get("type") == "array" and isinstance(inner.get("items"), dict)
+                     and _resolved(inner["items"], root).get("properties")):
+                walk(inner, path, required)
+        if isinstance(additional, dict):
+            path = prefix + ("." if prefix else "") + "*"
+            kind, constraints = _type_words(additional, root)
+            description = additional.get("description", "")
+            names = sub.get("propertyNames")
+            if names:
+                constraints = ["name %s" % c for c in _type_words(names, root)[1]] + constraints
+                description = "%s; the name: %s" % (description, names.get("description", "")) if description \
+                    else names.get("description", "")
+            rows.append((path, kind, constraints, "any other key", description or
+                         _resolved(additional, root).get("description", "one entry per key")))
+            if _resolved(additional, root).get("properties"):
+                walk(additional, path, set())
+
+    walk(root, "", set())
+    return root, rows, extends
+
+
+def _cell(*children):
+    entry = nodes.entry()
+    paragraph = nodes.paragraph()
+    paragraph.extend(children)
+    entry += paragraph
+    return entry
+
+
+class SchemaTable(Directive):
+    """```{schema-table} NAME```: the fields of schema NAME (trueaniso.validate.schema) as a table,
+    under a line naming its file and its description; the schema's own words, so the page and the
+    check that refuses a file cannot disagree."""
+    required_arguments = 1
+    has_content = False
+
+    def run(self):
+        name = self.arguments[0]
+        try:
+            root, rows, extends = schema_rows(name)
+        except (ValueError, OSError, KeyError) as e:
+            raise self.error(str(e))
+        self.state.document.settings.env.note_dependency(
+            os.path.join(REPO, "pyscripts", "trueaniso", "schemas", schema_file(name)))
+        intro = nodes.paragraph()
+        intro += nodes.Text("Schema ")
+        intro += nodes.literal(text=schema_file(name))
+        intro += nodes.Text(" (pyscripts/trueaniso/schemas/): %s" % root.get("description", root.get("title", "")))
+        if extends:
+            intro += nodes.Text(" Every field of ")
+            for i, ref in enumerate(extends):
+                intro += nodes.Text(", " if i else "")
+                intro += nodes.literal(text=ref)
+            intro += nodes.Text(", and:")
+        with_required = any(row[3] is not None for row in rows)
+        headings = ("field", "type", "constraints") + (("required",) if with_required else ()) + ("description",)
+        widths = (22, 12, 22) + ((10,) if with_required else ()) + (34,)
+        table = nodes.table(classes=["schema-table", "schema-" + name.replace("_", "-")])
+        group = nodes.tgroup(cols=len(headings))
+        table += group
+        for width in widths:
+            group += nodes.colspec(colwidth=width)
+        head = nodes.thead()
+        row = nodes.row()
+        for heading in headings:
+            row += _cell(nodes.Text(heading))
+        head += row
+        group += head
+        body = nodes.tbody()
+        for field, kind, constraints, required, description in rows:
+            row = nodes.row()
+            row += _cell(nodes.literal(text=field))
+            row += _cell(nodes.Text(kind))
+            row += _cell(nodes.Text("; ".join(constraints)))
+            if with_required:
+                row += _cell(nodes.Text(required))
+            row += _cell(nodes.Text(description))
+            body += row
+        group += body
+        # the schema's words as written: no curly quotes or dashes made of its ' and --
+        for node in (intro, table):
+            node["support_smartquotes"] = False
+        return [intro, table]
+
+
 def plain_docstring(app, what, name, obj, options, lines):
     """The package's docstrings are plain text (equations, tables, indented examples), not
     reStructuredText: shown as written, in a literal block, they need no markup and warn of none."""
@@ -111,4 +341,5 @@ def on_source_read(app, docname, source):
 def setup(app):
     app.connect("source-read", on_source_read)
     app.connect("autodoc-process-docstring", plain_docstring)
+    app.add_directive("schema-table", SchemaTable)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

@@ -1,7 +1,9 @@
 """The manual (docs/, Sphinx with myst-parser): it builds with no warning, its reference covers every
-script and module, the benchmark tables are where the scripts write them, and the tutorial's
-commands, run as written, give what the tutorial says."""
+script, module and input schema, the benchmark tables are where the scripts write them, and the
+tutorial's commands, run as written, give what the tutorial says."""
 import glob
+import html as html_text
+import json
 import os
 import re
 import shlex
@@ -81,6 +83,88 @@ def test_the_api_reference_documents_every_module(manual):
     # autodoc imported them: a documented function carries its signature
     assert 'id="trueaniso.triaxial.reach_state"' in html
     assert REPO not in html, "a default value shows this checkout's path"
+
+
+SCHEMAS = os.path.join(REPO, "pyscripts", "trueaniso", "schemas")
+
+
+def _schema_name(path):
+    name = os.path.basename(path)
+    return name[:-len(".schema.json")] if name.endswith(".schema.json") else os.path.splitext(name)[0]
+
+
+def _schema_pages():
+    """{schema name: pages (built .html paths) whose source shows it with ```{schema-table} NAME```}."""
+    pages = {}
+    for source in glob.glob(os.path.join(DOCS, "**", "*.md"), recursive=True):
+        with open(source) as f:
+            for name in re.findall(r"^```\{schema-table\}\s+(\S+)", f.read(), flags=re.M):
+                pages.setdefault(name, []).append(os.path.splitext(os.path.relpath(source, DOCS))[0] + ".html")
+    return pages
+
+
+def _descriptions(node, inside_definitions=False):
+    """Every "description" of a schema file, those of its shared definitions left out (a definition
+    is shown through the properties that use it)."""
+    found = []
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if key == "description" and isinstance(value, str) and not inside_definitions:
+                found.append(value)
+            else:
+                found += _descriptions(value, inside_definitions or key == "definitions")
+    elif isinstance(node, list):
+        for value in node:
+            found += _descriptions(value, inside_definitions)
+    return found
+
+
+def _words(text):
+    return " ".join(html_text.unescape(text).split())
+
+
+def test_every_schema_is_shown_in_the_manual_with_its_descriptions(manual):
+    """Every schema of pyscripts/trueaniso/schemas/ is rendered by a ```{schema-table}``` on some
+    page, and every description it holds (each field's, the file's) is in that built page: a new
+    schema, or a field, that the reference does not show fails here."""
+    proc, out = manual
+    assert proc.returncode == 0
+    files = sorted(glob.glob(os.path.join(SCHEMAS, "*.json")))
+    assert len(files) >= 9
+    pages = _schema_pages()
+    missing = [os.path.basename(p) for p in files if _schema_name(p) not in pages]
+    assert not missing, "schemas no page of docs/ shows with a schema-table: %s" % ", ".join(missing)
+    checked = 0
+    for path in files:
+        with open(path) as f:
+            descriptions = _descriptions(json.load(f))
+        assert len(descriptions) >= 3, path
+        for page in pages[_schema_name(path)]:
+            text = _words(_text(out, page))
+            assert os.path.basename(path) in text, "%s does not name %s" % (page, path)
+            for description in descriptions:
+                assert _words(description) in text, "%s: %r is not on %s" % (os.path.basename(path), description,
+                                                                            page)
+                checked += 1
+    assert checked >= 150
+
+
+def test_a_schema_table_gives_each_field_s_type_constraints_and_whether_it_is_required(manual):
+    """The rows of the specimen's metadata, read from the built table: nested fields by their dotted
+    path, bounds and enums as the schema states them, required or not as its lists say."""
+    proc, out = manual
+    assert proc.returncode == 0
+    page = _html(out, os.path.join("reference", "formats", "specimen.html"))
+    rows = {}
+    for row in re.findall(r"<tr[^>]*>(.*?)</tr>", page, flags=re.S):
+        cells = [_words(re.sub(r"<[^>]+>", "", c)) for c in re.findall(r"<td[^>]*>(.*?)</td>", row, flags=re.S)]
+        if len(cells) == 5:
+            rows[cells[0]] = cells[1:]
+    assert rows["material.poisson"][:3] == ["number", "finite; > -1; < 0.5", "required"]
+    assert rows["material.rolling_friction"][:3] == ["number", "finite; >= 0", "optional"]
+    assert rows["format_version"][:3] == ["integer", "one of 2, 3, 4", "required"]
+    assert rows["seed"][:3] == ["integer or null", ">= 0", "required"]
+    assert rows["parameters.assembly"][2] == "optional"
 
 
 def _bench_names(path):

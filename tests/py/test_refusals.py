@@ -1,6 +1,7 @@
 """Refusals that write nothing, resources before work, I/O errors mid-run as one line, derived
 quantities of a clump specimen, and a packing far beyond the study's stresses refused before
-stepping. Each case names what the code before did."""
+stepping. Each docstring says what the check guards against: a traceback, a file written by a
+run that is then refused, work spent before a refusal, or a wrong number given without a word."""
 import errno
 import os
 import shutil
@@ -24,8 +25,9 @@ def _far_contact(a):
 
 
 def test_a_refused_run_into_a_new_out_leaves_nothing_behind(specimen_100, tmp_path):
-    """Before: refused when the specimen was loaded, after metadata.json and states/ were written,
-    and the next correct run there was refused as 'another study'."""
+    """A specimen refused when it is loaded leaves no metadata.json and no states/ in the new
+    results directory: left there, they would make the next correct run into it refused as
+    'another study'."""
     bad = tmp_path / "bad.npz"
     _rewrite(specimen_100, bad, edit_arrays=_far_contact, reseal=True)
     out = tmp_path / "out"
@@ -35,7 +37,8 @@ def test_a_refused_run_into_a_new_out_leaves_nothing_behind(specimen_100, tmp_pa
 
 
 def test_force_new_moves_the_old_study_aside_only_after_the_new_inputs_passed(specimen_100, tmp_path):
-    """Before: the old study was moved into superseded/, then the new --specimen was refused."""
+    """--force-new with a specimen that is refused leaves the old study in place: it is moved into
+    superseded/ only once the new inputs passed."""
     out = tmp_path / "out"
     (out / "states").mkdir(parents=True)
     shutil.copy(os.path.join(REPO, "docs", "data", "spheres-4000-s1", "metadata.json"), out / "metadata.json")
@@ -70,7 +73,8 @@ def test_a_study_that_fails_before_saving_anything_is_undone(specimen_100, tmp_p
 
 
 def test_a_lock_or_states_of_the_wrong_kind_is_refused_in_one_line(specimen_100, tmp_path):
-    """Before: IsADirectoryError and FileExistsError tracebacks."""
+    """A .lock that is a directory and a states that is a file are refused in one line naming
+    them, not as IsADirectoryError or FileExistsError tracebacks."""
     out = tmp_path / "a"
     (out / ".lock").mkdir(parents=True)
     one_line_error(run_script("run_states.py", "--specimen", specimen_100, "--ids", "1", "--out", out), ".lock",
@@ -84,9 +88,9 @@ def test_a_lock_or_states_of_the_wrong_kind_is_refused_in_one_line(specimen_100,
 
 @pytest.mark.parametrize("assembly", ["clump1", "clump2"])
 def test_a_huge_clump_preparation_is_refused_before_anything_is_drawn(tmp_path, assembly):
-    """Before: clump1 at --n 1000000000 drew every clump first (no output, past 15 GB); spheres at the
-    same n were refused in 0.2 s. Under a 2 GB address-space limit a run that draws anything of
-    that size dies of it instead of being refused."""
+    """The memory a clump preparation needs is estimated before any clump is drawn, as for
+    spheres. Under a 2 GB address-space limit a run that draws anything of that size dies of it
+    instead of being refused."""
     import resource
     n = 1000000000  # a multiple of either recipe's layers
 
@@ -126,8 +130,8 @@ def _run_with_failing_writes(args, error, target):
     (errno.EACCES, "atomic", "make it writable for this user"),
 ])
 def test_an_io_error_mid_run_is_one_line_and_the_run_resumes(specimen_100, tmp_path, error, target, fix):
-    """Before: a traceback (no data was lost). Now one line naming the file and how to go on; the
-    same command then finishes the study."""
+    """A full disk, a read-only file system or a permission taken away ends the run in one line
+    naming the file and how to go on, not a traceback; the same command then finishes the study."""
     out = tmp_path / "out"
     args = ["--specimen", specimen_100, "--ids", "1", "--probes", "z", "--out", out]
     proc = _run_with_failing_writes(args, error, target)
@@ -185,11 +189,11 @@ def _scaled(name, k, factor):
 
 
 @pytest.mark.parametrize("edit_meta,edit_arrays,words", [
-    # before: accepted; an inertia x1000 changed E_z by 2.25 % without a word
+    # an inertia x1000, accepted, would change E_z by 2.25 % without a word
     (None, _scaled("inertia", 3, 1000.0), "body 3: its principal moments of inertia"),
     (None, _scaled("masses", 5, 1.01), "body 5: its mass"),
     (lambda m: m["material"].update(density=2000.0), None, r"body \d+: its mass"),
-    # before: a clump1 file labelled clump2 was reported as clump2
+    # a clump1 file labelled clump2 would be reported as clump2
     (lambda m: m["parameters"].update(assembly="clump2"), None, "a clump of clump2"),
     (lambda m: m["parameters"].update(assembly="clump2", shape="trimer-2.0", orientation_weights=[1.0, 1.0, 10.0],
                                       layers=1), None, "parameters record the clump1 recipe"),
@@ -204,8 +208,8 @@ def test_clump_mass_inertia_and_label_are_checked_against_the_members(clump_file
 
 
 def test_an_exploded_packing_is_refused_before_stepping(specimen_100, tmp_path):
-    """Every length shrunk by 3 %: the contacts carry hundreds of MPa. Before: the servo stepped
-    toward 100 kPa for its 3,000,000 steps, then gave up."""
+    """Every length shrunk by 3 %: the contacts carry hundreds of MPa. Refused before the first
+    step: the servo would otherwise step toward 100 kPa for its 3,000,000 steps, then give up."""
     def shrink(a):
         for k in ("positions", "cell", "cell_ref"):
             a[k] = a[k] * 0.97
@@ -220,8 +224,8 @@ def test_an_exploded_packing_is_refused_before_stepping(specimen_100, tmp_path):
 
 
 def test_damping_0_is_refused_at_once_with_the_reason(specimen_100, tmp_path):
-    """Before: accepted, then Table C1's state 5 was held 200,000 steps without settling (the
-    unbalanced force stays above the servo's tolerance with nothing to dissipate it)."""
+    """Refused before any step: with no damping, Table C1's state 5 is held 200,000 steps without
+    settling (the unbalanced force stays above the servo's tolerance with nothing to dissipate it)."""
     out = tmp_path / "out"
     one_line_error(run_script("run_states.py", "--specimen", specimen_100, "--ids", "5", "--damping", "0",
                               "--out", out), "--damping 0", "no viscous damping")

@@ -40,7 +40,7 @@ def _study_with_checkpoint(tmp_path, specimen_path, **changes):
 
 
 @pytest.mark.parametrize("changes,words", [
-    (dict(study="0123456789abcdef"), "made by another study"),  # before: solved, Table B1 of the other study
+    (dict(study="0123456789abcdef"), "made by another study"),  # would give Table B1 of the other study
     (dict(specimen="f" * 64), "another specimen"),
     (dict(sigma_z=110e3), "sigma_z = 110000 Pa"),
     (dict(state="5"), "checkpoint of state 5, not of state 1"),
@@ -95,7 +95,7 @@ def _drop_state(sid):
 
 
 @pytest.mark.parametrize("edit_meta,edit_rows,words", [
-    # before: the rows of state 5 went into Table 2 and zeta although the study does not define it
+    # rows of a state the study does not define would go into Table 2 and the fit of zeta
     (_drop_state("5"), None, ["rows of state 5", "does not define"]),
     (None, _set(4, "b", "0.25"), ["line 4", "b = 0.25", "defines it with b"]),
     (None, _set(4, "sigma_z_goal", "150000.0"), ["line 4", "sigma_z_goal = 150000.0"]),
@@ -110,7 +110,8 @@ def test_rows_that_are_not_the_study_s_are_refused_by_every_analysis(tmp_path, e
 
 
 def test_a_nan_cell_leaves_its_row_out_and_the_report_says_so(tmp_path):
-    """Before: one NaN Zm ended the report in a LinAlgError (SVD did not converge), the figures in a
+    """One NaN Zm is left out of the report, the figures and path_fidelity, each saying which line:
+    kept, it fails the report's fit as a LinAlgError (SVD did not converge) and the figures as a
     SystemError."""
     out = _copy_study(tmp_path, edit_rows=_set(5, "Zm", "nan"))
     proc = _module("analysis.report", out)
@@ -119,7 +120,7 @@ def test_a_nan_cell_leaves_its_row_out_and_the_report_says_so(tmp_path):
     assert "1 row with a NaN or infinite cell left out: line 5 (state 6 probe z: Zm = nan)" in text, text[:3000]
     proc = _module("analysis.figures", out / "probes.csv", "--out", tmp_path / "f")
     assert proc.returncode == 0 and "left out: line 5" in proc.stderr, proc.stderr
-    proc = _module("analysis.path_fidelity", out / "probes.csv")  # before: left out without a word
+    proc = _module("analysis.path_fidelity", out / "probes.csv")  # says so too, not only the report
     assert proc.returncode == 0 and "left out: line 5" in proc.stderr, proc.stderr
 
 

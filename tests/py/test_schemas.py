@@ -1,6 +1,8 @@
 """One schema per file trueaniso reads (pyscripts/trueaniso/schemas, trueaniso/validate.py): a file
 that parses but has the wrong shape is refused in one line naming the file and the field, never
-with a traceback. Each case names what the code before did with it."""
+with a traceback: each case is a file that parses (JSON, npz, CSV) but would otherwise reach the
+code that uses it as a value of the wrong kind, where it fails as a TypeError or AttributeError
+far from the file."""
 import json
 import os
 import shutil
@@ -51,7 +53,7 @@ def _meta_of(path):
 
 
 @pytest.mark.parametrize("edit,field", [
-    (lambda m: m.update(material=None), "material"),  # before: TypeError traceback
+    (lambda m: m.update(material=None), "material"),  # refused by the schema, not a TypeError in the material check
     (lambda m: m.update(material=["G", 1]), "material"),
     (lambda m: m["material"].update(density="2650"), "material.density"),  # a string where a number belongs
     (lambda m: m.update(step=1.5), "step"),
@@ -68,7 +70,8 @@ def test_specimen_metadata_of_the_wrong_shape_is_refused_naming_the_field(specim
 
 
 def test_specimen_metadata_that_is_a_list_is_refused(specimen_100, tmp_path):
-    """Before: AttributeError ('list' object has no attribute 'get')."""
+    """Metadata that is valid JSON but not an object is refused as the file's whole metadata, in one
+    line from the library and from a script (not an AttributeError on the list)."""
     with np.load(specimen_100) as z:
         arrays = {k: z[k] for k in z.files}
     arrays["meta"] = np.array(json.dumps([1, 2]))
@@ -81,7 +84,8 @@ def test_specimen_metadata_that_is_a_list_is_refused(specimen_100, tmp_path):
 
 
 @pytest.mark.parametrize("edit,words", [
-    # before: 'member_begin' stored as float ended in a TypeError inside the contents check
+    # the kind of number is checked before any array is used as an index (a float member_begin
+    # would fail as a TypeError inside the contents check)
     (lambda a: a.update(member_begin=a["member_begin"].astype(float)), "member_begin: must hold integers, not float64"),
     (lambda a: a.update(c_shift=a["c_shift"].astype(float)), "c_shift: must hold integers"),
     (lambda a: a.update(radii=a["radii"][:-1]), "radii: has shape"),
@@ -107,7 +111,7 @@ def _study(tmp_path, specimen, edit):
 
 
 @pytest.mark.parametrize("edit,field", [
-    (lambda m: m.update(states=[1, 2]), "states"),  # before: AttributeError traceback
+    (lambda m: m.update(states=[1, 2]), "states"),  # a list where a table of states belongs
     (lambda m: m["states"]["5"].update(sigma_z="high"), "states.5.sigma_z"),
     (lambda m: m.update(fingerprint=None), "fingerprint"),
     (lambda m: m["fingerprint"].update(threads=1.5), "fingerprint.threads"),
@@ -127,7 +131,8 @@ def test_study_metadata_of_the_wrong_shape_is_refused_by_the_scripts(specimen_10
 
 
 def test_study_metadata_that_is_a_list_is_refused_by_the_report(tmp_path):
-    """Before: AttributeError traceback from analysis.report."""
+    """analysis.report reads metadata.json through its schema: a file that is a list is one line
+    naming the file, not an AttributeError traceback."""
     import subprocess
     import sys
     out = tmp_path / "study"
@@ -160,7 +165,8 @@ def test_probe_table_cells_of_the_wrong_type_are_refused_naming_line_and_column(
 
 
 def test_a_parameter_table_value_of_the_wrong_kind_is_refused(tmp_path):
-    """Before: a dict value went on as '--out={'a': 1}' to argparse."""
+    """A table value that YADE evaluates to a dict is refused naming the line and the column: it
+    would otherwise go on to argparse as the text '--out={'a': 1}'. 'inf' stays a value."""
     table = tmp_path / "t.txt"
     table.write_text("ids out\n'1' {'a':1}\n'1' inf\n")
     with pytest.raises(param_table.InputError, match="line 2: column out: must be"):
@@ -173,7 +179,8 @@ def test_a_parameter_table_value_of_the_wrong_kind_is_refused(tmp_path):
 
 
 def test_a_statics_record_of_the_wrong_shape_is_refused_by_the_report(tmp_path):
-    """Before: a TypeError or KeyError traceback from Table B1."""
+    """Table B1 reads each statics record through its schema: too few moduli, or a file that is a
+    list, is refused naming the file and the field (not a TypeError or KeyError in the table)."""
     from analysis import chain, report
     from analysis.results import ResultsError
     (tmp_path / "statics_isotropic.json").write_text(json.dumps({"E_kinematic": [1, 2], "E_blocked": [1, 2, 3]}))
@@ -185,7 +192,7 @@ def test_a_statics_record_of_the_wrong_shape_is_refused_by_the_report(tmp_path):
 
 
 @pytest.mark.parametrize("name,source,edit,words", [
-    # before: a TypeError traceback from the Fig. 16 section ('%.2f' of a text)
+    # a text where a number belongs is refused by the schema, before the Fig. 16 section formats it
     ("fig16.json", "fig16-spheres-4000.json", lambda rows: rows[1].update(sigma_v="50e3"), "1.sigma_v: must be"),
     ("fig16.json", "fig16-spheres-4000.json", lambda rows: rows[0].update(nu_ratio=[1]), "0.nu_ratio: must be"),
     ("clumps.json", "anisotropy-clumps-4000.json", lambda rows: rows[0].update(probe_restrained=[1e8, 1e8]),
