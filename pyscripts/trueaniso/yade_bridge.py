@@ -135,10 +135,12 @@ def _contact_rows(O, index):
     for I in O.interactions:
         if not I.isReal:
             continue
-        if type(I.phys).__name__ != "MindlinPhys":
+        kind = type(I.phys).__name__
+        if kind not in ("MindlinPhys", "SimplifiedMindlinPhys"):
             raise BridgeError("interaction %d-%d has %s: its forces come from another contact law than Hertz-Mindlin "
-                              "(Ip2_FrictMat_FrictMat_MindlinPhys); import the positions only "
-                              "(import_contacts=False) to evaluate them with ours" % (I.id1, I.id2, type(I.phys).__name__))
+                              "(Ip2_FrictMat_FrictMat_MindlinPhys, or ours from the trueaniso YADE plugin: "
+                              "Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys); import the positions only "
+                              "(import_contacts=False) to evaluate them with ours" % (I.id1, I.id2, kind))
         # MindlinPhys also carries the Mindlin variants the paper's law has not: viscous damping
         # (betan, betas), adhesion (gamma), rolling and twisting moments (krot, ktwist). Their forces
         # passed the class check (adhesion: 4.8 kPa in YADE read 97 kPa here; an outside try).
@@ -332,7 +334,12 @@ def write_shear_history(scene, O, yade_of_member, every=False):
             continue
         fs = (1.0 if I.id1 == i1 else -1.0) * c["shear_force"][k]
         I.phys.shearForce = Vector3(*fs)
-        I.phys.shearElastic = Vector3(*fs)
+        if type(I.phys).__name__ == "SimplifiedMindlinPhys":
+            # our law in YADE carries the force from the normal it was last evaluated at
+            I.phys.prevNormal = Vector3(I.geom.normal)
+            I.phys.loaded = True
+        else:
+            I.phys.shearElastic = Vector3(*fs)
 
 
 def _interaction_images(O):
@@ -371,8 +378,10 @@ def _keep_interaction_images(O, before):
             I.cellDist = Vector3i(*[int(v) for v in new])
 
 
-def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False):
-    """Rebuild YADE's O from our scene, with YADE's own Hertz-Mindlin law: the peer we compare to.
+def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False, law="yade"):
+    """Rebuild YADE's O from our scene, with YADE's own Hertz-Mindlin law (law="yade"): the peer we
+    compare to; or, with law="trueaniso", with our law as a YADE class (the plugin of engines/yade,
+    loaded through YADE_PREFIX: docs/yade-peer.md).
 
     YADE's sphere-sphere geometry scales tangential displacements by (r1+r2)/(r1+r2-delta) to
     "avoid granular ratcheting" (its default; the law's own flag of that name is unused in
@@ -384,7 +393,19 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
                       InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
                       Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator, Vector3, utils)
+    if law not in ("yade", "trueaniso"):
+        raise BridgeError("law must be 'yade' (YADE's Hertz-Mindlin) or 'trueaniso' (ours, from the YADE plugin)")
+    if law == "trueaniso":
+        try:
+            from yade import Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys as Ip2, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin as Law2
+        except ImportError:
+            raise BridgeError("law='trueaniso' needs the trueaniso YADE plugin: run yade-double with "
+                              "YADE_PREFIX=<repository>/build/yade-prefix (./setup.sh builds it)") from None
+    else:
+        Ip2, Law2 = Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
     if scene.has_clumps:
+        if law != "yade":
+            raise BridgeError("the trueaniso YADE plugin's law is for spheres; a clump scene takes law='yade'")
         from . import yade_clumps
         return yade_clumps.yade_clump_scene_from(scene, O, damping, import_contacts, mindlin_ratcheting)[0]
     O.reset()
@@ -404,8 +425,8 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
         ForceResetter(),
         InsertionSortCollider([Bo1_Sphere_Aabb()], label="collider"),
         InteractionLoop([Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=mindlin_ratcheting)],
-                        [Ip2_FrictMat_FrictMat_MindlinPhys()],
-                        [Law2_ScGeom_MindlinPhys_Mindlin(label="mindlin")]),
+                        [Ip2()],
+                        [Law2(label="mindlin")]),
         NewtonIntegrator(damping=damping, label="newton"),
     ]
     O.dt = scene.dt if scene.dt > 0 else 1e-8

@@ -69,3 +69,9 @@ def specimen_100(tmp_path_factory):
     path = tmp_path_factory.mktemp("specimen100") / "s100.npz"
     specimen_file.save(str(path), scene, seed=3, parameters=log, summary=specimen.state(scene))
     return path
+
+
+def pytest_configure(config):
+    # Tests that take more than about 20 s (./test.sh --long runs them). Registered here because
+    # this tree has no pytest.ini; the one place to move it to when there is one.
+    config.addinivalue_line("markers", "long: a test that takes more than about 20 s")
