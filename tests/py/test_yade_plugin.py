@@ -187,6 +187,23 @@ def test_two_threads(plugin, specimen_100, tmp_path):
     assert np.abs(np.array(r["stress"]) - np.array(r["goal"])).max() < 100.0
 
 
+def test_fabric_recorder_against_our_fabric(plugin, specimen_100, tmp_path):
+    """FabricRecorder at a held state against our fabric() (measure/Fabric.cpp, tested against
+    YADE's fabricTensor in test_fabric.py) of that state imported through yade_bridge. The import
+    is one step later (the recorder evaluates inside YADE's step, the import after it), at a state
+    held to unbalanced force 1e-4: counts, void ratio and Nc/V equal, the tensors apart by one
+    step of motion (measured: R, H 6e-10; B, M, weighted by N^(1/3), 1e-6 of their largest)."""
+    r = run_plugin("plugin_state", specimen_100, "reach", *STATE_21, cwd=tmp_path)
+    assert r["reached"], r["message"]
+    rec, ours = r["fabric_check"]["recorder"], r["fabric_check"]["ours"]
+    assert rec["Nc"] == ours["Nc"] > 100 and rec["Zm"] == ours["Zm"]
+    assert rec["e"] == pytest.approx(ours["e"], rel=1e-12)
+    assert rec["NcV"] == pytest.approx(ours["NcV"], rel=1e-12)
+    for key, tol in (("R", 1e-8), ("H", 1e-8), ("B", 1e-5), ("M", 1e-5)):
+        a, b = np.array(rec[key], dtype=float).ravel(), np.array(ours[key], dtype=float).ravel()
+        assert np.abs(a - b).max() <= tol * np.abs(b).max(), key
+
+
 BATCH_TABLE = """b      sigmaZ
 0.5    140e3
 0.0    120e3

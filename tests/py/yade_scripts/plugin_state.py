@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 from yade import O  # noqa: E402
 from yade.wrapper import FabricRecorder, StressProbe, TrueTriaxialServo  # noqa: E402
 
-from trueaniso import dem, specimen_file, triaxial, yade_bridge  # noqa: E402
+from trueaniso import dem, engines, specimen_file, triaxial, yade_bridge  # noqa: E402
 
 path, mode, b, sigma_z, out = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), sys.argv[-1]
 DAMPING = 0.4
@@ -72,6 +72,17 @@ result.update(reached=servo.reached, failed=servo.failed, message=servo.message,
 fab = [e for e in O.engines if isinstance(e, FabricRecorder)][0]
 result["fabric"] = dict(Zm=fab.Zm, B=[list(r) for r in fab.B], NcOverV=fab.NcOverV, voidRatio=fab.voidRatio,
                         records=fab.records)
+# FabricRecorder at the held state against our fabric() of the same state imported through the
+# bridge: one more step with the recorder due, then the import (at the positions after it).
+fab.iterPeriod = 1
+O.run(1, True)
+mine, _ = yade_bridge.scene_from_yade(O)
+f = engines.fabric(mine)
+result["fabric_check"] = dict(recorder=dict(Zm=fab.Zm, B=[list(r) for r in fab.B], R=[list(r) for r in fab.R],
+                                            H=[list(r) for r in fab.H], M=list(fab.M), e=fab.voidRatio,
+                                            NcV=fab.NcOverV, Nc=fab.contacts),
+                              ours=dict(Zm=f["Zm"], B=f["B"].tolist(), R=f["R"].tolist(), H=f["H"].tolist(),
+                                        M=f["M"].ravel().tolist(), e=f["e"], NcV=f["NcV_count"], Nc=f["Nc"]))
 
 if mode == "probe" and servo.reached:
     hold = np.array(servo.finalStress())
