@@ -14,7 +14,6 @@ seconds per step in the same round; the goal is <= 1.10.
 
 Needs the plugin: ./setup.sh with the YADE source (build/yade-prefix).
 """
-import argparse
 import json
 import os
 import statistics
@@ -28,6 +27,7 @@ sys.path[:0] = [os.path.dirname(HERE), REPO]
 if HERE not in sys.path:
     sys.path.insert(0, HERE)
 import _bench  # noqa: E402
+from trueaniso import cli  # noqa: E402
 
 PREFIX = os.path.join(REPO, "build", "yade-prefix")
 STATE = (0.5, 140e3, 100e3)  # state 21: b, sigma_z, p
@@ -35,14 +35,19 @@ BLOCK = "yade-engines"
 
 
 def options():
-    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--specimen", required=True)
-    p.add_argument("--steps", type=int, default=2000)
-    p.add_argument("--repeats", type=int, default=5)
-    p.add_argument("--threads", type=int, default=1)
-    p.add_argument("--doc", default=None, help="Markdown file to write the table into (docs/yade-benchmarks.md)")
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimen", required=True, help="sphere specimen file (.npz) to step")
+    p.add_argument("--steps", type=int, default=2000, help="timed steps per run (after 100 untimed)")
+    p.add_argument("--repeats", type=int, default=5, help="rounds; the medians and ranges over them are reported")
+    p.add_argument("--threads", type=int, default=1, help="yade-double -j THREADS for both loops")
+    p.add_argument("--doc", default=None, help="Markdown file whose yade-engines table is replaced (docs/yade-benchmarks.md)")
     p.add_argument("--worker", choices=("trueaniso", "yade"), help="(internal) time one loop in this process")
-    return p.parse_args([a for a in sys.argv[1:]])
+    o = cli.parse(p)
+    if o.steps < 1 or o.repeats < 1 or o.threads < 1:
+        cli.fail("--steps, --repeats and --threads must be >= 1")
+    if not o.worker and o.doc:
+        _bench.writable_doc(o.doc)
+    return o
 
 
 def worker(o):
