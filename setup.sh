@@ -57,3 +57,10 @@ if [ -n "$level" ] && [ "$level" != x86-64 ]; then  # sticky: say so on every ru
   echo "setup: the engines are built for $level (TRUEANISO_ARCH; TRUEANISO_ARCH= ./setup.sh returns to the portable baseline)"
 fi
 grep -E "warning:" "$log" || true
+
+# The YADE plugin (engines/yade, docs/yade-peer.md), with the full build only: built, self-tested
+# and installed into build/yade-prefix when the YADE source can be had (TRUEANISO_YADE_SOURCE or
+# apt-get source), else one line says why; it never stops the setup (cmake/yade_plugin.sh).
+if [ -z "$targets" ]; then
+  cmake/yade_plugin.sh
+fi

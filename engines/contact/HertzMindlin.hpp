@@ -21,10 +21,21 @@ namespace trueaniso {
 
 class HertzMindlin {
  public:
-  explicit HertzMindlin(const Material& m)
-      : ratio_(m.stiffnessRatio()), mu_(m.friction), Cn_(m.Cn()), Cs_(m.Cs()),
-        hertzUnit_(4.0 / 3.0 * m.contactModulus() * std::sqrt(0.5)), beta_(m.rollingStiffness),
-        etaR_(m.rollingFriction) {}
+  // The law's constants, computed once from the material. A host that keeps them with each
+  // contact (the YADE plugin's SimplifiedMindlinPhys) builds the law from them per contact,
+  // with the contact's own friction, at the cost of a copy.
+  struct Constants {
+    Real ratio, mu, Cn, Cs;
+    Real hertzUnit;   // (4/3) E* sqrt(1/2): N = hertzUnit sqrt(rbar) delta^(3/2)
+    Real beta, etaR;  // rolling sub-model
+  };
+  static Constants constants(const Material& m) {
+    return {m.stiffnessRatio(), m.friction, m.Cn(), m.Cs(), 4.0 / 3.0 * m.contactModulus() * std::sqrt(0.5),
+            m.rollingStiffness, m.rollingFriction};
+  }
+  explicit HertzMindlin(const Constants& c)
+      : ratio_(c.ratio), mu_(c.mu), Cn_(c.Cn), Cs_(c.Cs), hertzUnit_(c.hertzUnit), beta_(c.beta), etaR_(c.etaR) {}
+  explicit HertzMindlin(const Material& m) : HertzMindlin(constants(m)) {}
 
   // Touching contacts of one step, held by component so that the law runs over several contacts
   // at once: the compiler puts two contacts in the two lanes of an SSE2 register (the x86-64

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "contact/HertzMindlin.hpp"
+#include "measure/ContactTerms.hpp"
 #include "measure/Reduce.hpp"
 
 namespace trueaniso {
@@ -17,7 +18,7 @@ namespace {
 
 // Love-Weber: F_c (x) L_c.
 inline void addStress(const Contacts& C, int c, Mat3& acc) {
-  if (C.normalForce[c] > 0) acc.noalias() += C.force(c) * C.branch[c].transpose();
+  if (C.normalForce[c] > 0) addStressTerm(C.force(c), C.branch[c], acc);
 }
 
 // The mean contact force of the unbalanced force.
@@ -34,22 +35,7 @@ inline void addContactForce(const Contacts& C, int c, ForceMean& acc) {
 inline void addAffineStiffness(const Contacts& C, const HertzMindlin& law, int c, Vec6& acc) {
   const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
   if (kn <= 0) return;
-  const Real ks = law.shearStiffness(kn), kd = (1.0 - law.shearToNormal()) * kn;  // k_n - k_s
-  const Vec3& n = C.normal[c];
-  const Vec3& L = C.branch[c];
-  for (int k = 0; k < 3; ++k) {
-    // K_kk = sum L_k^2 [k_s + (k_n - k_s) n_k^2], the kk kk component of Eq. (32).
-    acc[k] += L[k] * L[k] * (ks + kd * n[k] * n[k]);
-  }
-  for (int I = 3; I < 6; ++I) {
-    // Engineering shear gamma_ij: the affine displacement u = (gamma/2)(L_j e_i + L_i e_j), the
-    // force k_s u + (k_n - k_s) n (n.u), the stress sym(dF (x) L)_ij: the ij ij component of
-    // Eq. (32) symmetrised over (ij) and (kl), as the static solve's affine part.
-    const int i = voigt::kRow[I], j = voigt::kCol[I];
-    const Real nu = 0.5 * (n[i] * L[j] + n[j] * L[i]);
-    const Real dFi = 0.5 * ks * L[j] + kd * n[i] * nu, dFj = 0.5 * ks * L[i] + kd * n[j] * nu;
-    acc[I] += 0.5 * (dFi * L[j] + dFj * L[i]);
-  }
+  addAffineStiffnessTerm(kn, law.shearToNormal(), C.normal[c], C.branch[c], acc);
 }
 
 // Mean |resultant force| over bodies over the mean |contact force|.

@@ -185,8 +185,10 @@ def write_to_yade(scene, O=None, ids=None):
     write_shear_history(scene, O, ids)
 
 
-def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False):
-    """Rebuild YADE's O from our scene, with YADE's own Hertz-Mindlin law: the peer we compare to.
+def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False, law="yade"):
+    """Rebuild YADE's O from our scene, with YADE's own Hertz-Mindlin law (law="yade"): the peer we
+    compare to; or, with law="trueaniso", with our law as a YADE class (the plugin of engines/yade,
+    loaded through YADE_PREFIX: docs/yade-peer.md).
 
     YADE's sphere-sphere geometry scales tangential displacements by (r1+r2)/(r1+r2-delta) to
     "avoid granular ratcheting" (its default; the law's own flag of that name is unused in
@@ -198,7 +200,19 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
                       InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
                       Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator, Vector3, utils)
+    if law not in ("yade", "trueaniso"):
+        raise BridgeError("law must be 'yade' (YADE's Hertz-Mindlin) or 'trueaniso' (ours, from the YADE plugin)")
+    if law == "trueaniso":
+        try:
+            from yade import Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys as Ip2, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin as Law2
+        except ImportError:
+            raise BridgeError("law='trueaniso' needs the trueaniso YADE plugin: run yade-double with "
+                              "YADE_PREFIX=<repository>/build/yade-prefix (./setup.sh builds it)") from None
+    else:
+        Ip2, Law2 = Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
     if scene.has_clumps:
+        if law != "yade":
+            raise BridgeError("the trueaniso YADE plugin's law is for spheres; a clump scene takes law='yade'")
         return yade_clumps.yade_clump_scene_from(scene, O, damping, import_contacts, mindlin_ratcheting)[0]
     O.reset()
     O.periodic = True
@@ -217,8 +231,8 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
         ForceResetter(),
         InsertionSortCollider([Bo1_Sphere_Aabb()], label="collider"),
         InteractionLoop([Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=mindlin_ratcheting)],
-                        [Ip2_FrictMat_FrictMat_MindlinPhys()],
-                        [Law2_ScGeom_MindlinPhys_Mindlin(label="mindlin")]),
+                        [Ip2()],
+                        [Law2(label="mindlin")]),
         NewtonIntegrator(damping=damping, label="newton"),
     ]
     O.dt = scene.dt if scene.dt > 0 else 1e-8

@@ -68,10 +68,12 @@ def _contact_rows(O, index):
     for I in O.interactions:
         if not I.isReal:
             continue
-        if type(I.phys).__name__ != "MindlinPhys":
+        kind = type(I.phys).__name__
+        if kind not in ("MindlinPhys", "SimplifiedMindlinPhys"):
             raise BridgeError("interaction %d-%d has %s: its forces come from another contact law than Hertz-Mindlin "
-                              "(Ip2_FrictMat_FrictMat_MindlinPhys); import the positions only "
-                              "(import_contacts=False) to evaluate them with ours" % (I.id1, I.id2, type(I.phys).__name__))
+                              "(Ip2_FrictMat_FrictMat_MindlinPhys, or ours from the trueaniso YADE plugin: "
+                              "Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys); import the positions only "
+                              "(import_contacts=False) to evaluate them with ours" % (I.id1, I.id2, kind))
         # MindlinPhys also carries the Mindlin variants the paper's law has not: viscous damping
         # (betan, betas), adhesion (gamma), rolling and twisting moments (krot, ktwist). Their forces
         # pass the class check (adhesion: 4.8 kPa in YADE would read 97 kPa here).
@@ -157,7 +159,12 @@ def write_shear_history(scene, O, yade_of_member, every=False):
             continue
         fs = (1.0 if I.id1 == i1 else -1.0) * c["shear_force"][k]
         I.phys.shearForce = Vector3(*fs)
-        I.phys.shearElastic = Vector3(*fs)
+        if type(I.phys).__name__ == "SimplifiedMindlinPhys":
+            # our law in YADE carries the force from the normal it was last evaluated at
+            I.phys.prevNormal = Vector3(I.geom.normal)
+            I.phys.loaded = True
+        else:
+            I.phys.shearElastic = Vector3(*fs)
 
 
 def _interaction_images(O):
