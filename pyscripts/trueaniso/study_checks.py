@@ -52,8 +52,8 @@ def _number(text):
 def specimen_problem(study_meta, rows):
     """Why rows of a probe table (dicts of text, line 2 on) are not of this study's specimen, or
     None: a row whose ``specimen`` cell is not the checksum metadata.json records. Rows of two
-    studies of the same states, one table, differ only there. A table without the column (written
-    before rows named their specimen) has nothing to compare and passes."""
+    studies of the same states, one table, differ only there. A table without the column (an older
+    study's) has nothing to compare and passes: a check that refused it would refuse every such study."""
     own = (study_meta.get("fingerprint") or {}).get("specimen")
     if not own:
         return None

@@ -123,8 +123,9 @@ def test_a_resumed_run_refuses_them_too(mixed, specimen_300):
 
 
 def test_without_the_column_the_same_mix_passes(mixed):
-    """The control: the column alone catches the mix. The same table without it (as every table
-    was written before) is read as one study's, study_b's row among study_a's."""
+    """The control: the column alone catches the mix. The same table without it (an older study's
+    layout, and what a reader that ignores the column sees) is read as one study's, study_b's row
+    among study_a's."""
     header, rows = _table(mixed / "probes.csv")
     k = header.index("specimen")
     _write(mixed / "probes.csv", header[:k] + header[k + 1:], [r[:k] + r[k + 1:] for r in rows])
