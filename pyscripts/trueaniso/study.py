@@ -22,20 +22,23 @@ import time
 
 import numpy as np
 
-from . import (dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_dir, triaxial,
-               validate)
+from . import (dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_checks, study_dir,
+               triaxial, validate)
 from .progress import EVERY, Progress, chunk_for, say
 from .refusal import InputError
 from .triaxial import AXES
 
 # A row is also the state's record: its six stresses, the principal values and the largest
-# off-diagonal. E and nu_* are empty in a shear probe's row, G in a normal probe's.
+# off-diagonal. E and nu_* are empty in a shear probe's row, G in a normal probe's. `specimen` is
+# the specimen's checksum (metadata.json's fingerprint.specimen): a row of another study's
+# specimen put into the table is refused by every reader (study_checks.specimen_problem). A table
+# whose header lacks it keeps its columns: rows appended to it are written without it.
 COLUMNS = ["path", "state", "b", "sigma_z_goal", "sigma_x", "sigma_y", "sigma_z", "sigma_yz", "sigma_xz",
            "sigma_xy", "sigma_1", "sigma_2", "sigma_3", "tau_max", "q", "probe", "sign",
            "d_sigma_x", "d_sigma_y", "d_sigma_z", "d_sigma_yz", "d_sigma_xz", "d_sigma_xy", "d_eps_x", "d_eps_y",
            "d_eps_z", "d_gamma_yz", "d_gamma_xz", "d_gamma_xy", "E", "nu_1", "nu_2", "nu_1_name", "nu_2_name", "G",
            "gamma", "Zm", "void_ratio", "rotations", "detection", "damping",
-           "probe_steps", "probe_wall_time", "state_steps", "state_wall_time", "state_from"]
+           "probe_steps", "probe_wall_time", "state_steps", "state_wall_time", "state_from", "specimen"]
 WALL_TIME_COLUMNS = ("probe_wall_time", "state_wall_time")  # the only columns a rerun does not reproduce
 CSV_NAME = study_dir.CSV_NAME
 
@@ -336,6 +339,10 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
             table = results_csv.repair(results_csv.read(csv_path), log)
         except results_csv.TableError as exc:
             raise study_dir.StudyMismatch("%s; %s" % (exc, study_dir.WAY_OUT % os.path.join(out, study_dir.SUPERSEDED)))
+        mixed = previous and study_checks.specimen_problem(previous, table.rows)
+        if mixed:
+            raise study_dir.StudyMismatch("%s: %s; %s" % (csv_path, mixed,
+                                                          study_dir.WAY_OUT % os.path.join(out, study_dir.SUPERSEDED)))
         known = set((previous or {}).get("states", {}))
         strange = sorted({r["state"] for r in table.rows} - known)
         if strange:
@@ -620,7 +627,10 @@ class _Run:
             row.update(extra)
             # The fabric's own Zm is the row's Zm (the same value): one column, not two (pandas read the
             # second as 'Zm.1').
-            self.sink(row, self.columns or COLUMNS + [k for k in extra if k not in COLUMNS])
+            columns = self.columns or COLUMNS + [k for k in extra if k not in COLUMNS]
+            if "specimen" in columns:  # the table's header decides (module comment at COLUMNS)
+                row["specimen"] = self.fp["specimen"]
+            self.sink(row, columns)
             self.done.add((str(sid), name))
             if nus:
                 self.log("state %s: probe %s  E = %.1f MPa  %s = %.4f  %s = %.4f  (%d steps, %.1f s)"

@@ -1,5 +1,6 @@
 """What the analysis of a study checks against the study's own metadata.json before it uses a file
-of the study: a state's checkpoint (states/ID.npz) and the rows of its probe table.
+of the study: a state's checkpoint (states/ID.npz) and the rows of its probe table (each row
+names its study's specimen: a row of another is refused).
 
 run_states.py refuses a checkpoint of another study when it continues one (study._Run.load); the
 report's static solve and every analysis of probes.csv apply the same checks here, so that a file
@@ -48,10 +49,30 @@ def _number(text):
         return None
 
 
+def specimen_problem(study_meta, rows):
+    """Why rows of a probe table (dicts of text, line 2 on) are not of this study's specimen, or
+    None: a row whose ``specimen`` cell is not the checksum metadata.json records. Rows of two
+    studies of the same states, one table, differ only there. A table without the column (an older
+    study's) has nothing to compare and passes: a check that refused it would refuse every such study."""
+    own = (study_meta.get("fingerprint") or {}).get("specimen")
+    if not own:
+        return None
+    for line, r in enumerate(rows, start=2):
+        theirs = r.get("specimen")
+        if theirs is not None and theirs != own:
+            return ("line %d: state %s probe %s is a row of specimen %s, this study's metadata.json records "
+                    "specimen %s (a row of another study?)" % (line, r.get("state"), r.get("probe"),
+                                                              theirs or "(empty)", own))
+    return None
+
+
 def rows_problem(study_meta, rows):
-    """Why rows of a probe table (dicts of text, line 2 on) are not this study's, or None: a state
-    its metadata.json does not define, a row whose b or sigma_z goal is not the state's
-    definition, a row on another loading path."""
+    """Why rows of a probe table (dicts of text, line 2 on) are not this study's, or None: a row of
+    another specimen (specimen_problem), a state its metadata.json does not define, a row whose b or
+    sigma_z goal is not the state's definition, a row on another loading path."""
+    found = specimen_problem(study_meta, rows)
+    if found:
+        return found
     if "states" not in study_meta:  # a metadata.json made by hand without them: nothing to check against
         return None
     states = study_meta["states"]
