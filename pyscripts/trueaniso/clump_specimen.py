@@ -12,7 +12,7 @@ The paper only cites its two preparation methods; our readings of them:
    stacked along z, copy k turned by k x 90 degrees about z (which maps the square periodic cell
    onto itself), so the two horizontal directions are equivalent by construction; stage 1 (rotation
    blocked) goes to 100 kPa, stage 2 consolidates there with the final friction.
-Recipe parameters live in RECIPES; every one can be overridden by a keyword of prepare_clumps.
+Recipe parameters live in RECIPES (clump_recipes); every one can be overridden by a keyword of prepare_clumps.
 """
 import math
 import time
@@ -20,18 +20,12 @@ import time
 import numpy as np
 
 from . import clump_shapes, dem, engines, prep_checkpoint as _checkpointed, psd as _psd, specimen
+# The recipes are data that the checks of a specimen file read too (derived.py); kept importable here.
+from .clump_recipes import RECIPES, recipe  # noqa: F401
 
 
 class PreparationError(RuntimeError):
     pass
-
-
-RECIPES = {
-    "clump1": dict(shape="trimer-2.0", d50=0.195e-3, cu=1.25, orientation_weights=(1.0, 1.0, 10.0), layers=1,
-                   stage1_rotations="blocked", stage1_pressure=10e3, mu_prep=0.002, mu_final=0.5, phi_cell=0.62),
-    "clump2": dict(shape="dimer-1.5", d50=0.216e-3, cu=1.43, orientation_weights=(1.0, 1.0, 0.5), layers=4,
-                   stage1_rotations="blocked", stage1_pressure=100e3, mu_prep=0.01, mu_final=0.5, phi_cell=0.55),
-}
 
 
 def random_sequential_clumps(template, scales, quats, box, rng, periodic_z=True, max_attempts=100000):
@@ -223,22 +217,6 @@ def check_count(assembly, n):
     layers = recipe(assembly)["layers"]
     if n < layers or n % layers:
         raise ValueError("%s is built from %d identical layers: --n must be a multiple of %d" % (assembly, layers, layers))
-
-
-def recipe(assembly, **overrides):
-    if assembly not in RECIPES:
-        raise ValueError("unknown clump assembly %r (available: %s)" % (assembly, ", ".join(RECIPES)))
-    r = dict(RECIPES[assembly])
-    for k, v in overrides.items():
-        if k not in r:
-            raise ValueError("%s: unknown recipe parameter %r (parameters: %s)" % (assembly, k, ", ".join(r)))
-        if v is not None:
-            r[k] = v
-    if r["stage1_rotations"] not in ("blocked", "free"):
-        raise ValueError("stage1_rotations must be 'blocked' or 'free'")
-    if not r["stage1_pressure"] > 0:
-        raise ValueError("stage1_pressure must be > 0")
-    return r
 
 
 def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_number=1e-2, prep_unbalanced=1e-2,

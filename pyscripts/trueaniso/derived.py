@@ -28,12 +28,12 @@ def clump_problem(arrays, meta):
     assembly = params.get("assembly")
     if assembly not in ("clump1", "clump2"):
         return None
-    from . import clump_shapes, clump_specimen
-    for other, r in clump_specimen.RECIPES.items():  # a prepared file records its recipe: another's is a relabel
+    from . import clump_recipes, clump_shapes
+    for other, r in clump_recipes.RECIPES.items():  # a prepared file records its recipe: another's is a relabel
         if other != assembly and all(k in params and _same(params[k], r[k]) for k in RECIPE_KEYS):
             return ("parameters.assembly: %s, but its parameters record the %s recipe (%s): the assembly label does "
                     "not match the members" % (assembly, other, ", ".join(RECIPE_KEYS)))
-    shape = params.get("shape") or clump_specimen.recipe(assembly)["shape"]
+    shape = params.get("shape") or clump_recipes.recipe(assembly)["shape"]
     try:
         t = clump_shapes.template(shape)
     except ValueError as exc:

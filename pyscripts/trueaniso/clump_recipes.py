@@ -1,0 +1,28 @@
+"""The recipes of the clump assemblies clump1 and clump2 (clump_specimen.py says how each is
+prepared): their template shape, size distribution, orientation weights, layers and stage
+settings. Data only, so that the checks of a specimen file (derived.py) can read them without
+the preparation's imports.
+"""
+
+RECIPES = {
+    "clump1": dict(shape="trimer-2.0", d50=0.195e-3, cu=1.25, orientation_weights=(1.0, 1.0, 10.0), layers=1,
+                   stage1_rotations="blocked", stage1_pressure=10e3, mu_prep=0.002, mu_final=0.5, phi_cell=0.62),
+    "clump2": dict(shape="dimer-1.5", d50=0.216e-3, cu=1.43, orientation_weights=(1.0, 1.0, 0.5), layers=4,
+                   stage1_rotations="blocked", stage1_pressure=100e3, mu_prep=0.01, mu_final=0.5, phi_cell=0.55),
+}
+
+
+def recipe(assembly, **overrides):
+    if assembly not in RECIPES:
+        raise ValueError("unknown clump assembly %r (available: %s)" % (assembly, ", ".join(RECIPES)))
+    r = dict(RECIPES[assembly])
+    for k, v in overrides.items():
+        if k not in r:
+            raise ValueError("%s: unknown recipe parameter %r (parameters: %s)" % (assembly, k, ", ".join(r)))
+        if v is not None:
+            r[k] = v
+    if r["stage1_rotations"] not in ("blocked", "free"):
+        raise ValueError("stage1_rotations must be 'blocked' or 'free'")
+    if not r["stage1_pressure"] > 0:
+        raise ValueError("stage1_pressure must be > 0")
+    return r
