@@ -105,6 +105,10 @@ def read_probes(path, need=("state", "probe", "E")):
         problem = meta and study_checks.rows_problem(meta, table.rows)
         if problem:
             raise ResultsError("%s: %s" % (path, problem))
+    # A table away from its metadata.json (renamed, copied) still holds one specimen's rows.
+    mixed = study_checks.mixed_specimens_problem(table.rows)
+    if mixed:
+        raise ResultsError("%s: %s" % (path, mixed))
     kept, notes = _fitting_rows(path, table.rows)
     out = Probes(kept)
     if table.torn is not None:

@@ -66,6 +66,23 @@ def specimen_problem(study_meta, rows):
     return None
 
 
+def mixed_specimens_problem(rows):
+    """Why rows of a probe table are not of one specimen, or None: rows whose ``specimen`` cells name
+    two checksums (a table copied or renamed away from its metadata.json, whose rows have nothing
+    else to be compared with). Rows without the column pass."""
+    first = None
+    for line, r in enumerate(rows, start=2):
+        theirs = r.get("specimen")
+        if theirs is None:
+            continue
+        if first is None:
+            first = (line, theirs)
+        elif theirs != first[1]:
+            return ("line %d names specimen %s, line %d specimen %s: rows of two studies in one table"
+                    % (line, theirs or "(empty)", first[0], first[1] or "(empty)"))
+    return None
+
+
 def rows_problem(study_meta, rows):
     """Why rows of a probe table (dicts of text, line 2 on) are not this study's, or None: a row of
     another specimen (specimen_problem), a state its metadata.json does not define, a row whose b or

@@ -122,6 +122,20 @@ def test_a_resumed_run_refuses_them_too(mixed, specimen_300):
     assert (mixed / "probes.csv").read_text() == before
 
 
+def test_a_mixed_table_away_from_its_study_is_refused_too(mixed, study_b, tmp_path):
+    """A copy under another name has no metadata.json to compare with: its rows must still name one
+    specimen, else figures and zeta would fit two studies together."""
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    shutil.copyfile(mixed / "probes.csv", bare / "copy.csv")
+    proc = _module("analysis.figures", bare / "copy.csv", "--out", tmp_path / "f")
+    line = one_line_error(proc, "copy.csv", "line 4", _own(mixed), _own(study_b))
+    assert "two studies" in line
+    assert not (tmp_path / "f").exists()
+    shutil.copyfile(study_b / "probes.csv", bare / "one.csv")  # one study's rows alone: read
+    assert len(results.read_probes(str(bare / "one.csv"))) == 1
+
+
 def test_without_the_column_the_same_mix_passes(mixed):
     """The control: the column alone catches the mix. The same table without it (an older study's
     layout, and what a reader that ignores the column sees) is read as one study's, study_b's row
