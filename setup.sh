@@ -40,15 +40,29 @@ log=build/build.log
 # keeps its generator, as CMake requires.
 generator=()
 [ -f build/CMakeCache.txt ] || generator=(-G Ninja)
+# The YADE plugin (engines/yade, docs/yade-peer.md), with the full build only: its own CMake
+# project, built, self-tested and installed into build/yade-prefix when the YADE source can be had
+# (TRUEANISO_YADE_SOURCE or apt-get source), else one line says why; it never stops the setup
+# (cmake/yade_plugin.sh). It shares nothing with the build below, and its one large translation
+# unit leaves a core idle for most of its compile, so it runs beside it (about a minute less on 2
+# cores); a failing build below waits for it, so that nothing writes into build/ after setup ends.
+plugin=""
+if [ -z "$targets" ]; then
+  cmake/yade_plugin.sh &
+  plugin=$!
+fi
+finish_plugin() { if [ -n "$plugin" ]; then wait "$plugin" || true; plugin=""; fi; }
 if ! cmake -S . -B build "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 \
        ${TRUEANISO_ARCH+"-DTRUEANISO_ARCH=$TRUEANISO_ARCH"} >"$log" 2>&1; then
   tail -n 40 "$log" >&2
   echo "setup: CMake refused to configure the build (full log: $log)" >&2
+  finish_plugin
   exit 1
 fi
 if ! cmake --build build -j"$(nproc)" ${targets:+--target $targets} >>"$log" 2>&1; then
   tail -n 40 "$log" >&2
   echo "setup: build failed (full log: $log)" >&2
+  finish_plugin
   exit 1
 fi
 # The level of the module just linked (written beside it when it is linked), not CMake's cache.
@@ -58,9 +72,4 @@ if [ -n "$level" ] && [ "$level" != x86-64 ]; then  # sticky: say so on every ru
 fi
 grep -E "warning:" "$log" || true
 
-# The YADE plugin (engines/yade, docs/yade-peer.md), with the full build only: built, self-tested
-# and installed into build/yade-prefix when the YADE source can be had (TRUEANISO_YADE_SOURCE or
-# apt-get source), else one line says why; it never stops the setup (cmake/yade_plugin.sh).
-if [ -z "$targets" ]; then
-  cmake/yade_plugin.sh
-fi
+finish_plugin
