@@ -90,15 +90,9 @@ def one_line_error(proc, *words, yade=False):
 @pytest.fixture(scope="session")
 def specimen_100(tmp_path_factory):
     """A 100-sphere specimen (seed 3), prepared once for the robustness tests."""
-    from trueaniso import engines, specimen, specimen_file
-    threads = engines.threads()
-    engines.set_threads(1)  # as run_script: the same specimen on any machine
-    try:
-        scene, log = specimen.prepare_spheres(100, seed=3)
-    finally:
-        engines.set_threads(threads)
+    import fixture_recipes  # one engine thread, as run_script: the same specimen on any machine
     path = tmp_path_factory.mktemp("specimen100") / "s100.npz"
-    specimen_file.save(str(path), scene, seed=3, parameters=log, summary=specimen.state(scene))
+    fixture_recipes.save_spheres(100, 3)(str(path))
     return path
 
 

@@ -113,16 +113,10 @@ STATE_21 = (0.5, 140e3)
 @pytest.fixture(scope="module")
 def specimen_1000(tmp_path_factory):
     """A 1000-sphere specimen of ours (seed 1), prepared on one thread."""
-    from trueaniso import engines, specimen, specimen_file
-    threads = engines.threads()
-    engines.set_threads(1)
-    try:
-        scene, log = specimen.prepare_spheres(1000, seed=1)
-    finally:
-        engines.set_threads(threads)
-    path = tmp_path_factory.mktemp("plugin1000") / "s1000.npz"
-    specimen_file.save(str(path), scene, seed=1, parameters=log, summary=specimen.state(scene))
-    return str(path)
+    import fixture_recipes
+    path = str(tmp_path_factory.mktemp("plugin1000") / "s1000.npz")
+    fixture_recipes.save_spheres(1000, 1)(path)
+    return path
 
 
 @pytest.mark.long
