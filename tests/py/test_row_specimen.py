@@ -50,22 +50,22 @@ def _own(out):
         return json.load(f)["fingerprint"]["specimen"]
 
 
+def _state_1(spec, probes, out):
+    proc = run_script("run_states.py", "--specimen", spec, "--out", out, "--ids", "1", "--probes", probes)
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
 @pytest.fixture(scope="module")
 def study_a(specimen_300, tmp_path_factory):
     """State 1 of the 300-sphere specimen, probes z and x."""
-    out = tmp_path_factory.mktemp("a") / "study"
-    proc = run_script("run_states.py", "--specimen", specimen_300, "--out", out, "--ids", "1", "--probes", "zx")
-    assert proc.returncode == 0, proc.stderr
-    return out
+    return _state_1(specimen_300, "zx", tmp_path_factory.mktemp("a") / "study")
 
 
 @pytest.fixture(scope="module")
 def study_b(specimen_150, tmp_path_factory):
     """State 1 (the same definition as study_a's) of the 150-sphere specimen, probe y."""
-    out = tmp_path_factory.mktemp("b") / "study"
-    proc = run_script("run_states.py", "--specimen", specimen_150, "--out", out, "--ids", "1", "--probes", "y")
-    assert proc.returncode == 0, proc.stderr
-    return out
+    return _state_1(specimen_150, "y", tmp_path_factory.mktemp("b") / "study")
 
 
 def test_a_new_study_s_rows_name_its_specimen(study_a, specimen_300):
