@@ -18,6 +18,7 @@ void TrueTriaxialServo::validate() const {
           "servo tolerances and path rate must be > 0");
   require(std::isfinite(loadingFriction) && loadingFriction > 0,
           "servo: the loading friction must be a finite number > 0");
+  tangent.validate();
 }
 
 void TrueTriaxialServo::start(Scene& s) {
@@ -58,7 +59,10 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
     target = stress;
     startDeformation = m.deformation;
     status = Status::Loading;
+    tangent.reset();
+    predicted_.setZero();
   }
+  if (feedForward) tangent.observe(stress, predicted_);
   ++steps;
   const unsigned mask = stressMask();
   Vec6 final = finalStress();
@@ -68,6 +72,8 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   Real follow = 0;
   for (int k = 0; k < 6; ++k)
     if (mask >> k & 1u) follow = std::max(follow, std::abs(stress[k] - target[k]));
+  lag = follow;
+  const Vec6 previousTarget = target;
   if (status == Status::Loading) {
     if (follow < followTolerance) {
       const Real length = (final - startStress).cwiseAbs().maxCoeff();
@@ -76,6 +82,7 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
       if (progress >= 1.0) status = Status::Holding;
     } else {
       ++stalled;
+      ++waited;
     }
   }
   target = startStress + progress * (final - startStress);
@@ -118,7 +125,12 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   Vec6 goalNow = target;
   for (int k = 0; k < 6; ++k)
     if (!(mask >> k & 1u)) goalNow[k] = 0;  // held shear strains: rate 0
-  return law.rates(goalNow, mask, stress, m.stiffness, dt);
+  if (!feedForward) return law.rates(goalNow, mask, stress, m.stiffness, dt);
+  // The goal's rate this step: zero while it waits and once it is held.
+  const Vec6 goalRate = (target - previousTarget) / dt;
+  const Vec6 r = law.rates(goalNow, mask, stress, m.stiffness, dt, goalRate, tangent.ratio());
+  predicted_ = -m.stiffness.cwiseProduct(r) * dt;
+  return r;
 }
 
 }  // namespace trueaniso

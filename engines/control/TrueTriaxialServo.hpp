@@ -16,6 +16,13 @@
 // and the shear stresses are all within `stressTolerance` (StressGap). With controlShear off the
 // cell keeps its shear strains (an orthorhombic cell, whose shear stresses nothing
 // holds); a shear goal on such a path is refused.
+//
+// With feedForward on, the goal's motion is fed forward through the cell's measured tangent
+// stiffness (CellServoLaw, TangentRatio): the stress keeps pace with the ramp instead of lagging
+// it by pathRate / (gain x tangent ratio), so the goal does not wait for it, and the state is
+// held from a stress already at the goal. The goal still advances only while the stress follows
+// it, and stops feeding forward while it waits, so a specimen that cannot carry the state
+// stalls and fails as without it.
 #include <string>
 
 #include "control/CellMeasurement.hpp"
@@ -34,6 +41,8 @@ class TrueTriaxialServo : public Engine {
   Vec3 shearGoal = Vec3::Zero();   // sigma_yz, sigma_xz, sigma_xy at the state (Pa)
   bool controlShear = true;        // servo the shear stresses (else hold the shear strains)
   CellServoLaw law;
+  bool feedForward = false;        // feed the goal's motion forward (see above)
+  TangentRatio tangent;            // the cell's tangent / affine stiffness, measured while loading
   // The friction of every contact while loading (the paper's 0.5), set on the scene by start():
   // a scene fresh from a probe or from elsewhere may carry another value. The servo owns it as
   // the probe owns kProbeFriction. (update() alone, as the YADE adapter uses it, leaves friction
@@ -65,14 +74,20 @@ class TrueTriaxialServo : public Engine {
   // <= 0 means it never passed its goal.
   Vec6 overshoot = Vec6::Constant(-1e300);
   Real unbalanced = 0;
-  long steps = 0, settled = 0, stalled = 0, holding = 0;
+  Real lag = 0;                    // largest |stress - goal| now (Pa), the stress-controlled components
+  // Steps: run, in a row at the hold criterion, in a row waited for, held, and waited for in all
+  // (the goal did not move because a stress was more than followTolerance behind it).
+  long steps = 0, settled = 0, stalled = 0, holding = 0, waited = 0;
 
   void reset() {
     status = Status::Idle;
     message.clear();
     progress = 0;
-    steps = settled = stalled = holding = 0;
+    steps = settled = stalled = holding = waited = 0;
+    lag = 0;
     overshoot = Vec6::Constant(-1e300);
+    tangent.reset();
+    predicted_.setZero();
     done = false;
     started_ = false;
   }
@@ -93,6 +108,7 @@ class TrueTriaxialServo : public Engine {
 
  private:
   bool started_ = false;
+  Vec6 predicted_ = Vec6::Zero();  // the affine stress change of the last rates (TangentRatio)
 };
 
 }  // namespace trueaniso

@@ -187,6 +187,16 @@ void exportControl() {
       .add_property("gain", &getGain<TrueTriaxialServo>, &setGain<TrueTriaxialServo>)
       .add_property("max_strain_rate", &getRate<TrueTriaxialServo>, &setRate<TrueTriaxialServo>)
       .def_readwrite("path_rate", &TrueTriaxialServo::pathRate, "Pa per step along the path")
+      .def_readwrite("feed_forward", &TrueTriaxialServo::feedForward,
+                     "Feed the goal's motion forward through the cell's measured tangent stiffness (default off).")
+      .add_property("tangent_ratio", +[](const TrueTriaxialServo& s) { return toNumpy(s.tangent.ratio()); },
+                    "The cell's tangent stiffness over its affine estimate, per Voigt component, as measured.")
+      .add_property("tangent_memory", +[](const TrueTriaxialServo& s) { return s.tangent.memory; },
+                    +[](TrueTriaxialServo& s, Real v) { s.tangent.memory = v; s.tangent.validate(); },
+                    "Steps over which the tangent ratio is measured (fading weights).")
+      .def_readonly("lag", &TrueTriaxialServo::lag, "Largest |stress - goal| now (Pa).")
+      .def_readonly("waited", &TrueTriaxialServo::waited,
+                    "Steps the goal waited for a stress more than follow_tolerance behind it.")
       .def_readwrite("follow_tolerance", &TrueTriaxialServo::followTolerance)
       .def_readwrite("stress_tolerance", &TrueTriaxialServo::stressTolerance)
       .def_readwrite("unbalanced_tolerance", &TrueTriaxialServo::unbalancedTolerance)

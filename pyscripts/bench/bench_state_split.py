@@ -1,14 +1,16 @@
 """Where a state's steps go: the servo's ramp (and its stalls) against its hold, for servo gains.
 
-    /usr/bin/python3 pyscripts/bench/bench_state_split.py --specimen S.npz [--ids 2,6,10] [--gains 0.01,0.03]
+    /usr/bin/python3 pyscripts/bench/bench_state_split.py --specimen S.npz [--ids 2,6,10] [--gains 0.01,0.03] \
+        [--feed-forward off,on]
 
 Every state is reached from the specimen itself, once per gain, with the study's servo settings
 otherwise (triaxial.reach_state's defaults: 2 Pa per step, damping 0.4, inertial number 1e-3, one
 engine thread). The ramp is the steps until the servo's goal reaches the state (its progress
 reaches 1), "stalled" the ramp's steps in which the goal did not move (a stress more than the
-follow tolerance behind it); the hold is the rest, until every stress is within 100 Pa and the
-unbalanced force below 1e-4 for 200 steps. One JSON line per state and gain (docs/runs.md,
-"Where clump2's steps to a state go").
+follow tolerance behind it; "waited" is the servo's own exact count of them); the hold is the
+rest, until every stress is within 100 Pa and the unbalanced force below 1e-4 for 200 steps.
+--feed-forward off,on runs each gain with the servo's feed-forward off and on (docs/triaxial.md).
+One JSON line per state, gain and setting (docs/runs.md, "Where clump2's steps to a state go").
 """
 import json
 import os
@@ -27,6 +29,7 @@ def options():
     p.add_argument("--specimen", required=True, help="specimen file (.npz)")
     p.add_argument("--ids", default="2,6,10,14,18,22", help="Table C1 states by number")
     p.add_argument("--gains", default="0.01,0.03", help="servo gains (fraction of the stress error closed a step)")
+    p.add_argument("--feed-forward", default="off", help="servo feed-forward settings: off, on, or off,on")
     p.add_argument("--chunk", type=cli.at_least(1), default=500,
                    help="steps between looks at the servo: the ramp's end and its stalls are counted to this "
                         "many steps (the state's total is exact)")
@@ -42,10 +45,13 @@ def options():
         cli.fail("--gains: %s not in (0, 1] (the fraction of the stress error closed a step)" % bad[0])
     if len(set(o.ids)) != len(o.ids) or len(set(o.gains)) != len(o.gains):
         cli.fail("--ids and --gains name each value once")
+    o.feed_forward = o.feed_forward.split(",")
+    if any(f not in ("off", "on") for f in o.feed_forward) or len(set(o.feed_forward)) != len(o.feed_forward):
+        cli.fail("--feed-forward: off, on, or both separated by a comma")
     return o
 
 
-def split(specimen_path, b, sigma_z, gain, chunk):
+def split(specimen_path, b, sigma_z, gain, chunk, feed_forward=False):
     """The state reached as a study reaches it (triaxial.reach_state), its servo watched every chunk."""
     from trueaniso import specimen_file, triaxial
     s, _ = specimen_file.load(specimen_path)
@@ -59,10 +65,11 @@ def split(specimen_path, b, sigma_z, gain, chunk):
             seen["last"] = servo.progress
     t0 = time.time()
     try:
-        info = triaxial.reach_state(s, b, sigma_z, gain=gain, chunk=chunk, progress=watch)
+        info = triaxial.reach_state(s, b, sigma_z, gain=gain, chunk=chunk, progress=watch, feed_forward=feed_forward)
     except triaxial.StateNotReached as exc:
         return dict(status="failed", message=str(exc), seconds=round(time.time() - t0, 1))
     return dict(status=info["status"], steps=info["steps"], ramp=seen["ramp"], ramp_stalled=seen["stalled"],
+                waited=info["waited_steps"], overshoot=max(info["overshoot"]),
                 hold=info["steps"] - (seen["ramp"] or 0), seconds=round(time.time() - t0, 1))
 
 
@@ -76,7 +83,9 @@ def main():
             cli.fail("--ids: no Table C1 state %d" % i)
     for i in o.ids:
         for g in o.gains:
-            print(json.dumps(dict(state=i, gain=g, **split(o.specimen, *states[i], g, o.chunk))), flush=True)
+            for f in o.feed_forward:
+                print(json.dumps(dict(state=i, gain=g, feed_forward=f,
+                                      **split(o.specimen, *states[i], g, o.chunk, f == "on"))), flush=True)
 
 
 if __name__ == "__main__":

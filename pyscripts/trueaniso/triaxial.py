@@ -120,7 +120,7 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
                 unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
                 stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
                 control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0,
-                gain=None):
+                gain=None, feed_forward=False):
     """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
 
     Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
@@ -131,7 +131,10 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     resistance of the contact law (beta, eta_r; docs/rolling.md), set on the scene for the loading
     and kept in its checkpoint, so its probes run with it too; 0, 0 (the paper) turns it off.
     gain: the servo's (the fraction of the stress error closed a step; None: the engine's 0.01, every
-    study's; bench_state_split.py compares others).
+    study's; bench_state_split.py compares others). feed_forward: feed the path's rate forward through
+    the cell's measured tangent stiffness, so that the stresses keep pace with the goal instead of
+    lagging it (docs/triaxial.md; off, every study's default; bench_state_speed.py and
+    bench_state_split.py compare the two).
     Raises StateNotReached if the specimen cannot get there: it
     stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
     strains beyond `max_strain`, or runs `max_steps`.
@@ -146,6 +149,7 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     servo.path_rate = path_rate
     if gain is not None:
         servo.gain = gain
+    servo.feed_forward = bool(feed_forward)
     servo.stress_tolerance = tolerance
     servo.unbalanced_tolerance = unbalanced
     servo.max_strain = max_strain
@@ -169,7 +173,8 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     info = dict(status=servo.status, steps=int(servo.steps), wall_time=time.time() - t0,
                 stress=servo.stress.tolist(), unbalanced=float(servo.unbalanced), message=servo.message,
                 overshoot=servo.overshoot.tolist(), goal=servo.final_stress.tolist(),
-                friction=float(scene.friction), hold_steps=int(servo.holding), control_shear=bool(control_shear))
+                friction=float(scene.friction), hold_steps=int(servo.holding), control_shear=bool(control_shear),
+                waited_steps=int(servo.waited))
     info.update(stress_record(scene, servo.final_stress))
     if servo.status == "failed":
         raise StateNotReached(servo.message)

@@ -182,6 +182,138 @@ TEST(TrueTriaxialServo, FailsCleanlyWhenTheSpecimenCannotFollow) {
   EXPECT_TRUE(servo.done);
 }
 
+// The tangent ratio is the slope of the measured against the predicted stress changes: a cell
+// that shows 0.4 of every predicted change reads 0.4 once the prediction has summed past
+// minPredicted; before that, and where the cell moved against the prediction, it reads 1 (the
+// affine bound); a ratio below the floor reads the floor.
+TEST(TangentRatio, IsTheSlopeOfTheCellsResponseAndFallsBackToTheAffineBound) {
+  TangentRatio t;
+  t.memory = 100;
+  Vec6 stress = Vec6::Constant(100e3);
+  const Vec6 predicted = (Vec6() << 10, -10, 10, 10, 0, 10).finished();
+  Vec6 shown = 0.4 * predicted;
+  shown[3] = -4;   // against the prediction
+  shown[5] = 0.1;  // 0.01 of it: below the floor
+  t.observe(stress, Vec6::Zero());
+  for (int n = 0; n < 20; ++n) {  // sum of the predictions: 200 Pa, under minPredicted = 500 Pa
+    stress += shown;
+    t.observe(stress, predicted);
+  }
+  EXPECT_EQ(t.ratio(), Vec6::Ones());
+  for (int n = 0; n < 2000; ++n) {
+    stress += shown;
+    t.observe(stress, predicted);
+  }
+  const Vec6 r = t.ratio();
+  EXPECT_NEAR(r[0], 0.4, 1e-12);  // a constant ratio: the fading sums are in that ratio exactly
+  EXPECT_NEAR(r[1], 0.4, 1e-12);
+  EXPECT_NEAR(r[2], 0.4, 1e-12);
+  EXPECT_EQ(r[3], 1.0);
+  EXPECT_EQ(r[4], 1.0);           // never strained
+  EXPECT_EQ(r[5], t.floor);
+  t.floor = 0;
+  EXPECT_THROW(t.validate(), InputError);
+}
+
+// The feed-forward term of the law: a goal moving at g Pa/s adds the strain rate -g / (ratio K).
+TEST(CellServoLaw, FeedsTheGoalsRateForwardThroughTheTangent) {
+  CellServoLaw law{0.1, 5.0};
+  const Vec6 K = Vec6::Constant(2e8);
+  const Vec6 stress = Vec6::Constant(100e3);
+  const Real dt = 1e-6;
+  const Vec6 g = (Vec6() << 2e6, -2e6, 0, 0, 0, 0).finished();  // 2 Pa per step
+  const Vec6 ratio = (Vec6() << 0.5, 0.25, 1, 1, 1, 1).finished();
+  const Vec6 r = law.rates(stress, kAllComponents, stress, K, dt, g, ratio);  // no error: the feed alone
+  EXPECT_NEAR(r[0], -2e6 / (0.5 * 2e8), 1e-15);
+  EXPECT_NEAR(r[1], +2e6 / (0.25 * 2e8), 1e-15);
+  EXPECT_EQ(r[2], 0.0);
+  EXPECT_EQ(law.rates(stress, kAllComponents, stress, K, dt, 1e12 * g, ratio)[0], -5.0);  // capped
+}
+
+namespace {
+
+// The lag of the servo's stresses behind its goal in the middle of the ramp of state 21, on a
+// cell whose stiffness is diagonal (no coupling), so that each component is a loop of its own.
+Real midRampLag(bool feedForward, Real* ratio = nullptr) {
+  LinearCell cell;
+  cell.C = Mat6(cell.C.diagonal().asDiagonal());
+  cell.sigma0.tail<3>().setZero();
+  TrueTriaxialServo servo;
+  servo.goal = TrueTriaxialState{0.5, 140e3, 100e3};
+  servo.law = CellServoLaw{0.05, 1e3};
+  servo.feedForward = feedForward;
+  CellMeasurement m;
+  do {
+    m = cell.measure();
+    cell.advance(servo.update(m, cell.dt));
+  } while (servo.progress < 0.5 && servo.status == TrueTriaxialServo::Status::Loading);
+  if (ratio) *ratio = servo.tangent.ratio()[2];
+  return (servo.target - m.stress).cwiseAbs().maxCoeff();  // the goal and the stress of one step
+}
+
+}  // namespace
+
+// A linear ramp on a linear elastic cell whose affine estimate is 1.5 times its stiffness (tangent
+// ratio 2/3). Proportional control alone closes gain x 2/3 of the error a step, so it settles at
+// the lag where that equals the ramp's 2 Pa a step: 2 x 1.5 / 0.05 = 60 Pa (closed form of the
+// discrete loop; the log strain of a diagonal F adds exactly, to terms of order rate x dt ~ 1e-6).
+// With the ramp fed forward through the measured ratio (2/3 exactly on this cell), the error
+// shrinks by (1 - gain x 2/3) a step whatever the ramp, so at mid-ramp, 10,000 steps in, it is
+// round-off: below 1e-3 Pa, 1e-5 of the proportional lag.
+TEST(TrueTriaxialServo, FeedForwardKeepsPaceWithTheRamp) {
+  EXPECT_NEAR(midRampLag(false), 60.0, 60.0 * 1e-4);
+  Real ratio = 0;
+  EXPECT_LT(midRampLag(true, &ratio), 1e-3);
+  EXPECT_NEAR(ratio, 1 / 1.5, 1e-6);  // exact but for the log strain's ln(1 + rate dt) ~ rate dt (1e-8)
+}
+
+// On the coupled cell (normal and shear components coupled, a shear stress at the start) the
+// feed-forward servo reaches state 21 within the tolerance, without passing its goal by more than
+// the tolerance, in the steps the path rate implies; and a specimen that cannot carry the state
+// still stalls and fails by name (the goal stops, and with it the feed-forward).
+TEST(TrueTriaxialServo, FeedForwardReachesState21AndStillFailsByStalling) {
+  LinearCell cell;
+  TrueTriaxialServo servo;
+  servo.goal = TrueTriaxialState{0.5, 140e3, 100e3};
+  servo.law = CellServoLaw{0.05, 1e3};
+  servo.feedForward = true;
+  long n = 0;
+  Real worstLag = 0;
+  while (servo.status != TrueTriaxialServo::Status::Reached && servo.status != TrueTriaxialServo::Status::Failed &&
+         n < 1000000) {
+    cell.advance(servo.update(cell.measure(), cell.dt));
+    ++n;
+    if (servo.status == TrueTriaxialServo::Status::Loading && n > 2000) worstLag = std::max(worstLag, servo.lag);
+  }
+  ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Reached) << servo.message;
+  EXPECT_LT((cell.measure().stress - servo.finalStress()).cwiseAbs().maxCoeff(), servo.stressTolerance);
+  EXPECT_LT(servo.overshoot.maxCoeff(), servo.stressTolerance);
+  EXPECT_EQ(servo.waited, 0);
+  EXPECT_GE(servo.steps, 20000);
+  EXPECT_LT(servo.steps, 40000);
+  // The coupling is what the diagonal ratio cannot see; the proportional term takes it, well
+  // inside the follow tolerance (its lag without the feed-forward is of order 60 Pa, above).
+  EXPECT_LT(worstLag, 60.0);
+
+  LinearCell weak;
+  TrueTriaxialServo failing;
+  failing.goal = TrueTriaxialState{0.5, 140e3, 100e3};
+  failing.law = CellServoLaw{0.05, 1e3};
+  failing.feedForward = true;
+  failing.stallSteps = 5000;
+  n = 0;
+  while (failing.status != TrueTriaxialServo::Status::Failed && failing.status != TrueTriaxialServo::Status::Reached &&
+         n < 1000000) {
+    CellMeasurement m = weak.measure();
+    m.stress[2] = std::min(m.stress[2], 120e3);  // the specimen yields at 120 kPa
+    weak.advance(failing.update(m, weak.dt));
+    ++n;
+  }
+  ASSERT_EQ(failing.status, TrueTriaxialServo::Status::Failed);
+  EXPECT_NE(failing.message.find("stopped following the path"), std::string::npos) << failing.message;
+  EXPECT_LT(n, 30000);
+}
+
 // The servo owns the loading friction: start() sets it on the scene (which may carry the probe's
 // 1e23) before the first force evaluation; running it unstarted, or with a friction that is not a
 // finite positive number, is refused.

@@ -83,10 +83,12 @@ def test_bench_state_split_on_the_isotropic_state(specimen_100):
     assert proc.returncode == 0, proc.stderr
     r = json.loads(proc.stdout.strip().splitlines()[-1])
     assert r["status"] == "reached" and r["ramp"] is not None and r["ramp"] + r["hold"] == r["steps"]
+    assert r["feed_forward"] == "off" and r["waited"] == 0  # the isotropic state: no path to wait on
     for args, words in ((["--ids", "40"], "no Table C1 state 40"),
                         # every gain checked before the first state runs
                         (["--ids", "1", "--gains", "0.03,5"], "--gains: 5.0 not in (0, 1]"),
-                        (["--ids", "1,1"], "name each value once")):
+                        (["--ids", "1,1"], "name each value once"),
+                        (["--ids", "1", "--feed-forward", "off,yes"], "--feed-forward: off, on")):
         proc = run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100, *args, timeout=60)
         one_line_error(proc, words)
         assert proc.stdout == ""

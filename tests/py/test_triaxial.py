@@ -168,8 +168,11 @@ def test_probe_bad_input(specimen300, axis, gamma, message):
         triaxial.probe(specimen300, [100e3] * 3, axis, gamma=gamma)
 
 
+@pytest.mark.parametrize("feed_forward", [False, True])
 @pytest.mark.parametrize("sid,b,sz", [(21, 0.5, 140e3), (25, 0.5, 60e3)])  # q = +69.3, -69.3 kPa
-def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, sid, b, sz):
+def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, sid, b, sz, feed_forward):
+    """With the servo's feed-forward too (docs/triaxial.md): the same acceptance, and the goal
+    never waits for the stresses (they keep pace with it)."""
     s = specimen300.copy()
     s.friction = 1e23  # as a probe leaves it unrestored: reach_state must load with 0.5
     goal = engines.true_triaxial_stresses(b, sz)
@@ -178,8 +181,10 @@ def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, si
     def watch(servo):
         if servo.status in ("holding", "reached"):
             held.append(servo.stress_error)  # principal and shear stresses against the state
-    info = triaxial.reach_state(s, b, sz, chunk=200, progress=watch)
+    info = triaxial.reach_state(s, b, sz, chunk=200, progress=watch, feed_forward=feed_forward)
     assert info["friction"] == 0.5 and s.friction == 0.5
+    if feed_forward:
+        assert info["waited_steps"] == 0
     # the held state's contacts belong to its positions: a refresh (as every probe and every
     # checkpoint load does) changes no force (it once moved the stress by ~0.1 Pa)
     held_state = _state(s)
@@ -205,11 +210,12 @@ def test_hardest_states_reached_without_overshoot_or_oscillation(specimen300, si
     assert all(b < a + 100.0 for a, b in zip(held, held[1:])), (sid, held)
 
 
-def test_unreachable_state_fails_cleanly(specimen300):
+@pytest.mark.parametrize("feed_forward", [False, True])
+def test_unreachable_state_fails_cleanly(specimen300, feed_forward):
     s = specimen300.copy()
     # sigma_x = sigma_y = 15 kPa against sigma_z = 270 kPa: far beyond the friction's capacity
     with pytest.raises(triaxial.StateNotReached, match="not reached"):
-        triaxial.reach_state(s, 0.0, 270e3, stall_steps=20000)
+        triaxial.reach_state(s, 0.0, 270e3, stall_steps=20000, feed_forward=feed_forward)
 
 
 def test_state_that_never_settles_is_reported(specimen300):
