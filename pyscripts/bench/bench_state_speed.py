@@ -99,7 +99,7 @@ def main():
             w.writerows(rows)
     from trueaniso import specimen_file as sf
     n = sf.load(o.specimen)[0].num_bodies
-    lines = ["Specimen %s (%d spheres), 1 thread, %s; each state from the specimen, moduli from the static solve."
+    lines = ["Specimen %s (%d particles), 1 thread, %s; each state from the specimen, moduli from the static solve."
              % (os.path.basename(o.specimen), n, time.strftime("%Y-%m-%d")), "",
              "| state | b | sigma_z (kPa) | steps (%s) | s | way | steps | s | abs dZm | abs de | max abs dE/E | max abs dnu |"
              % way_name(o.ways[0]), "|---|---|---|---|---|---|---|---|---|---|---|---|"]

@@ -291,9 +291,11 @@ TEST(TrueTriaxialServo, FeedForwardReachesState21AndStillFailsByStalling) {
   EXPECT_EQ(servo.waited, 0);
   EXPECT_GE(servo.steps, 20000);
   EXPECT_LT(servo.steps, 40000);
-  // The coupling is what the diagonal ratio cannot see; the proportional term takes it, well
-  // inside the follow tolerance (its lag without the feed-forward is of order 60 Pa, above).
-  EXPECT_LT(worstLag, 60.0);
+  // The coupling between components is what a per-component ratio sees only on average (it reads
+  // 0.55 on y and z here, not the diagonal's 2/3); the proportional term takes the rest. Measured:
+  // a worst lag of 6.3 Pa past the first 2000 steps, against 71 Pa with the feed-forward off on
+  // this cell; 10 Pa leaves room for round-off and fails if the feed-forward is lost.
+  EXPECT_LT(worstLag, 10.0);
 
   LinearCell weak;
   TrueTriaxialServo failing;
