@@ -9,6 +9,8 @@ engine thread). The ramp is the steps until the servo's goal reaches the state (
 reaches 1), "stalled" the ramp's steps in which the goal did not move (a stress more than the
 follow tolerance behind it; "waited" is the servo's own exact count of them); the hold is the
 rest, until every stress is within 100 Pa and the unbalanced force below 1e-4 for 200 steps.
+While loading, looked at every chunk: the largest lag of a stress behind the goal (max_lag) and
+the largest distance of the normal stresses from the straight path (off_path), in Pa.
 --feed-forward off,on runs each gain with the servo's feed-forward off and on (docs/triaxial.md).
 One JSON line per state, gain and setting (docs/runs.md, "Where clump2's steps to a state go").
 """
@@ -53,11 +55,19 @@ def options():
 
 def split(specimen_path, b, sigma_z, gain, chunk, feed_forward=False):
     """The state reached as a study reaches it (triaxial.reach_state), its servo watched every chunk."""
-    from trueaniso import specimen_file, triaxial
+    import numpy as np
+    from trueaniso import engines, specimen_file, triaxial
     s, _ = specimen_file.load(specimen_path)
-    seen = dict(ramp=None, stalled=0, last=-1.0)
+    seen = dict(ramp=None, stalled=0, last=-1.0, lag=0.0, off_path=0.0)
+    start = np.diag(engines.stress(s)).copy()
+    line = engines.true_triaxial_stresses(b, sigma_z) - start
+    line /= max(np.linalg.norm(line), 1e-300)
 
     def watch(servo):
+        if servo.status == "loading":  # the normal stresses' distance from the straight path, and the lag
+            x = np.asarray(servo.stress[:3]) - start
+            seen["off_path"] = max(seen["off_path"], float(np.linalg.norm(x - x.dot(line) * line)))
+            seen["lag"] = max(seen["lag"], float(servo.lag))
         if seen["ramp"] is None and servo.progress >= 1.0:
             seen["ramp"] = servo.steps
         elif seen["ramp"] is None:
@@ -69,7 +79,8 @@ def split(specimen_path, b, sigma_z, gain, chunk, feed_forward=False):
     except triaxial.StateNotReached as exc:
         return dict(status="failed", message=str(exc), seconds=round(time.time() - t0, 1))
     return dict(status=info["status"], steps=info["steps"], ramp=seen["ramp"], ramp_stalled=seen["stalled"],
-                waited=info["waited_steps"], overshoot=max(info["overshoot"]),
+                waited=info["waited_steps"], overshoot=max(info["overshoot"]), max_lag=seen["lag"],
+                off_path=seen["off_path"],
                 hold=info["steps"] - (seen["ramp"] or 0), seconds=round(time.time() - t0, 1))
 
 
