@@ -84,6 +84,7 @@ def test_bench_state_split_on_the_isotropic_state(specimen_100):
     r = json.loads(proc.stdout.strip().splitlines()[-1])
     assert r["status"] == "reached" and r["ramp"] is not None and r["ramp"] + r["hold"] == r["steps"]
     assert r["feed_forward"] == "off" and r["waited"] == 0  # the isotropic state: no path to wait on
+    assert 0 <= r["max_lag"] < 1000.0 and r["off_path"] >= 0  # within the follow tolerance, or it waited
     for args, words in ((["--ids", "40"], "no Table C1 state 40"),
                         # every gain checked before the first state runs
                         (["--ids", "1", "--gains", "0.03,5"], "--gains: 5.0 not in (0, 1]"),
