@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what is missing (Debian 12 packages, with apt-get) and builds trueaniso into build/.
 # Used by main.sh and test.sh; safe to run again (it only installs and rebuilds what is needed).
-# Arguments: CMake targets to build (default: all).
+# Arguments: CMake targets to build. None: everything (target all) and the YADE plugin; given
+# targets (`all` too) build those alone, without the plugin.
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -24,8 +25,8 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-# Targets to build: all by default (test.sh: the engines' tests too); main.sh asks for the Python
-# module alone, which is all a study needs (a fresh build is about a third shorter).
+# Targets to build: all by default; main.sh asks for the Python module alone, which is all a study
+# needs (a fresh build is about a third shorter), and ./test.sh for `all` without the plugin.
 targets="${*:-}"
 
 # Debian's interpreter: the one yade-double embeds and the one with numpy/scipy.
@@ -40,7 +41,7 @@ log=build/build.log
 # keeps its generator, as CMake requires.
 generator=()
 [ -f build/CMakeCache.txt ] || generator=(-G Ninja)
-# The YADE plugin (engines/yade, docs/yade-peer.md), with the full build only: its own CMake
+# The YADE plugin (engines/yade, docs/yade-peer.md), when no target is named: its own CMake
 # project, built, self-tested and installed into build/yade-prefix when the YADE source can be had
 # (TRUEANISO_YADE_SOURCE or apt-get source), else one line says why; it never stops the setup
 # (cmake/yade_plugin.sh). It shares nothing with the build below, and its one large translation

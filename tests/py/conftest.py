@@ -12,6 +12,18 @@ sys.path.insert(0, os.path.join(REPO, "pyscripts"))
 sys.path.insert(0, REPO)
 
 
+# The files of the most CPU time first (largest first), the others after them in their order:
+# pytest-xdist hands whole files to its workers (--dist loadfile) in the order collected, and a long
+# file handed out last keeps one worker busy while the other has nothing left to do.
+LONGEST_FIRST = ("test_report.py", "test_prep_checkpoint.py", "test_main_job.py", "test_input_checks.py",
+                 "test_yade_peer.py", "test_study_reruns.py", "test_manual.py", "test_clumps.py")
+
+
+def pytest_collection_modifyitems(session, config, items):
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0].split("/")[-1], len(LONGEST_FIRST)))
+
+
 def run_yade(script, *args, timeout=600):
     """Run a script under yade-double and return the JSON it wrote (last argument: output path)."""
     if shutil.which("yade-double") is None:

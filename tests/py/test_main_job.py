@@ -74,13 +74,20 @@ def test_rerun_in_a_row_does_nothing_new(first, tmp_path):
     assert (out / "probes.csv").read_bytes() == before
 
 
-def test_adding_states_continues_the_study(first, tmp_path):
-    """States named by numbers and by text in one study: contrast_zeta orders them (no TypeError)."""
-    out = tmp_path / "W"
+@pytest.fixture(scope="module")
+def added_21(first, tmp_path_factory):
+    """The first study continued with state 21 (--ids 1,5,21): its directory and run. A test that
+    changes it works on a copy."""
+    out = tmp_path_factory.mktemp("main21") / "W"
     shutil.copytree(first[0], out)
-    before = (out / "probes.csv").read_bytes()
-    assert not (out / "statics_state-21.json").exists()
-    proc = main_job(out, "--ids", "1,5,21")
+    return out, main_job(out, "--ids", "1,5,21")
+
+
+def test_adding_states_continues_the_study(first, added_21):
+    """States named by numbers and by text in one study: contrast_zeta orders them (no TypeError)."""
+    out, proc = added_21
+    before = (first[0] / "probes.csv").read_bytes()
+    assert not (first[0] / "statics_state-21.json").exists()
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (out / "probes.csv").read_bytes().startswith(before)
     # what it kept is said before it goes on (a resumed run began at its next state without a word)
@@ -96,15 +103,15 @@ def test_adding_states_continues_the_study(first, tmp_path):
     check_contrast_against_checkpoints(out, summary["zeta_contrast"])
 
 
-def test_a_lost_checkpoint_of_state_21_is_reached_again(first, tmp_path):
+def test_a_lost_checkpoint_of_state_21_is_reached_again(added_21, tmp_path):
     """With state 21's rows done, a removed states/21.npz (the advice for a damaged one) does not
     leave the study stuck ('specimen file not found' at each rerun): the state is reached again
     along its path and its static solve gives the same numbers
     (a resume reproduces a checkpoint's arrays bit for bit; 1e-9 covers the solver's last
     digits, which depend only on those arrays)."""
+    assert added_21[1].returncode == 0, added_21[1].stderr[-3000:]
     out = tmp_path / "W"
-    shutil.copytree(first[0], out)
-    assert main_job(out, "--ids", "1,5,21").returncode == 0
+    shutil.copytree(added_21[0], out)
     record = json.loads((out / "statics_state-21.json").read_text())
     before = (out / "probes.csv").read_bytes()
     (out / "states" / "21.npz").write_bytes(b"not a zip")  # damaged: a clear refusal naming the checkpoint

@@ -225,10 +225,12 @@ def _tutorial_commands():
     return text, commands
 
 
+@pytest.mark.long
 def test_the_tutorial_s_commands_give_what_it_says(tmp_path):
     """The tutorial's commands, run as written from the repository's root (its results directory,
     results/tutorial, moved to a temporary one), write every file the tutorial names and say that
-    the study is done."""
+    the study is done. Long: as written, they prepare and study 300 spheres (half a minute of a
+    core); test_main_job runs the same ./main.sh on 100."""
     text, commands = _tutorial_commands()
     assert any(c.startswith("./main.sh") for c in commands), commands
     out = str(tmp_path / "tutorial")

@@ -32,6 +32,15 @@ def small_table(tmp_path_factory):
     return str(path)
 
 
+@pytest.fixture
+def text_only(monkeypatch):
+    """For the tests that read only the report's text and numbers: every figure is drawn and laid
+    out as always, but an empty file stands for its PNG (rasterising is two fifths of a report's
+    time). test_report_from_a_small_fixed_table, the Fig. 16 test and
+    test_figures_5_to_12_plot_the_table_s_own_numbers check real PNGs."""
+    monkeypatch.setattr(figures, "_save", lambda fig, path: open(path, "wb").close())
+
+
 def test_eq21_22_prediction_by_hand():
     # K = 150, G = 120 MPa; a^2 = (1.1, 1.0, 1/1.1): det a = 1
     K, G, a2 = 150e6, 120e6, np.array([1.1, 1.0, 1 / 1.1])
@@ -147,7 +156,7 @@ def test_report_from_a_small_fixed_table(small_table, tmp_path):
     assert "Not in this study" in text  # no statics_isotropic.json beside a bare table
 
 
-def test_report_for_a_clump_assembly_names_the_clump_paper_values(small_table, tmp_path):
+def test_report_for_a_clump_assembly_names_the_clump_paper_values(small_table, tmp_path, text_only):
     """--assembly clump1: the paper's clump1 numbers (Table 2, nu RMSE 0.036) and its statements
     (Fig. 4b: E_x/E_y alone a power law; Fig. 8: Zm falls faster at q < 0), none of the spheres'."""
     path, numbers = report.build(small_table, str(tmp_path / "c1"), assembly="clump1", log=lambda m: None)
@@ -183,7 +192,7 @@ def test_report_refuses_a_wrong_material_and_bad_input(small_table, tmp_path):
     assert not (tmp_path / "r" / "report.md").exists()
 
 
-def test_shear_probe_rows_leave_the_axial_chain_alone(small_table, tmp_path):
+def test_shear_probe_rows_leave_the_axial_chain_alone(small_table, tmp_path, text_only):
     """Rows of shear probes (yz, xz, xy: G_ij, no E_i) are skipped, not read as axial probes
     ("yz" is a substring of "xyz": a test on `in "xyz"` took it for y)."""
     with open(small_table) as f:
@@ -252,7 +261,7 @@ def test_fig16_section_from_the_committed_cross_anisotropic_data(small_table, tm
     assert (tmp_path / "fig16.png").stat().st_size > 5000 and "![Fig. 16](fig16.png)" in text
 
 
-def test_clump_section_from_the_committed_anisotropy_data(small_table, tmp_path):
+def test_clump_section_from_the_committed_anisotropy_data(small_table, tmp_path, text_only):
     """E_z/E_x of each clump assembly against the paper's Table B1 DEM row, computed here."""
     src = os.path.join(REPO, "docs", "data", "anisotropy-clumps-4000.json")
     path, numbers = report.build(small_table, str(tmp_path), log=lambda m: None, clumps=src)
@@ -342,7 +351,7 @@ def test_no_quadratic_through_two_distinct_zm(small_table, tmp_path):
         hyperelastic.quadratic_fit([5.9, 5.8, 5.8], [1.0, 2.0, 3.0])
 
 
-def test_states_without_rows_are_named(small_table, tmp_path):
+def test_states_without_rows_are_named(small_table, tmp_path, text_only):
     """A study whose run stopped at states it could not reach gets a report that names the states
     without rows, not only a count of those it has."""
     study = tmp_path / "study"
@@ -360,7 +369,7 @@ def test_states_without_rows_are_named(small_table, tmp_path):
     assert "without a row" not in open(path).read()
 
 
-def test_a_study_is_compared_with_its_own_assembly(tmp_path):
+def test_a_study_is_compared_with_its_own_assembly(tmp_path, text_only):
     """A report compares a study with the paper's values for its own assembly, not the spheres'
     unless told (the sphere fit would read 36,627 MPa at clump1's Zm 10.3)."""
     study = os.path.join(REPO, "docs", "data", "clump1-4000-s1")
@@ -371,7 +380,7 @@ def test_a_study_is_compared_with_its_own_assembly(tmp_path):
         report.build(study, str(tmp_path / "other"), assembly="spheres", log=lambda m: None)
 
 
-def test_the_study_line_names_the_path_rate(small_table, tmp_path):
+def test_the_study_line_names_the_path_rate(small_table, tmp_path, text_only):
     """A study made with --path-rate gets a report that says so, telling it from the default's."""
     study = tmp_path / "study"
     study.mkdir()
@@ -383,7 +392,7 @@ def test_the_study_line_names_the_path_rate(small_table, tmp_path):
         assert words in open(path).read()
 
 
-def test_the_study_line_names_the_probe_settings(small_table, tmp_path):
+def test_the_study_line_names_the_probe_settings(small_table, tmp_path, text_only):
     """A study probed with --skip-detection or rotations restrained does not read like any other in
     its report: the probes' strain, rotations and detection are said."""
     study = tmp_path / "study"
@@ -399,7 +408,7 @@ def test_the_study_line_names_the_probe_settings(small_table, tmp_path):
         assert words in open(path).read()
 
 
-def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path):
+def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path, text_only):
     """clump2 (docs/data/clump2-4000-s1): the contrast fit stops at zeta_v = 0 and every state's own
     fit at 0: the report says zeta is undetermined, not 'zeta_h = 0.051, zeta_v = 0.000 (fitted)'
     like a result, nor a Spearman correlation over per-state values of 1e-20."""
@@ -421,7 +430,7 @@ def test_sphere_and_spheres_name_one_assembly(small_table, tmp_path):
     assert (tmp_path / "r" / "report.md").read_text().startswith("# Report: spheres")
 
 
-def test_three_states_say_their_r2_is_one_by_construction(small_table, tmp_path):
+def test_three_states_say_their_r2_is_one_by_construction(small_table, tmp_path, text_only):
     """A quadratic through three points fits exactly; the report printed R^2 1.0000 as if a test."""
     path = tmp_path / "probes.csv"
     with open(small_table) as f:

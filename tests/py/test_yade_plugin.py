@@ -1,9 +1,11 @@
 """The YADE plugin (engines/yade, docs/yade-peer.md): our law, servo, probe and fabric recorder as
 YADE classes in Debian's yade-double, loaded through YADE_PREFIX=build/yade-prefix.
 
-The plugin is built by ./setup.sh when the YADE source can be had; without it these tests skip
-with the reason setup wrote to build/yade-plugin.status (and fail where TRUEANISO_YADE_SOURCE is
-set, as in CI: there the plugin must be there)."""
+The plugin is built by ./setup.sh (with no target named) when the YADE source can be had; without
+it these tests skip with the reason setup wrote to build/yade-plugin.status (and fail where
+TRUEANISO_YADE_SOURCE is set, as in CI: there the plugin must be there). They are all long: the
+quick ./test.sh does not build the plugin (its compile alone is minutes), ./test.sh --long builds
+it and runs them."""
 import json
 import math
 import os
@@ -13,6 +15,8 @@ import subprocess
 import numpy as np
 import pytest
 from conftest import HERE, REPO
+
+pytestmark = pytest.mark.long
 
 BUILD = os.environ.get("TRUEANISO_BUILD", os.path.join(REPO, "build"))
 PREFIX = os.path.join(BUILD, "yade-prefix")
@@ -119,7 +123,6 @@ def specimen_1000(tmp_path_factory):
     return path
 
 
-@pytest.mark.long
 def test_state_21_and_probes_against_our_stepper(plugin, specimen_1000, tmp_path):
     r = run_plugin("plugin_state", specimen_1000, "probe", *STATE_21, cwd=tmp_path)
     assert r["reached"], r["message"]
@@ -225,7 +228,6 @@ def test_yade_batch_table_of_two_states(plugin, specimen_100, tmp_path):
 # ---------------------------------------------------------------------------------------------
 # The self-test refuses a plugin built with one definition wrong.
 
-@pytest.mark.long
 def test_a_plugin_built_without_one_definition_is_refused(plugin, tmp_path):
     """The plugin compiled as if yade-double had no OpenMP (YADE_OPENMP missing: Scene's layout
     changes; nothing crashes, the plugin reads the wrong offsets) must fail the self-test."""
