@@ -687,6 +687,12 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                             m_vertical=exp_v["m"] if exp_v else None, r2_vertical=exp_v["r2"] if exp_v else None,
                             zeta_spearman=rho)
     lines += table_b1(results, paper, own_size)
+    if not fig16:
+        lines += ["## Fig. 16: one anisotropy in G, E and nu", "",
+                  "The paper's Fig. 16 covers spheres (16a) and clump2 (16b) only." if assembly == "clump1" else
+                  "Not in this report: it needs a cross-anisotropic study (run_states.py --path cross-anisotropic, "
+                  "given with --fig16)%s." % (", which has not been run on clump2 (docs/clumps.md)"
+                                              if assembly == "clump2" else ""), ""]
     if fig16:
         free = numbers.get("free") or next(iter(numbers.values()), None)
         f16, numbers["fig16_worst"] = fig16_section(f16_rows, fig16, out, free and free["zeta"], material, own_size)
