@@ -465,11 +465,14 @@ def _bound_failure(tab, parts, ref, a2, contrast):
     return ["**The fit stops at a bound: a failure of the model, not noise.** At zeta = 0 (the tangential "
             "springs removed, the largest contrast Eq. 37 can give) the micromechanical a_x^2, a_y^2, a_z^2 follow "
             "the DEM's over the states (r %.3f, %.3f, %.3f) with slopes %.3f, %.3f, %.3f on them: the model's "
-            "stress-induced contrast is %.0f-%.0f %% of the DEM's whatever zeta in [0, 1]. Each state's own zeta "
+            "stress-induced contrast is %.0f-%.0f %% of the DEM's there, and less at a larger zeta (the slope over "
+            "all three, in the table above, falls from %.3f at the fit to %.3f at zeta = 1). Each state's own zeta "
             "against state %s, searched over %g to %g (C = A_n + zeta A_s, one zeta), is negative in %d of %d "
             "states (median %s): no reduction of the tangential stiffness reaches the DEM contrast. The fitted "
             "zeta_h %.3f, zeta_v %.3f only minimise a misfit that the model cannot remove."
-            % (*rs, *slopes, 100 * min(slopes), 100 * max(slopes), tab["state"][ref], *chain.UNBOUNDED_ZETA,
+            % (*rs, *slopes, 100 * min(slopes), 100 * max(slopes),
+               chain.a2_regression(tab["a2_dem"], a2[-1][1])["slope"], chain.a2_regression(tab["a2_dem"], a2[0][1])["slope"],
+               tab["state"][ref], *chain.UNBOUNDED_ZETA,
                neg, len(free), _fmt(float(np.median(free)) if free else None, "%.2f"),
                contrast["zeta_h"], contrast["zeta_v"]), ""]
 
@@ -652,8 +655,8 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                   "| | paper | ours |", "|---|---|---|",
                   "| zeta fitted on the contrast, all states | %s | zeta_h %.3f, zeta_v %.3f (one zeta: %.3f)%s |"
                   % (paper_zeta, zh, zv, contrast["zeta"],
-                     "; at a bound of the search (%g-%g): not determined by these states" % chain.ZETA_BOUNDS
-                     if contrast["at_bound"] else ""),
+                     "; at a bound of the search (%g-%g): not determined by these states, a failure of the model "
+                     "(Fig. 13 above)" % chain.ZETA_BOUNDS if contrast["at_bound"] else ""),
                   "| zeta per state against state %s, mean at the highest Zm (within 0.02) | %s, constant | %s (%s) |"
                   % (tab["state"][ref], paper_zeta_short, _fmt(trend["high"], "%.3f"), _states(trend["n_high"])),
                   "| the same, lowest fifth of the Zm range | %s, constant | %s (%s) |"

@@ -413,6 +413,11 @@ def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path):
     assert "at a bound of the search (0-5): not determined by these states" in text
     assert "| Spearman rank correlation of zeta with Zm | (zeta independent of state) | n/a |" in text
     assert "or a contrast that does not depend on zeta) | | 37 of 37 |" in text
+    # ... and why: a failure of the model, with its evidence (an independent reading of docs/data
+    # found per-direction slopes 0.79-0.82 at zeta = 0 and a median per-state zeta of -0.27)
+    assert "**The fit stops at a bound: a failure of the model, not noise.**" in text
+    assert "with slopes 0.821, 0.820, 0.793 on them" in text
+    assert "is negative in 37 of 37 states (median -0.27)" in text
 
 
 def test_sphere_and_spheres_name_one_assembly(small_table, tmp_path):
