@@ -256,3 +256,17 @@ def test_d50_and_cu_are_stored_and_old_files_still_load(tmp_path):
     m["specimen"]["summary"].update(d50=0.2161e-3, cu=1.4312)
     json.dump(m, open(study / "metadata.json", "w"))
     assert "D50 = 0.216 mm and Cu = 1.43 (paper: 0.216 mm, 1.43)" in report._study_line(str(study))
+
+
+def test_fig16b_on_clump2_names_its_size(tmp_path):
+    """The committed clump2 cross-anisotropic study (1000 clumps) in a report of another size says
+    so; its largest G_hh/G_vh against (E_h/E_v)^0.5 difference is computed here."""
+    src = os.path.join(DATA, "fig16-clump2-1000-s1")
+    rows = report.fig16_rows(src)
+    lines, worst = report.fig16_section(rows, src, str(tmp_path), (0.05, 0.0), dict(shear_modulus=18e9, poisson=0.15),
+                                        "4000 clump2 clumps")
+    text = "\n".join(lines)
+    assert "1000 clump2 clumps. These are 1000 clump2 clumps, not this report's 4000 clump2 clumps." in text
+    assert worst == pytest.approx(max(abs(m["G_ratio"] / m["E_ratio_root"] - 1) for m in rows))
+    assert 0.13 < worst < 0.14 and len(rows) == 11
+    assert (tmp_path / "fig16.png").stat().st_size > 5000
