@@ -204,3 +204,91 @@ def zeta_trend(tab, zetas, band=0.02, low_fraction=0.2):
     mean = lambda v: float(np.mean(v)) if v else None  # noqa: E731
     return dict(rho=rho, high=mean(hi), n_high=len(hi), low=mean(lo), n_low=len(lo),
                 n_undetermined=sum(v is None for v in zetas.values()), n=len(zetas))
+
+
+def nu_floor(tab):
+    """The nu_ij RMSE that no zeta can beat: Eq. (22) fed with each state's own DEM a_i^2 (Eq. 25)
+    and nu0 (hyperelastic.scalar_moduli), against the DEM nu_ij. Any prediction through Eq. (22)
+    has nu_ij a_j^2 / a_i^2 equal in all six pairs, which the DEM values are not; this is how far
+    they are from it. Returns dict(rmse, mean_abs (mean |nu_ij|), relative (rmse / mean_abs))."""
+    off = ~np.eye(3, dtype=bool)
+    err, vals = [], []
+    for E, nu in zip(tab["E"], tab["nu"]):
+        m = hyperelastic.scalar_moduli(E, nu)
+        pred = m["nu0"] * m["a2"][:, None] / m["a2"][None, :]
+        err.append((pred - nu)[off])
+        vals.append(nu[off])
+    err, vals = np.concatenate(err), np.concatenate(vals)
+    rmse, mean_abs = float(np.sqrt(np.mean(err ** 2))), float(np.mean(np.abs(vals)))
+    return dict(rmse=rmse, mean_abs=mean_abs, relative=rmse / mean_abs)
+
+
+def relative_nu_rmse(tab, rmse):
+    """An RMSE of nu_ij relative to the values: rmse / mean |nu_ij| over the states' six nu_ij."""
+    off = ~np.eye(3, dtype=bool)
+    return float(rmse / np.mean(np.abs(tab["nu"][:, off])))
+
+
+def a2_regression(a2_dem, a2_mic):
+    """Micromechanical against DEM a_i^2 over all states and axes: least-squares slope and
+    intercept of mic = slope dem + intercept, and Pearson's r. Appendix B expects a line; with
+    the right zeta its slope is 1."""
+    x, y = np.ravel(a2_dem), np.ravel(a2_mic)
+    slope, intercept = np.polyfit(x, y, 1)
+    return dict(slope=float(slope), intercept=float(intercept), r=float(np.corrcoef(x, y)[0, 1]))
+
+
+UNBOUNDED_ZETA = (-1.0, 5.0)  # the per-state search when the bounded fit stops at 0 (zeta_below_zero)
+
+
+def zeta_below_zero(tab, parts, reference, bounds=UNBOUNDED_ZETA):
+    """One zeta per state, as zeta_per_state, but searched below 0 as well: C = A_n + zeta A_s
+    (Eq. 37, one zeta, linear in it) is defined for negative zeta as long as E_i stay positive.
+    A negative optimum says that no reduction of the tangential stiffness reaches the DEM contrast:
+    the model's contrast is too small even with the tangential springs removed.
+    Returns {state: zeta} (None where the misfit has no interior minimum in `bounds`)."""
+    from scipy import optimize
+    A_n, A_s = parts
+
+    def a2(k, z):
+        return _zeta.a_squared(_young_one(A_n[k], A_s[k], z))
+
+    dem = tab["a2_dem"] / tab["a2_dem"][reference]
+    out = {}
+    for k, sid in enumerate(tab["state"]):
+        if k == reference:
+            continue
+
+        def misfit(z, k=k):
+            with np.errstate(invalid="ignore"):
+                r = a2(k, z) / a2(reference, z) - dem[k]
+            return float(np.sum(r ** 2)) if np.all(np.isfinite(r)) else 1e3
+
+        fit = optimize.minimize_scalar(misfit, bounds=bounds, method="bounded", options=dict(xatol=1e-8))
+        inside = bounds[0] + 1e-4 < fit.x < bounds[1] - 1e-4
+        out[sid] = float(fit.x) if inside else None
+    return out
+
+
+def _young_one(A_n, A_s, z):
+    """E_i of Eq. (40) from C = A_n + z A_s (one zeta, any sign)."""
+    voigt = np.zeros((6, 6))
+    voigt[:3, :3] = _zeta._normal(A_n) + z * _zeta._normal(A_s)
+    from trueaniso import engines
+    return np.asarray(engines.orthotropic_moduli(voigt)["E"], dtype=float)
+
+
+def table2_slopes(tab, fits, paper, zm_ref):
+    """dK/dZm and dG/dZm (MPa per unit of Zm) at the reference Zm: of the paper's quadratic and of
+    ours (2 c1 Zm + c2), with a straight line over our states as a check of our quadratic's slope
+    (over a narrow Zm range the quadratic's coefficients are ill-conditioned, its slope less so);
+    ratio = paper / ours (quadratic)."""
+    out = {}
+    for name in ("K", "G"):
+        pc, c = paper[name], fits[name][:3]
+        p_slope = 2 * pc[0] * zm_ref + pc[1]
+        o_slope = 2 * c[0] * zm_ref + c[1]
+        line = float(np.polyfit(tab["Zm"], tab[name] / 1e6, 1)[0])
+        out[name] = dict(paper=float(p_slope), ours=float(o_slope), ours_line=line,
+                         ratio=float(p_slope / o_slope) if o_slope else None)
+    return out

@@ -81,34 +81,55 @@ def states(path):
         if "mic_E_x" in r and r["mic_E_x"] != "":
             mic_h = 0.5 * (number(r, "mic_E_x", path) + number(r, "mic_E_y", path))
             m["predicted_ratio"] = math.sqrt(mic_h / number(r, "mic_E_z", path))
+            if r.get("mic_zeta", "") != "":
+                m["predicted_zeta"] = number(r, "mic_zeta", path)
         out.append(m)
     if not out:
         raise ResultsError("%s has no state with all six probes (x, y, z, yz, xz, xy)" % path)
     return sorted(out, key=lambda m: m["sigma_v"])
 
 
-def figure(rows, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def predicted_ratios(path, shear_modulus, poisson, zeta_h, zeta_v):
+    """{state: a_h^2 / a_v^2} of the micromechanical prediction at (zeta_h, zeta_v), from the
+    fabric columns of a cross-anisotropic study's probe table (Eqs. 35-37 in the directional form
+    of trueaniso.zeta, Eq. 40, then Eq. 25 as `states` takes it: (mic E_h / mic E_v)^0.5)."""
+    from . import zeta_contrast
+    from trueaniso import zeta
+    found = zeta_contrast.sources(path, shear_modulus, poisson, complete_only=True)
+    src = next((f for f in found if f["rotations"] == "free"), found[0] if found else None)
+    out = {}
+    if src is not None:
+        E = zeta.young_moduli(*zeta_contrast.parts_of(src), zeta_h, zeta_v)
+        for sid, (Ex, Ey, Ez) in zip(src["states"], E):
+            out[sid] = math.sqrt(0.5 * (Ex + Ey) / Ez)
+    return out
+
+
+def figure(rows, path, predictions=None):
+    """Fig. 16: the anisotropy ratios against sigma_v / sigma_h. `predictions`: [(label, [a_h^2 /
+    a_v^2 per row])], the micromechanical curves, each labelled with its zeta; by default the rows'
+    own predicted_ratio, at the zeta of the table's micromechanical columns."""
+    from .figures import _finish, _plt
+    plt = _plt()
     sr = [m["sigma_v"] / m["sigma_h"] for m in rows]
-    fig, ax = plt.subplots(figsize=(5.5, 4))
+    fig, ax = plt.subplots(figsize=(5.8, 4.2))
     ax.plot(sr, [m["G_ratio"] for m in rows], "o-", label="$G_{hh}/G_{vh}$ (shear probes)")
     ax.plot(sr, [m["E_ratio_root"] for m in rows], "s-", label="$(E_h/E_v)^{0.5}$")
     if "nu_ratio" in rows[0]:
         ax.plot(sr, [m["nu_ratio"] for m in rows], "^-", label=r"$\nu_{hv}/\nu_{hh}$")
-    if "predicted_ratio" in rows[0]:
-        ax.plot(sr, [m["predicted_ratio"] for m in rows], "k--", label="$a_h^2/a_v^2$ predicted (Eqs. 35-37, 25)")
-    ax.set_xlabel(r"$\sigma_v/\sigma_h$ ($\sigma_h$ = 100 kPa)")
-    ax.set_ylabel("anisotropy ratio")
-    ax.set_title("Do G, E and nu show one anisotropy? (Fig. 16)", fontsize=11)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    if predictions is None and "predicted_ratio" in rows[0]:
+        z = rows[0].get("predicted_zeta")
+        predictions = [("$a_h^2/a_v^2$ predicted, " + (r"$\zeta$ = %g" % z if z is not None
+                                                         else r"$\zeta$ of the table's columns"),
+                        [m["predicted_ratio"] for m in rows])]
+    for (label, values), style in zip(predictions or (), ("k--", "k:", "k-.")):
+        ax.plot(sr, values, style, label=label)
+    ax.set_xlabel(r"$\sigma_v/\sigma_h$ (-)")
+    ax.set_ylabel("anisotropy ratio (-)")
+    ax.set_title(r"One anisotropy in $G$, $E$ and $\nu$? (Fig. 16; $\sigma_h$ = 100 kPa)", fontsize=10)
+    ax.legend(fontsize=7)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)  # as --out's JSON (trueaniso.atomic)
-    tmp = path + ".tmp.png"  # atomic, as analysis.figures writes its figures
-    fig.savefig(tmp, dpi=120)
-    os.replace(tmp, path)
-    plt.close(fig)
+    _finish(plt, fig, path)
 
 
 def main(argv=None):

@@ -40,9 +40,9 @@ def modulus_vs_stress(rows, path, title="sphere assembly"):
         sel = [r for r in rows if r["probe"] == axis]
         s = [float(r["sigma_" + axis]) / 1e3 for r in sel]
         e = [float(r["E"]) / 1e6 for r in sel]
-        ax.scatter(s, e, marker=mark, label="E_%s" % axis, alpha=0.8)
-    ax.set_xlabel("sigma_i (kPa)")
-    ax.set_ylabel("E_i (MPa)")
+        ax.scatter(s, e, marker=mark, label="$E_%s$" % axis, alpha=0.8)
+    ax.set_xlabel(r"$\sigma_i$ (kPa)")
+    ax.set_ylabel(r"$E_i$ (MPa)")
     ax.set_title("Young's moduli against the stress in their direction\n(%s)" % title, fontsize=10)
     ax.legend()
     _finish(plt, fig, path)
@@ -67,10 +67,10 @@ def scalar_moduli_vs_zm(rows, path):
         c, r2 = hyperelastic.quadratic_fit(z, vals)
         xs = np.linspace(min(z), max(z), 50)
         ax.scatter(z, vals, marker=mark, label=name)
-        ax.plot(xs, np.polyval(c, xs), label="%s fit, R^2 = %.3f" % (name, r2))
+        ax.plot(xs, np.polyval(c, xs), label="%s fit, $R^2$ = %.3f" % (name, r2))
         out[name] = dict(c=c.tolist(), r2=r2)
-    ax.set_xlabel("Zm")
-    ax.set_ylabel("modulus (MPa)")
+    ax.set_xlabel(ZM_LABEL)
+    ax.set_ylabel("$K$, $G$ (MPa)")
     ax.legend(fontsize=8)
     _finish(plt, fig, path)
     return out
@@ -108,9 +108,10 @@ def poisson_vs_q(rows, path):
             line, = ax.plot(q, nu[:, i, j], "o-", ms=3, label="b = %.2f" % b)
             ax.plot(q, nu[:, k, m], "s--", ms=3, color=line.get_color())
     for ax, ((i, j), (k, m)) in zip(axes, pairs):
-        ax.set_title("nu_%s%s (solid), nu_%s%s (dashed)" % ("xyz"[i], "xyz"[j], "xyz"[k], "xyz"[m]), fontsize=9)
-        ax.set_xlabel("q (kPa)")
-    axes[0].set_ylabel("Poisson's ratio")
+        ax.set_title(r"$\nu_{%s%s}$ (solid), $\nu_{%s%s}$ (dashed)" % ("xyz"[i], "xyz"[j], "xyz"[k], "xyz"[m]),
+                     fontsize=9)
+        ax.set_xlabel("$q$ (kPa)")
+        ax.set_ylabel(r"$\nu_{%s%s}$, $\nu_{%s%s}$ (-)" % ("xyz"[i], "xyz"[j], "xyz"[k], "xyz"[m]))
     axes[2].legend(fontsize=7)
     _finish(plt, fig, path)
     return out
@@ -128,9 +129,10 @@ def stress_ratios_vs_q(rows, path):
         out[b] = (q, ratios)
         for k, ax in enumerate(axes):
             ax.plot(q, ratios[:, k], "o-", ms=3, label="b = %.2f" % b)
-    for ax, name in zip(axes, ("sigma_z/sigma_x", "sigma_z/sigma_y", "sigma_x/sigma_y")):
+    for ax, name in zip(axes, (r"$\sigma_z/\sigma_x$", r"$\sigma_z/\sigma_y$", r"$\sigma_x/\sigma_y$")):
         ax.set_title(name, fontsize=9)
-        ax.set_xlabel("q (kPa)")
+        ax.set_xlabel("$q$ (kPa)")
+        ax.set_ylabel(name + " (-)")
     axes[2].legend(fontsize=7)
     _finish(plt, fig, path)
     return out
@@ -146,37 +148,51 @@ def zm_vs_q(rows, path, band=PAPER_ZM_SPHERES):
     fig, ax = plt.subplots(figsize=(6, 4.2))
     if band:
         ax.axhspan(*band, color="0.85", label="paper, spheres (%.2f-%.2f)" % band)
-    out = {}
+    out, gap = {}, False
     for b, sts in _b_groups(_by_state(rows)).items():
         q = np.array([float(st["q"]) for st in sts]) / 1e3
         zm = np.array([float(st["Zm"]) for st in sts])
         out[b] = (q, zm)
         line, = ax.plot(q, zm, "o-", ms=3, label="b = %.2f" % b)
         if sts[0].get("Zm_gap1e-3", "") != "":
+            gap = True
             ax.plot(q, [float(st["Zm_gap1e-3"]) for st in sts], "o:", ms=3, mfc="none", color=line.get_color())
-    ax.set_xlabel("q (kPa)")
-    ax.set_ylabel("Zm (filled), Zm with a 1e-3 gap tolerance (open)")
+    if gap:  # the open markers, said once in the legend
+        ax.plot([], [], "o:", ms=3, mfc="none", color="0.4", label="$Z_m$, contacts within a gap of\n"
+                "$10^{-3}(r_1 + r_2)$ counted")
+    ax.set_xlabel("$q$ (kPa)")
+    ax.set_ylabel(ZM_LABEL)
     ax.legend(fontsize=7)
     _finish(plt, fig, path)
     return out
 
 
+# What Figs 9, 10 and 12 plot of each fabric tensor, with its unit. H (Eq. 16, m^2) is shown as
+# H_ii / tr H, the share of each direction, which does not depend on the particle size; B and M
+# (Eqs. 33-34) are <rbar^(1/3) N^(1/3) L L> and <rbar^(1/3) N^(1/3) L n L n>: m^(1/3) N^(1/3) m^2.
+FABRIC_LABELS = dict(R=r"$R_{ii}$ (-)", H=r"$H_{ii}/\mathrm{tr}\,H$ (-)",
+                     B=r"$B_{ii}$ (m$^{7/3}$ N$^{1/3}$)", M=r"$M_{iiii}$ (m$^{7/3}$ N$^{1/3}$)")
+ZM_LABEL = "$Z_m$ (-)"
+
+
 def fabric_vs_stress(rows, path, name):
-    """Figs 9, 10, 12: the diagonal of a fabric tensor of the rows (R, H, B: name_ii; M: M_iiii)
-    against the stress in the same direction, one series per direction. Returns {axis: (sigma
-    in kPa, values)}."""
+    """Figs 9, 10, 12: the diagonal of a fabric tensor of the rows (R, B: name_ii; H: H_ii / tr H;
+    M: M_iiii) against the stress in the same direction, one series per direction. Returns {axis:
+    (sigma in kPa, values)}, the values as plotted."""
     plt = _plt()
     states = _by_state(rows)
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
     out = {}
+    trace = np.array([sum(float(st["H_" + a * 2]) for a in "xyz") for st in states]) if name == "H" else 1.0
     for axis, mark in zip("xyz", "os^"):
         col = name + "_" + axis * (4 if name == "M" else 2)
         s = np.array([float(st["sigma_" + axis]) for st in states]) / 1e3
-        v = np.array([float(st[col]) for st in states])
+        v = np.array([float(st[col]) for st in states]) / trace
         out[axis] = (s, v)
-        ax.scatter(s, v, marker=mark, label=col, alpha=0.8)
-    ax.set_xlabel("sigma_i (kPa)")
-    ax.set_ylabel(name + " (diagonal)")
+        ax.scatter(s, v, marker=mark, label="$%s_{%s}$" % (name, axis * (4 if name == "M" else 2))
+                   + (r"$/\mathrm{tr}\,H$" if name == "H" else ""), alpha=0.8)
+    ax.set_xlabel(r"$\sigma_i$ (kPa)")
+    ax.set_ylabel(FABRIC_LABELS[name])
     ax.legend(fontsize=8)
     _finish(plt, fig, path)
     return out

@@ -46,6 +46,10 @@ DEPARTURES = [
     ("zeta range", "[0, 5]", "the paper's zeta is a reduction in [0, 1]; a fit with rotations blocked lands at "
      "1.01, which [0, 1] would clip, so the search goes to 5 (docs/equations.md). A fit that stops at 0 or 5 is "
      "reported as at a bound: not determined by the states"),
+    ("Preparation friction", "0.015 (spheres), 0.002 (clump1), 0.01 (clump2) while the packing forms, then 0.5",
+     "the paper's Table 1 gives 0.5 for consolidation and no other friction; consolidated at 0.5 throughout, "
+     "spheres settle at e ~ 0.74 and Zm ~ 4.4. A lower friction while the radii grow is how ours reach the "
+     "paper's e and Zm together; friction is 0.5 from the consolidated state on (docs/specimens.md)"),
     ("Table B1 Sphere*", "406.7 MPa closed form for the simple cubic packing at 100 kPa",
      "the paper prints 386.1-386.7 MPa for its equal-sized cubic packing; its own Eqs. 5-6 give "
      "E = (12 E*^2 sigma)^(1/3)/2 = 406.7 MPa at 100 kPa (docs/triaxial.md). Unexplained: a 5 % gap that "
@@ -64,70 +68,108 @@ def _save(fig, path):
 
 
 def _identity(ax, lo, hi):
-    ax.plot([lo, hi], [lo, hi], "k--", lw=0.8, label="y = x")
+    ax.plot([lo, hi], [lo, hi], "k--", lw=0.8, label="$y = x$")
+
+
+def _tex(text):
+    """A report's plain name of zeta (zeta_h, zeta_v, zeta) in mathtext, for a figure's text."""
+    return (text.replace("zeta_h", "@h").replace("zeta_v", "@v").replace("zeta", r"$\zeta$")
+            .replace("@h", r"$\zeta_h$").replace("@v", r"$\zeta_v$"))
+
+
+def _state_order(states):
+    """State ids in Table C1's order (numbers first, by value), with their positions in `states`."""
+    key = lambda sid: (0, int(sid), "") if sid.isdigit() else (1, 0, sid)  # noqa: E731
+    return sorted(range(len(states)), key=lambda k: key(states[k]))
 
 
 def fig13(tab, a2_by_zeta, path):
     """Micromechanical against DEM a_i^2 at each zeta, coloured by Zm (the paper's Fig. 13)."""
     plt = _plt()
-    fig, axes = plt.subplots(1, len(a2_by_zeta), figsize=(4.0 * len(a2_by_zeta), 3.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(a2_by_zeta), figsize=(4.2 * len(a2_by_zeta) + 1.0, 4.4), squeeze=False,
+                             layout="constrained")
     lo = min(tab["a2_dem"].min(), min(a.min() for _, a in a2_by_zeta)) - 0.01
     hi = max(tab["a2_dem"].max(), max(a.max() for _, a in a2_by_zeta)) + 0.01
     for ax, (label, a2) in zip(axes[0], a2_by_zeta):
         for i, mark in zip(range(3), "os^"):
             sc = ax.scatter(tab["a2_dem"][:, i], a2[:, i], c=tab["Zm"], marker=mark, s=18, cmap="viridis",
-                            label="a_%s^2" % AXES[i])
+                            label="$a_%s^2$" % AXES[i])
         _identity(ax, lo, hi)
         ax.set_xlim(lo, hi)
         ax.set_ylim(lo, hi)
-        ax.set_title(label, fontsize=9)
-        ax.set_xlabel("DEM a_i^2 (Eq. 25)")
-        ax.set_ylabel("micromechanical a_i^2")
+        ax.set_title(_tex(label), fontsize=9)
+        ax.set_xlabel("DEM $a_i^2$, Eq. 25 (-)")
+        ax.set_ylabel("micromechanical $a_i^2$ (-)")
         ax.legend(fontsize=7)
-    fig.colorbar(sc, ax=axes[0].tolist(), label="Zm")
+    fig.colorbar(sc, ax=axes[0].tolist(), label=figures.ZM_LABEL)
     return _save(fig, path)
 
 
-def fig14_15(tab, pred, path_E, path_nu, assembly="spheres"):
+NU_PAIRS = (((2, 0), (0, 2)), ((1, 2), (2, 1)), ((0, 1), (1, 0)))  # the paper's Fig. 15 panels (a)-(c)
+
+
+def fig14_15(tab, pred, path_E, path_nu, assembly="spheres", path_parity=None):
+    """Fig. 14 (E_i, predicted against DEM) and Fig. 15 as the paper draws it: nu_ij of DEM and
+    predicted against the state ID, one panel per pair; the parity plot of nu_ij beside it."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(4.6, 4.2))
     for i, mark in zip(range(3), "os^"):
-        ax.scatter(tab["E"][:, i] / 1e6, pred["E"][:, i] / 1e6, marker=mark, s=16, label="E_%s" % AXES[i])
+        ax.scatter(tab["E"][:, i] / 1e6, pred["E"][:, i] / 1e6, marker=mark, s=16, label="$E_%s$" % AXES[i])
     lo, hi = np.nanmin(tab["E"]) / 1e6 * 0.97, np.nanmax(tab["E"]) / 1e6 * 1.03
     _identity(ax, lo, hi)
-    ax.set_xlabel("DEM E_i (MPa)")
-    ax.set_ylabel("predicted E_i (MPa), Eq. 21")
+    ax.set_xlabel("DEM $E_i$ (MPa)")
+    ax.set_ylabel("predicted $E_i$, Eq. 21 (MPa)")
     ax.set_title("relative RMSE %.4f" % pred["E_rel_rmse"], fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
     names = [_save(fig, path_E)]
-    fig, ax = plt.subplots(figsize=(4.6, 4.2))
-    for i in range(3):
-        for j in range(3):
-            if i != j:
-                ax.scatter(tab["nu"][:, i, j], pred["nu"][:, i, j], s=12, label="nu_%s%s" % (AXES[i], AXES[j]))
-    off = ~np.eye(3, dtype=bool)
-    lo, hi = tab["nu"][:, off].min() * 0.95, tab["nu"][:, off].max() * 1.05
-    _identity(ax, lo, hi)
-    ax.set_xlabel("DEM nu_ij")
-    ax.set_ylabel("predicted nu_ij, Eq. 22")
-    ax.set_title("RMSE %.4f (paper, %s: %.3f)" % (pred["nu_rmse"], assembly, chain.PAPER[assembly]["nu_rmse"]),
-                 fontsize=9)
-    ax.legend(fontsize=6, ncol=2)
-    fig.tight_layout()
+    order = _state_order(tab["state"])
+    numbered = all(s.isdigit() for s in tab["state"])  # Table C1's ids: a missing state leaves its gap
+    x = np.array([int(tab["state"][k]) for k in order]) if numbered else np.arange(len(order))
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.9), layout="constrained")
+    for ax, pair in zip(axes, NU_PAIRS):
+        for (i, j), mark in zip(pair, "os"):
+            name = r"\nu_{%s%s}" % (AXES[i], AXES[j])
+            line, = ax.plot(x, tab["nu"][order, i, j], mark, ms=4, mfc="none", label="DEM $%s$" % name)
+            ax.plot(x, pred["nu"][order, i, j], "-", color=line.get_color(), lw=1, label="predicted $%s$" % name)
+        if not numbered:
+            ax.set_xticks(x)
+            ax.set_xticklabels([tab["state"][k] for k in order], fontsize=7, rotation=90)
+        ax.set_xlabel("state ID, Table C1 (-)")
+        ax.set_ylabel(r"$%s$, $%s$ (-)" % tuple(r"\nu_{%s%s}" % (AXES[i], AXES[j]) for i, j in pair))
+        ax.legend(fontsize=7)
+    fig.suptitle("Poisson's ratios, DEM and Eq. 22: RMSE %.4f (paper, %s: %.3f)"
+                 % (pred["nu_rmse"], assembly, chain.PAPER[assembly]["nu_rmse"]), fontsize=10)
     names.append(_save(fig, path_nu))
+    if path_parity:
+        fig, ax = plt.subplots(figsize=(4.6, 4.2))
+        for i in range(3):
+            for j in range(3):
+                if i != j:
+                    ax.scatter(tab["nu"][:, i, j], pred["nu"][:, i, j], s=12,
+                               label=r"$\nu_{%s%s}$" % (AXES[i], AXES[j]))
+        off = ~np.eye(3, dtype=bool)
+        lo, hi = tab["nu"][:, off].min() * 0.95, tab["nu"][:, off].max() * 1.05
+        _identity(ax, lo, hi)
+        ax.set_xlabel(r"DEM $\nu_{ij}$ (-)")
+        ax.set_ylabel(r"predicted $\nu_{ij}$, Eq. 22 (-)")
+        ax.set_title("RMSE %.4f (paper, %s: %.3f)" % (pred["nu_rmse"], assembly, chain.PAPER[assembly]["nu_rmse"]),
+                     fontsize=9)
+        ax.legend(fontsize=6, ncol=2)
+        fig.tight_layout()
+        names.append(_save(fig, path_parity))
     return names
 
 
-def fig4a(exp, path, label="E_i/E_j, i != j"):
+def fig4a(exp, path, label=r"$E_i/E_j$, $i \neq j$"):
     plt = _plt()
     fig, ax = plt.subplots(figsize=(4.6, 4.2))
     x, y = np.exp(exp["log_sigma_ratio"]), np.exp(exp["log_E_ratio"])
     ax.loglog(x, y, "o", ms=3, alpha=0.7, label=label)
     xs = np.geomspace(x.min(), x.max(), 20)
-    ax.loglog(xs, xs ** exp["m"], "r-", label="(sigma_i/sigma_j)^%.3f" % exp["m"])
-    ax.set_xlabel("sigma_i / sigma_j")
-    ax.set_ylabel("E_i / E_j")
+    ax.loglog(xs, xs ** exp["m"], "r-", label=r"$(\sigma_i/\sigma_j)^{%.3f}$" % exp["m"])
+    ax.set_xlabel(r"$\sigma_i/\sigma_j$ (-)")
+    ax.set_ylabel("$E_i/E_j$ (-)")
     ax.legend(fontsize=8)
     fig.tight_layout()
     return _save(fig, path)
@@ -138,11 +180,11 @@ def fig_zeta_zm(tab, zetas, path, assembly="spheres"):
     fig, ax = plt.subplots(figsize=(4.6, 4.0))
     pts = [(tab["Zm"][k], zetas[s]) for k, s in enumerate(tab["state"]) if zetas.get(s) is not None]
     if pts:
-        ax.plot(*zip(*pts), "o", ms=4)
+        ax.plot(*zip(*pts), "o", ms=4, label="ours, per state")
     ax.axhline(chain.PAPER_ZETA, color="r", lw=0.8,
                label="paper 0.552" if assembly == "spheres" else "paper's spheres, 0.552")
-    ax.set_xlabel("Zm")
-    ax.set_ylabel("zeta fitted on the state's contrast")
+    ax.set_xlabel(figures.ZM_LABEL)
+    ax.set_ylabel(r"$\zeta$ fitted on the state's contrast (-)")
     ax.legend(fontsize=8)
     fig.tight_layout()
     return _save(fig, path)
@@ -192,11 +234,23 @@ def _study_line(results, rows=()):
         _fmt(probe.get("gamma"), "%g"),
         probe.get("rotations", "?") + (" (--rotations restrained)" if probe.get("rotations") == "restrained" else ""),
         probe.get("detection", "?") + (" (--skip-detection)" if probe.get("detection") == "off" else ""))
-    return ("Study: %s %s (%s), e = %s and Zm = %s at the isotropic state%s; %s path, %s; %s%s."
+    return ("Study: %s %s (%s), e = %s and Zm = %s at the isotropic state%s; %s; %s path, %s; %s%s."
             % (summ.get("n", "?"), fp.get("assembly", "sphere") + "s" if fp.get("assembly", "sphere") == "sphere"
                else fp.get("assembly"), "seed not recorded" if seed is None else "seed %s" % seed,
                _fmt(summ.get("void_ratio"), "%.4f"), _fmt(summ.get("Zm"), "%.3f"), where,
+               _size_said(spec.get("summary") or {}, fp.get("assembly", "sphere")),
                fp.get("path", "true-triaxial"), reached, law, probes))
+
+
+def _size_said(summary, assembly):
+    """D50 and Cu of the specimen (its summary, specimen.d50_cu) beside the paper's for the
+    assembly; a specimen saved before they were stored says so."""
+    from trueaniso import psd
+    paper = psd.PAPER_D50_CU.get(assembly)
+    theirs = " (paper: %.3f mm, %.2f)" % (paper[0] * 1e3, paper[1]) if paper else ""
+    if "d50" not in summary or "cu" not in summary:
+        return "D50 and Cu not stored in the specimen%s" % theirs
+    return "D50 = %.3f mm and Cu = %.2f%s" % (summary["d50"] * 1e3, summary["cu"], theirs)
 
 
 def _states(n):
@@ -243,8 +297,7 @@ def paper_figures(rows, out, tag, assembly):
     zm_all = np.concatenate([v[1] for v in zm.values()])
     sides = chain.zm_by_sign_of_q(q_all, zm_all, zm_all[np.argmin(np.abs(q_all))])
     side = lambda k: _fmt(sides[k]["drop"], "%.3f")  # noqa: E731
-    h_tr = [sum(fab["H"][a][1][k] for a in "xyz") for k in range(len(fab["H"]["x"][1]))]
-    h_rel = np.array([fab["H"][a][1] / np.array(h_tr) for a in "xyz"])
+    h_rel = np.array([fab["H"][a][1] for a in "xyz"])  # Fig. 10 plots H_ii / tr H
     b_slope = {a: 1000 * np.polyfit(*fab["B"][a], 1)[0] / np.mean(fab["B"][a][1]) for a in "xyz"}  # % per 10 kPa
     sphere = assembly == "spheres"
     return ["### Figs 5, 6, 8, 9, 10 and 12", "",
@@ -303,31 +356,82 @@ def clump_entries(source):
     return entries
 
 
-def fig16_section(rows, source, out):
-    """Fig. 16 from fig16_rows: lines of the report, its figure written into `out`."""
+def study_size(source):
+    """What a study is, by its size, as its metadata.json records it ("4000 spheres"), for a study
+    directory or its probes.csv; None where nothing records it (a bare table, a JSON of measures)."""
+    if source is None:
+        return None
+    d = source if os.path.isdir(source) else os.path.dirname(os.path.abspath(source))
+    meta = read_metadata(d) if os.path.exists(os.path.join(d, "metadata.json")) else None
+    n = (((meta or {}).get("specimen") or {}).get("summary") or {}).get("n")
+    if n is None:
+        return None
+    kind = (meta.get("fingerprint") or {}).get("assembly", "sphere")
+    return "%d %s" % (n, "spheres" if kind == "sphere" else kind if kind == "clumps" else kind + " clumps")
+
+
+def _other_size(size, own):
+    """The sentence that says a section's data are not the report's own study, by size."""
+    if size is None:
+        return " Its size is not recorded with it."
+    return "" if own is None or size == own else " These are %s, not this report's %s." % (size, own)
+
+
+def fig16_section(rows, source, out, calibrated=None, material=None, own=None):
+    """Fig. 16 from fig16_rows: lines of the report, its figure written into `out`. `calibrated`:
+    (zeta_h, zeta_v) of the report's own study; with a study's table (not a JSON of measures) the
+    micromechanical a_h^2/a_v^2 is drawn at that zeta and at zeta = 1, each labelled."""
     from . import cross_anisotropy
-    cross_anisotropy.figure(rows, os.path.join(out, "fig16.png"))
+    size = study_size(source) if not source.endswith(".json") else None
+    curves, cols = None, []
+    if not source.endswith(".json") and material:
+        path = table_path(source)
+        zetas = [("zeta = 1 (unmodified)", 1.0, 1.0)]
+        if calibrated is not None:
+            zetas.insert(0, ("zeta_h = %.3f, zeta_v = %.3f (calibrated on this report's study)" % calibrated,
+                             calibrated[0], calibrated[1]))
+        curves = []
+        for label, zh, zv in zetas:
+            by_state = cross_anisotropy.predicted_ratios(path, material["shear_modulus"], material["poisson"], zh, zv)
+            values = [by_state.get(m["state"], float("nan")) for m in rows]
+            curves.append(("$a_h^2/a_v^2$ predicted, " + _tex(label), values))
+            cols.append((label, values))
+    else:
+        z = rows[0].get("predicted_zeta")
+        cols = [("zeta = %g" % z if z is not None else "the zeta of the table's columns",
+                 [m.get("predicted_ratio", float("nan")) for m in rows])]
+    cross_anisotropy.figure(rows, os.path.join(out, "fig16.png"), curves)
     lines = ["## Fig. 16: one anisotropy in G, E and nu (cross-anisotropic states, z vertical)", "",
-             "From `%s`. The paper (Fig. 16a): G_hh/G_vh follows (E_h/E_v)^0.5, as Eq. (24) predicts, while "
-             "nu_hh/nu_vv follows another trend. Ours:" % source, "",
-             "| sigma_v/sigma_h | G_hh/G_vh | (E_h/E_v)^0.5 | difference | nu_hv/nu_hh | predicted a_h^2/a_v^2 |",
-             "|---|---|---|---|---|---|"]
-    for m in rows:
+             "From `%s`%s.%s The paper (Fig. 16a, spheres; 16b, clump2): the predicted a_h^2/a_v^2 (at its "
+             "calibrated zeta) agrees with G_hh/G_vh and (E_h/E_v)^0.5, as Eq. (24) says, while nu_hh/nu_vv follows "
+             "another trend. Ours:" % (source, ", %s" % size if size else "", _other_size(size, own)), "",
+             "| sigma_v/sigma_h | G_hh/G_vh | (E_h/E_v)^0.5 | difference | nu_hv/nu_hh | %s |"
+             % " | ".join("predicted a_h^2/a_v^2, %s" % label for label, _ in cols),
+             "|---|---|---|---|---|%s" % ("---|" * len(cols))]
+    for k, m in enumerate(rows):
         lines.append("| %.2f | %.3f | %.3f | %+.1f %% | %s | %s |" % (
             m["sigma_v"] / m["sigma_h"], m["G_ratio"], m["E_ratio_root"], 100 * (m["G_ratio"] / m["E_ratio_root"] - 1),
-            _fmt(m.get("nu_ratio"), "%.3f"), _fmt(m.get("predicted_ratio"), "%.3f")))
+            _fmt(m.get("nu_ratio"), "%.3f"), " | ".join(_fmt(v[k], "%.3f") for _, v in cols)))
     worst = max(abs(m["G_ratio"] / m["E_ratio_root"] - 1) for m in rows)
-    return lines + ["", "Largest difference between G_hh/G_vh and (E_h/E_v)^0.5: %.1f %% over %d states."
-                    % (100 * worst, len(rows)), "", "![Fig. 16](fig16.png)", ""], worst
+    lines += ["", "Largest difference between G_hh/G_vh and (E_h/E_v)^0.5: %.1f %% over %d states." % (100 * worst,
+                                                                                                    len(rows))]
+    for label, values in cols:
+        dev = [abs(v / m["E_ratio_root"] - 1) for v, m in zip(values, rows) if np.isfinite(v)]
+        if dev:
+            lines.append("Largest difference between the predicted a_h^2/a_v^2 (%s) and (E_h/E_v)^0.5: %.1f %%."
+                         % (label, 100 * max(dev)))
+    return lines + ["", "![Fig. 16](fig16.png)", ""], worst
 
 
-def clumps_section(entries, source):
+def clumps_section(entries, source, own_size=None):
     """The clump assemblies at their isotropic state (clump_entries): void ratio, the restrained
     moduli of Table B1 and E_z/E_x beside the paper's."""
     from . import chain
     lines = ["## Clump assemblies at the isotropic state (100 kPa, rotations restrained)", "",
-             "From `%s` (docs/specimens.md has the fabric and the free-rotation moduli). The paper's "
-             "clump1 is vertically stiffer, its clump2 horizontally (Table B1, DEM row)." % source, "",
+             "From `%s`, %s (docs/specimens.md has the fabric and the free-rotation moduli)%s. The paper's "
+             "clump1 is vertically stiffer, its clump2 horizontally (Table B1, DEM row)."
+             % (source, " and ".join("%d %s clumps" % (m["n"], m["assembly"]) for m in entries),
+                "; not this report's study (%s)" % own_size if own_size else ""), "",
              "| assembly | | e | E_x | E_y | E_z (MPa) | E_z/E_x | E_z/E_x against the paper |", "|---|---|---|---|---|---|---|---|"]
     ratios = {}
     for m in entries:
@@ -347,6 +451,30 @@ def clumps_section(entries, source):
                     "recipes are ours, docs/clumps.md: the paper shows its shapes only in a figure and cites its "
                     "recipes); the direction and the size of the inherent anisotropy are the comparable numbers.",
                     ""], ratios
+
+
+def _bound_failure(tab, parts, ref, a2, contrast):
+    """Why a contrast fit at a bound of its search is a failure of the model, not noise: the
+    micromechanical a_i^2 follow the DEM's (r) with a slope below 1 even with no tangential
+    stiffness (zeta = 0), and each state's own zeta, searched below 0, comes out negative."""
+    mic0 = chain.micromechanical_a2(parts, 0.0, 0.0)
+    per = [chain.a2_regression(tab["a2_dem"][:, i], mic0[:, i]) for i in range(3)]
+    slopes, rs = [r["slope"] for r in per], [r["r"] for r in per]
+    free = [v for v in chain.zeta_below_zero(tab, parts, ref).values() if v is not None]
+    neg = sum(v < 0 for v in free)
+    return ["**The fit stops at a bound: a failure of the model, not noise.** At zeta = 0 (the tangential "
+            "springs removed, the largest contrast Eq. 37 can give) the micromechanical a_x^2, a_y^2, a_z^2 follow "
+            "the DEM's over the states (r %.3f, %.3f, %.3f) with slopes %.3f, %.3f, %.3f on them: the model's "
+            "stress-induced contrast is %.0f-%.0f %% of the DEM's there, and less at a larger zeta (the slope over "
+            "all three, in the table above, falls from %.3f at the fit to %.3f at zeta = 1). Each state's own zeta "
+            "against state %s, searched over %g to %g (C = A_n + zeta A_s, one zeta), is negative in %d of %d "
+            "states (median %s): no reduction of the tangential stiffness reaches the DEM contrast. The fitted "
+            "zeta_h %.3f, zeta_v %.3f only minimise a misfit that the model cannot remove."
+            % (*rs, *slopes, 100 * min(slopes), 100 * max(slopes),
+               chain.a2_regression(tab["a2_dem"], a2[-1][1])["slope"], chain.a2_regression(tab["a2_dem"], a2[0][1])["slope"],
+               tab["state"][ref], *chain.UNBOUNDED_ZETA,
+               neg, len(free), _fmt(float(np.median(free)) if free else None, "%.2f"),
+               contrast["zeta_h"], contrast["zeta_v"]), ""]
 
 
 def study_assembly(results):
@@ -413,11 +541,13 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
             lines += [line, ""]
     os.makedirs(out, exist_ok=True)
     numbers = {}
+    own_size = study_size(results) if os.path.isdir(results) else None
     for rot in sorted({r["rotations"] for r in rows}):
         sel = [r for r in rows if r["rotations"] == rot]
         tab = chain.state_table(sel)
         n = len(tab["state"])
-        lines += ["## Probes with rotations %s: %d complete state%s" % (rot, n, "" if n == 1 else "s"), ""]
+        lines += ["## Probes with rotations %s: %d complete state%s%s" % (rot, n, "" if n == 1 else "s",
+                                                                       " of %s" % own_size if own_size else ""), ""]
         if n < 3:
             lines += ["Fewer than 3 complete states (a state is complete when probed on x, y and z, which the "
                       "fits need): no fits.", ""]
@@ -449,9 +579,10 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         zetas = chain.zeta_per_state(tab, parts, ref)
         figs = dict(f13=fig13(tab, a2, os.path.join(out, "fig13-a2%s.png" % tag)),
                     f1415=fig14_15(tab, preds[2][1], os.path.join(out, "fig14-E%s.png" % tag),
-                                   os.path.join(out, "fig15-nu%s.png" % tag), assembly),
+                                   os.path.join(out, "fig15-nu%s.png" % tag), assembly,
+                                   os.path.join(out, "fig15-nu-parity%s.png" % tag)),
                     f4=fig4a(exp, os.path.join(out, "fig4a%s.png" % tag),
-                             "E_i/E_j, i != j" if sphere else "E_x/E_y, E_y/E_x") if exp else None,
+                             r"$E_i/E_j$, $i \neq j$" if sphere else "$E_x/E_y$, $E_y/E_x$") if exp else None,
                     fz=fig_zeta_zm(tab, zetas, os.path.join(out, "zeta-vs-Zm%s.png" % tag), assembly),
                     f3="fig3-E-vs-sigma%s.png" % tag, f11="fig11-K-G-vs-Zm%s.png" % tag)
         figures.modulus_vs_stress(sel, os.path.join(out, figs["f3"]), "%s, rotations %s" % (assembly, rot))
@@ -471,6 +602,15 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
             shown = "(%.1f, extrapolated)" % at if outside else "%.1f" % at
             lines.append("| %s paper | %.1f | %.1f | %.1f | > 0.99 | %s |" % (name, *pc, shown))
             lines.append("| %s ours | %.1f | %.1f | %.1f | %.4f | %.1f |" % (name, *c, np.polyval(c[:3], zm[ref])))
+        slopes = chain.table2_slopes(tab, fits, paper, zm[ref])
+        lines += ["", "Slopes of the fits at Zm = %.2f (MPa per unit of Zm)%s:" % (
+            zm[ref], "; the paper's extrapolated" if outside else ""), "",
+            "| | paper | ours, of the quadratic | ours, a straight line over our states | paper / ours (quadratic) |",
+            "|---|---|---|---|---|"]
+        for name in ("K", "G"):
+            sl = slopes[name]
+            lines.append("| d%s/dZm | %.1f | %.1f | %.1f | %s |" % (name, sl["paper"], sl["ours"], sl["ours_line"],
+                                                                   _fmt(sl["ratio"], "%.2f")))
         lines += ["", "![Fig. 3](%s) ![Fig. 11](%s)" % (figs["f3"], figs["f11"]), "",
                   "The coefficients of a quadratic over a narrow Zm range are ill-conditioned (large, of "
                   "alternating sign, in the paper too); the value at the reference Zm is the comparable number"
@@ -481,15 +621,31 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                      "docs/clumps.md). Compare the trends and Table B1 instead." % ("; ".join(outside), zm[ref])),
                   "",
                   "### Fig. 13: micromechanical against DEM a_i^2", "",
-                  "| zeta | rms of a_i^2 | E_i relative RMSE (Eq. 21) | nu_ij RMSE (Eq. 22) |", "|---|---|---|---|"]
+                  "| zeta | rms of a_i^2 | slope of micromechanical on DEM a_i^2 (r) | E_i relative RMSE (Eq. 21) | "
+                  "nu_ij RMSE (Eq. 22) | nu_ij RMSE / mean \\|nu_ij\\| |", "|---|---|---|---|---|---|"]
+        floor = chain.nu_floor(tab)
         for (label, a), (_, p) in zip(a2, preds):
-            lines.append("| %s | %.4f | %.4f | %.4f |" % (label, float(np.sqrt(np.mean((a - tab["a2_dem"]) ** 2))),
-                                                          p["E_rel_rmse"], p["nu_rmse"]))
-        lines += ["| paper (%s) | | | %.3f |" % ("spheres, 0.552" if sphere else assembly + ", its fitted zeta_h, zeta_v",
-                                                paper["nu_rmse"]), "",
-                  "![Fig. 13](%s)" % figs["f13"], "",
+            reg = chain.a2_regression(tab["a2_dem"], a)
+            lines.append("| %s | %.4f | %.3f (%.4f) | %.4f | %.4f | %.3f |"
+                         % (label, float(np.sqrt(np.mean((a - tab["a2_dem"]) ** 2))), reg["slope"], reg["r"],
+                            p["E_rel_rmse"], p["nu_rmse"], chain.relative_nu_rmse(tab, p["nu_rmse"])))
+        lines += ["| Eq. 22 with each state's own DEM a_i^2 and nu0: the floor | 0 | 1 (1) | | %.4f | %.3f |"
+                  % (floor["rmse"], floor["relative"]),
+                  "| paper (%s) | | | | %.3f | |" % ("spheres, 0.552" if sphere else assembly + ", its fitted zeta_h, zeta_v",
+                                                    paper["nu_rmse"]), "",
+                  "The floor: Eq. (22) makes nu_ij a_j^2/a_i^2 one number, nu0, for the six pairs; the DEM's are not one "
+                  "number, so even the DEM's own a_i^2 and nu0 leave an RMSE of %.4f (mean \\|nu_ij\\| %.3f), which no "
+                  "zeta can beat. %s" % (floor["rmse"], floor["mean_abs"],
+                                        "It is above the paper's %.3f: the paper's RMSE is not reachable with our "
+                                        "nu_ij." % paper["nu_rmse"] if floor["rmse"] > paper["nu_rmse"] else
+                                        "The paper's %.3f is above it." % paper["nu_rmse"]), ""]
+        if contrast["at_bound"]:
+            lines += _bound_failure(tab, parts, ref, a2, contrast)
+        lines += ["![Fig. 13](%s)" % figs["f13"], "",
                   "### Figs 14-15: E_i and nu_ij predicted (Table 2 fits, fitted zeta) against DEM", "",
-                  "![Fig. 14](%s) ![Fig. 15](%s)" % tuple(figs["f1415"]), ""]
+                  "![Fig. 14](%s)" % figs["f1415"][0], "",
+                  "Fig. 15 as the paper draws it, against the state ID (Table C1), and as a parity plot:", "",
+                  "![Fig. 15](%s)" % figs["f1415"][1], "", "![Fig. 15, parity](%s)" % figs["f1415"][2], ""]
         trend = chain.zeta_trend(tab, zetas)
         # The paper states its zeta in the text for spheres only; the clumps' pair is in Fig. 13d, f.
         paper_zeta, paper_zeta_short = (("0.552 (both)", "0.552") if sphere else
@@ -499,8 +655,8 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                   "| | paper | ours |", "|---|---|---|",
                   "| zeta fitted on the contrast, all states | %s | zeta_h %.3f, zeta_v %.3f (one zeta: %.3f)%s |"
                   % (paper_zeta, zh, zv, contrast["zeta"],
-                     "; at a bound of the search (%g-%g): not determined by these states" % chain.ZETA_BOUNDS
-                     if contrast["at_bound"] else ""),
+                     "; at a bound of the search (%g-%g): not determined by these states, a failure of the model "
+                     "(Fig. 13 above)" % chain.ZETA_BOUNDS if contrast["at_bound"] else ""),
                   "| zeta per state against state %s, mean at the highest Zm (within 0.02) | %s, constant | %s (%s) |"
                   % (tab["state"][ref], paper_zeta_short, _fmt(trend["high"], "%.3f"), _states(trend["n_high"])),
                   "| the same, lowest fifth of the Zm range | %s, constant | %s (%s) |"
@@ -528,16 +684,24 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                       "(b = 0 only), so E_x/E_y has no stress ratio to follow.", ""]
         lines += paper_figures(sel, out, tag, assembly)
         numbers[rot] = dict(states=n, Zm=(float(zm.min()), float(zm.max())), table2=fits, zeta=(zh, zv),
+                            nu_floor=floor, slopes=slopes,
                             zeta_common=contrast["zeta"], nu_rmse={l: p["nu_rmse"] for l, p in preds},
                             E_rel_rmse={l: p["E_rel_rmse"] for l, p in preds}, m=exp["m"] if exp else None,
                             m_vertical=exp_v["m"] if exp_v else None, r2_vertical=exp_v["r2"] if exp_v else None,
                             zeta_spearman=rho)
-    lines += table_b1(results, paper)
+    lines += table_b1(results, paper, own_size)
+    if not fig16:
+        lines += ["## Fig. 16: one anisotropy in G, E and nu", "",
+                  "The paper's Fig. 16 covers spheres (16a) and clump2 (16b) only." if assembly == "clump1" else
+                  "Not in this report: it needs a cross-anisotropic study (run_states.py --path cross-anisotropic, "
+                  "given with --fig16)%s." % (", which has not been run on clump2 (docs/clumps.md)"
+                                              if assembly == "clump2" else ""), ""]
     if fig16:
-        f16, numbers["fig16_worst"] = fig16_section(f16_rows, fig16, out)
+        free = numbers.get("free") or next(iter(numbers.values()), None)
+        f16, numbers["fig16_worst"] = fig16_section(f16_rows, fig16, out, free and free["zeta"], material, own_size)
         lines += f16
     if clumps:
-        cl, numbers["clump_ratios"] = clumps_section(clump_rows, clumps)
+        cl, numbers["clump_ratios"] = clumps_section(clump_rows, clumps, own_size)
         lines += cl
     lines += ["## Departures from the paper", "", "| what | ours | why |", "|---|---|---|"]
     lines += ["| %s | %s | %s |" % d for d in DEPARTURES]
@@ -550,13 +714,20 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     return path, numbers
 
 
-def table_b1(results, paper):
+def _b1_cells(E):
+    """E_i (MPa) with its a_i^2 (Eq. 25) in brackets, as the paper's Table B1 prints them."""
+    a2 = hyperelastic.fabric_a2(E)
+    return tuple("%.1f (%.3f)" % (e, a) for e, a in zip(E, a2))
+
+
+def table_b1(results, paper, own_size=None):
     """Appendix B / Table B1 at the isotropic state and at state 21: the exact static solve with
     rotations blocked (what a restrained probe measures) against the unmodified (zeta = 1)
     kinematic prediction, from the study's statics records (trueaniso.statics.cached_record:
-    run_study.py writes them, `--statics` solves them from the checkpoints)."""
+    run_study.py writes them, `--statics` solves them from the checkpoints). Each E_i with its
+    a_i^2 (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i."""
     from trueaniso import statics
-    out = ["## Table B1: rotations restrained (MPa)", ""]
+    out = ["## Table B1: rotations restrained, E_i (MPa) and a_i^2", ""]
     found = []
     if os.path.isdir(results):
         for label, candidates in (("isotropic", (None, "1")), ("21", ("21",))):
@@ -567,19 +738,29 @@ def table_b1(results, paper):
     if not found:
         return out + ["Not in this study (run_study.py writes the statics records; `python3 -m analysis.report "
                       "DIR --statics` solves them from the state checkpoints).", ""]
-    out += ["| state | | E_x | E_y | E_z | predicted / DEM |", "|---|---|---|---|---|---|"]
+    out += ["From this study's statics records%s. a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (Eq. 25) of each row; the "
+            "paper prints its a_i^2 to two decimals, here computed from its printed E_i." %
+            (" (%s)" % own_size if own_size else ""), "",
+            "| state | | E_x (a_x^2) | E_y (a_y^2) | E_z (a_z^2) | predicted / DEM, mean E_i | largest \\|a_i^2 "
+            "predicted - DEM\\| |", "|---|---|---|---|---|---|---|"]
+    have = {label for label, _ in found}
     for label, st in found:
         pred, dem = np.array(st["E_kinematic"]) / 1e6, np.array(st["E_blocked"]) / 1e6
         p = paper["B1"][label]
         name = "isotropic" if label == "isotropic" else "21 (b = 0.5, sigma_z = 140 kPa)"
-        out += ["| %s | paper predicted (zeta = 1) | %.1f | %.1f | %.1f | %.3f |"
-                % (name, *p["pred"], np.mean(p["pred"]) / np.mean(p["dem"])),
-                "| | paper DEM | %.1f | %.1f | %.1f | |" % tuple(p["dem"]),
-                "| | ours predicted (zeta = 1) | %.1f | %.1f | %.1f | %.3f |" % (*pred, pred.mean() / dem.mean()),
-                "| | ours static solve, rotations blocked | %.1f | %.1f | %.1f | |" % tuple(dem)]
+        gap = lambda a, b: float(np.max(np.abs(hyperelastic.fabric_a2(a) - hyperelastic.fabric_a2(b))))  # noqa: E731
+        out += ["| %s | paper predicted (zeta = 1) | %s | %s | %s | %.3f | %.3f |"
+                % (name, *_b1_cells(p["pred"]), np.mean(p["pred"]) / np.mean(p["dem"]), gap(p["pred"], p["dem"])),
+                "| | paper DEM | %s | %s | %s | | |" % _b1_cells(p["dem"]),
+                "| | ours predicted (zeta = 1) | %s | %s | %s | %.3f | %.3f |"
+                % (*_b1_cells(pred), pred.mean() / dem.mean(), gap(pred, dem)),
+                "| | ours static solve, rotations blocked | %s | %s | %s | | |" % _b1_cells(dem)]
         if "sigma" in st:
-            out.append("| | ours sigma_x, sigma_y, sigma_z (kPa) | %.1f | %.1f | %.1f | |"
+            out.append("| | ours sigma_x, sigma_y, sigma_z (kPa) | %.1f | %.1f | %.1f | | |"
                        % tuple(x / 1e3 for x in st["sigma"]))
+    if "21" not in have:
+        out += ["", "State 21: no statics record in this study (no checkpoint of state 21 was kept, or the state "
+                "was not solved); docs/departures.md says why where it is known."]
     return out + [""]
 
 

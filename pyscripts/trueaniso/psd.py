@@ -74,5 +74,7 @@ def mass_d50_cu(diameters):
     return at(0.5), at(0.6) / at(0.1)
 
 
-PAPER_SPHERES = SizeDistribution.from_d50_cu(0.195e-3, 1.25)
-PAPER_CLUMP2 = SizeDistribution.from_d50_cu(0.216e-3, 1.43)
+# The paper's D50 (m) and Cu of each assembly (section 2.1).
+PAPER_D50_CU = dict(sphere=(0.195e-3, 1.25), clump1=(0.195e-3, 1.25), clump2=(0.216e-3, 1.43))
+PAPER_SPHERES = SizeDistribution.from_d50_cu(*PAPER_D50_CU["sphere"])
+PAPER_CLUMP2 = SizeDistribution.from_d50_cu(*PAPER_D50_CU["clump2"])

@@ -202,11 +202,18 @@ def _require_force_evaluation(sig, coordination):
                          "just imported, e.g. from YADE): call trueaniso.dem.refresh(scene) first")
 
 
+def d50_cu(scene):
+    """(D50 in m, Cu) of the scene's particles by mass, each by the diameter of its equal-volume
+    sphere (a clump's union volume): the numbers the paper gives for its assemblies (section 2.1)."""
+    d = np.cbrt(6.0 * np.asarray(scene.volumes, dtype=float) / np.pi)
+    return _psd.mass_d50_cu(d)
+
+
 def state(scene):
     """The numbers a researcher checks on a specimen: the whole stress (normal and shear
     components, principal values largest first, the largest shear stress tau_max and the
     deviatoric q of the principal values), the fabric counts and the cell (hSize, columns = cell
-    vectors)."""
+    vectors), and D50 and Cu (d50_cu)."""
     from .triaxial import stress_record
     sig = engines.stress(scene)
     z = engines.coordination(scene)
@@ -217,6 +224,7 @@ def state(scene):
                p=np.trace(sig) / 3.0, unbalanced=engines.unbalanced_force(scene),
                friction=scene.friction, cell=scene.cell.tolist())
     out.update(stress_record(scene))
+    out["d50"], out["cu"] = d50_cu(scene)
     s1, s2, s3 = out["sigma_1"], out["sigma_2"], out["sigma_3"]
     out["q"] = float(np.sqrt(0.5 * ((s1 - s2) ** 2 + (s2 - s3) ** 2 + (s3 - s1) ** 2)))
     return out
