@@ -26,7 +26,7 @@ struct Fabric {
   Real Zm = 0;           // Eq. (14); NaN when no particle has two contacts
   Mat3 R = Mat3::Zero(); // Eq. (15)
   Mat3 H = Mat3::Zero(); // Eq. (16), m^2
-  Mat3 B = Mat3::Zero(); // Eq. (33), m^(8/3) N^(1/3)
+  Mat3 B = Mat3::Zero(); // Eq. (33), m^(7/3) N^(1/3): r^(1/3) N^(1/3) L L
   Mat9 M = Mat9::Zero(); // Eq. (34), same unit as B
   Real meanNormalForce = 0;  // <N> over the Nc contacts (N)
   Real volume = 0;           // cell volume V (m^3)
