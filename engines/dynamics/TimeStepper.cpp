@@ -12,11 +12,11 @@ namespace trueaniso {
 
 namespace {
 
-// Largest eigenvalue of a symmetric 3x3 (closed form; relative error ~1e-12, far below what a
-// safety factor needs).
+// Largest eigenvalue of a symmetric 3x3, iteratively (Eigen's closed form, computeDirect, lost
+// 1e-9 of it on a turned dimer whose scaled matrix has one small and two equal eigenvalues).
 Real largestEigenvalue(const Mat3& a) {
   Eigen::SelfAdjointEigenSolver<Mat3> solver;
-  solver.computeDirect(a, Eigen::EigenvaluesOnly);
+  solver.compute(a, Eigen::EigenvaluesOnly);
   return solver.eigenvalues()(2);
 }
 
@@ -33,13 +33,14 @@ Mat3 cross(const Vec3& l) {
 }
 
 // Arm from the centre of the body on `side` (1 or 2) of pair c to the contact point, world frame:
-// the member's offset and its radius towards the other sphere (normal n points from 1 to 2).
+// the member's offset, then towards the other sphere to mid-overlap (normal n points from 1 to 2),
+// where the force loop applies the contact force (dynamics/ContactForces.cpp).
 Vec3 arm(const Scene& s, int c, int side) {
   const Contacts& C = s.contacts;
   const int m = side == 1 ? C.m1[c] : C.m2[c];
   const int b = side == 1 ? C.b1[c] : C.b2[c];
-  const Real r = side == 1 ? s.members.radius[m] : -s.members.radius[m];
-  return s.bodies.orientation[b] * s.members.offset[m] + r * C.normal[c];
+  const Real r = s.members.radius[m] - 0.5 * C.overlap[c];
+  return s.bodies.orientation[b] * s.members.offset[m] + (side == 1 ? r : -r) * C.normal[c];
 }
 
 }  // namespace

@@ -51,10 +51,10 @@ struct DimerAndSphere {
 
 }  // namespace
 
-// The dimer's contact lies on its x axis: arm (d + r) along x, no stiffness about x, k_s (d + r)^2
-// about y and z. With I_x a millionth of I_y the bound must not notice I_x (a rule on the smallest
+// The dimer's contact lies on its x axis: arm l = d + r - delta/2 along x (to mid-overlap, where the
+// force acts), no stiffness about x, k_s l^2 about y and z. With I_x a millionth of I_y the bound must not notice I_x (a rule on the smallest
 // principal inertia would cut the step by 1000), and turning the whole pair changes nothing.
-// The sphere: translation lambda_max(K_c) = k_n over m_s, rotation k_s r^2 over (2/5) m_s r^2.
+// The sphere: translation lambda_max(K_c) = k_n over m_s, rotation k_s (r - delta/2)^2 over (2/5) m_s r^2.
 // Tolerance 1e-9: the closed-form eigenvalues and the Hertz overlap to round-off.
 TEST(TimeStepper, PerAxisBoundOfADimer) {
   for (const Quat& q : {Quat::Identity(), Quat(Eigen::AngleAxis<Real>(0.7, Vec3(1, 2, 3).normalized()))}) {
@@ -62,8 +62,9 @@ TEST(TimeStepper, PerAxisBoundOfADimer) {
     ASSERT_EQ(p.s->contacts.size(), 1);
     ASSERT_TRUE(p.s->contacts.active(0));
     const Real kn = hertzKn(p.r, p.delta), ks = mindlinKs(kn);
-    const Real dimerRot = ks * (p.d + p.r) * (p.d + p.r) / p.I.y();
-    const Real w2 = std::max({kn / p.M, dimerRot, kn / p.ms, ks / (0.4 * p.ms)});
+    const Real l = p.d + p.r - 0.5 * p.delta, ls = p.r - 0.5 * p.delta;
+    const Real dimerRot = ks * l * l / p.I.y();
+    const Real w2 = std::max({kn / p.M, dimerRot, kn / p.ms, ks * ls * ls / (0.4 * p.ms * p.r * p.r)});
     ASSERT_EQ(w2, dimerRot);  // the dimer's rotation is the stiffest mode here
     EXPECT_NEAR(TimeStepper::perAxisBound(*p.s) * std::sqrt(w2), 1.0, 1e-9);
     EXPECT_LT(TimeStepper::stiffnessBound(*p.s), 0.01 * TimeStepper::perAxisBound(*p.s));  // sqrt(I_x): 1e-3
@@ -71,8 +72,9 @@ TEST(TimeStepper, PerAxisBoundOfADimer) {
 }
 
 // A sphere with contacts along +-x and +-y (a square, no z): about z every arm is normal to the
-// axis, about x and y only half of them. Stiffest axis: z, 4 k_s r^2 against I = (2/5) m r^2; the
-// rule on the sum of k_s r^2 gives the same here, and 2/3 of it for contacts all round (below).
+// axis, about x and y only half of them. Stiffest axis: z, 4 k_s l^2 (l = r - delta/2) against
+// I = (2/5) m r^2; the rule on the sum of k_s l^2 gives the same here, and 2/3 of it for contacts all
+// round (below).
 // Tolerance 1e-9 as above.
 TEST(TimeStepper, SphereRotationAboutItsStiffestAxis) {
   const Real r = 1e-4, delta = 1e-6, a = 2 * r - delta;
@@ -83,9 +85,10 @@ TEST(TimeStepper, SphereRotationAboutItsStiffestAxis) {
     for (int j = 0; j < 2; ++j) s->addSphere(Vec3((i + 0.5) * a, (j + 0.5) * a, 10 * r), r);
   Driver(s).evaluate();
   const Real kn = hertzKn(r, delta), ks = mindlinKs(kn), m = rho * 4.0 / 3.0 * M_PI * r * r * r;
-  const Real w2 = std::max(4 * kn / m, 4 * ks * r * r / (0.4 * m * r * r));
+  const Real l = r - 0.5 * delta;
+  const Real w2 = std::max(4 * kn / m, 4 * ks * l * l / (0.4 * m * r * r));
   EXPECT_NEAR(TimeStepper::perAxisBound(*s) * std::sqrt(w2), 1.0, 1e-9);
-  // Simple cubic, 6 contacts: each axis is normal to 4 of them: 4 k_s r^2, against 6 k_n in translation.
+  // Simple cubic, 6 contacts: each axis is normal to 4 of them: 4 k_s l^2, against 6 k_n in translation.
   auto c = std::make_shared<Scene>();
   c->material = paperMaterial();
   c->cell.setBox(Vec3::Constant(2 * a));
@@ -93,27 +96,29 @@ TEST(TimeStepper, SphereRotationAboutItsStiffestAxis) {
     for (int j = 0; j < 2; ++j)
       for (int k = 0; k < 2; ++k) c->addSphere(Vec3(i + 0.5, j + 0.5, k + 0.5) * a, r);
   Driver(c).evaluate();
-  const Real w2c = std::max(6 * kn / m, 4 * ks / (0.4 * m));
+  const Real w2c = std::max(6 * kn / m, 4 * ks * l * l / (0.4 * m * r * r));
   EXPECT_NEAR(TimeStepper::perAxisBound(*c) * std::sqrt(w2c), 1.0, 1e-9);
 }
 
 // The pair alone: normal mode k_n (1/M + 1/m_s); tangential modes (y and z of the dimer) with
-// mobility 1/M + 1/m_s + (d + r)^2 / I_y + r^2 / I_s. I_x does not enter (zero arm about x).
+// mobility 1/M + 1/m_s + l^2 / I_y + l_s^2 / I_s (arms to mid-overlap, l = d + r - delta/2,
+// l_s = r - delta/2). I_x does not enter (zero arm about x).
 TEST(TimeStepper, PairLimitOfADimerOnItsArms) {
   for (const Quat& q : {Quat::Identity(), Quat(Eigen::AngleAxis<Real>(-1.1, Vec3(0.3, -1, 2).normalized()))}) {
     DimerAndSphere p(q, 1e-6);
     const Real kn = hertzKn(p.r, p.delta), ks = mindlinKs(kn);
     const Real is = 0.4 * p.ms * p.r * p.r;
-    const Real w2 = std::max(kn * (1 / p.M + 1 / p.ms),
-                             ks * (1 / p.M + 1 / p.ms + (p.d + p.r) * (p.d + p.r) / p.I.y() + p.r * p.r / is));
+    const Real l = p.d + p.r - 0.5 * p.delta, ls = p.r - 0.5 * p.delta;
+    const Real w2 = std::max(kn * (1 / p.M + 1 / p.ms), ks * (1 / p.M + 1 / p.ms + l * l / p.I.y() + ls * ls / is));
     EXPECT_NEAR(TimeStepper::criticalPairStep(*p.s) * std::sqrt(w2) / 2, 1.0, 1e-9);
   }
-  // Two equal spheres: 2/omega with omega^2 = k_s (2/m + 2 r^2 / I) = 7 k_s / m (I = (2/5) m r^2).
+  // Two equal spheres: 2/omega with omega^2 = k_s (2/m + 2 l^2 / I), I = (2/5) m r^2, l = r - delta/2.
   const Real r = 1e-4, delta = 1e-6, m = rho * 4.0 / 3.0 * M_PI * r * r * r;
   auto s = twoSpheres(r, r, delta);
   Driver(s).evaluate();
   const Real ks = mindlinKs(hertzKn(r, delta));
-  EXPECT_NEAR(TimeStepper::criticalPairStep(*s) * std::sqrt(7 * ks / m) / 2, 1.0, 1e-9);
+  const Real l = r - 0.5 * delta;
+  EXPECT_NEAR(TimeStepper::criticalPairStep(*s) * std::sqrt(ks * (2 / m + 2 * l * l / (0.4 * m * r * r))) / 2, 1.0, 1e-9);
   s->blockRotations = true;  // no rotation: the normal mode 2 k_n / m
   EXPECT_NEAR(TimeStepper::criticalPairStep(*s) * std::sqrt(2 * hertzKn(r, delta) / m) / 2, 1.0, 1e-9);
 }
@@ -124,9 +129,9 @@ TEST(TimeStepper, PairLimitOfADimerOnItsArms) {
 TEST(MechanicalEnergy, ClosedFormsOfTwoSpheresAndADimer) {
   const Real r1 = 1e-4, r2 = 1.3e-4, delta = 2e-6;
   auto s = twoSpheres(r1, r2, delta);
+  Driver(s).evaluate();  // at rest: no tangential increment
   s->bodies.vel[0] = Vec3(0.1, -0.2, 0.05);
   s->bodies.angVel[1] = Vec3(3, 0, -4);
-  Driver(s).evaluate();
   const MechanicalEnergy e = mechanicalEnergy(*s);
   const Real Rstar = r1 * r2 / (r1 + r2);
   EXPECT_NEAR(e.normal / (8.0 / 15.0 * G / (1 - nu) * std::sqrt(Rstar) * std::pow(delta, 2.5)), 1.0, 1e-12);
