@@ -1,6 +1,5 @@
 #include "dynamics/TimeStepper.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,17 +11,22 @@ namespace trueaniso {
 
 namespace {
 
-// Largest eigenvalue of a symmetric 3x3, iteratively (Eigen's closed form, computeDirect, lost
-// 1e-9 of it on a turned dimer whose scaled matrix has one small and two equal eigenvalues).
+// Largest eigenvalue of a symmetric 3x3 in closed form: with q = tr(a)/3 and a = q + p B, B having
+// zero trace and unit Frobenius norm / sqrt 6, the eigenvalues are q + 2p cos(phi + 2 pi k/3) with
+// cos(3 phi) = det(B)/2 (the trigonometric solution of the characteristic cubic); the largest is
+// k = 0. It loses ~1e-8 of the value where two eigenvalues coincide (acos near +-1), immaterial to a
+// time step; an iterative solver made the bound cost half a step.
 Real largestEigenvalue(const Mat3& a) {
-  Eigen::SelfAdjointEigenSolver<Mat3> solver;
-  solver.compute(a, Eigen::EigenvaluesOnly);
-  return solver.eigenvalues()(2);
-}
-
-// Contact stiffness on the relative displacement of the contact point: k_n n n^T + k_s (1 - n n^T).
-Mat3 contactStiffness(Real kn, Real ks, const Vec3& n) {
-  return ks * Mat3::Identity() + (kn - ks) * n * n.transpose();
+  const Real off = a(0, 1) * a(0, 1) + a(0, 2) * a(0, 2) + a(1, 2) * a(1, 2);
+  const Real q = a.trace() / 3.0;
+  const Real d0 = a(0, 0) - q, d1 = a(1, 1) - q, d2 = a(2, 2) - q;
+  const Real p2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * off;
+  if (!(p2 > 0)) return q;  // a multiple of the identity
+  const Real p = std::sqrt(p2 / 6.0);
+  Mat3 b = a;
+  b.diagonal().array() -= q;
+  const Real r = std::clamp(b.determinant() / (2.0 * p * p * p), -1.0, 1.0);
+  return q + 2.0 * p * std::cos(std::acos(r) / 3.0);
 }
 
 // [l]: the matrix with [l] x = l x x.
@@ -85,7 +89,10 @@ Real TimeStepper::perAxisBound(const Scene& s) {
   const int nb = B.size();
 #pragma omp parallel for schedule(static) reduction(min : best) if (worthThreads(nb))
   for (int b = 0; b < nb; ++b) {
+    // K_t = sum k_s 1 + (k_n - k_s) n n^T; K_r = sum k_s (|l|^2 1 - l l^T) + (k_n - k_s) c c^T with
+    // c = l x n ([l]^T [l] = |l|^2 1 - l l^T, [l]^T n = -c), plus k_r (1 - n n^T).
     Mat3 Kt = Mat3::Zero(), Kr = Mat3::Zero();
+    const bool sphere = B.memberCount(b) == 1 && s.members.offset[B.memberBegin[b]].isZero();
     bool loaded = false;
     for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
       const int e = C.incidence[q];
@@ -94,24 +101,39 @@ Real TimeStepper::perAxisBound(const Scene& s) {
       if (kn <= 0) continue;
       loaded = true;
       const Real ks = law.shearStiffness(kn);
-      const Mat3 Kc = contactStiffness(kn, ks, C.normal[c]);
-      Kt += Kc;
-      if (rot) {
-        const Mat3 L = cross(arm(s, c, e >= 0 ? 2 : 1));
-        Kr += L.transpose() * Kc * L;
-        // The rolling spring resists the rotation normal to n (0 when off: adds nothing).
-        const Real kr = law.rollingStiffness(ks, C.rbar[c]);
-        Kr += kr * (Mat3::Identity() - C.normal[c] * C.normal[c].transpose());
+      const Vec3& n = C.normal[c];
+      const Mat3 nn = n * n.transpose();
+      Kt.diagonal().array() += ks;
+      Kt += (kn - ks) * nn;
+      if (!rot) continue;
+      // The rolling spring resists the rotation normal to n (k_r = 0 when off).
+      const Real kr = law.rollingStiffness(ks, C.rbar[c]);
+      if (sphere) {  // l = -/+ (r - delta/2) n: c = 0, |l|^2 1 - l l^T = l^2 (1 - n n^T)
+        const int m = e >= 0 ? C.m2[c] : C.m1[c];
+        const Real l = s.members.radius[m] - 0.5 * C.overlap[c];
+        const Real k = ks * l * l + kr;
+        Kr.diagonal().array() += k;
+        Kr -= k * nn;
+      } else {
+        const Vec3 l = arm(s, c, e >= 0 ? 2 : 1), cr = l.cross(n);
+        Kr.diagonal().array() += ks * l.squaredNorm() + kr;
+        Kr += (kn - ks) * cr * cr.transpose() - ks * l * l.transpose() - kr * nn;
       }
     }
     if (!loaded) continue;
-    Real w2 = largestEigenvalue(Kt) / B.mass[b];
+    // The eigenvalue only where it can lower the minimum: the trace bounds it from above, so a body
+    // whose 1/sqrt(trace) is not below the best so far cannot be the minimum (the same result).
+    const Real bar = 1.0 / (best * best);
+    Real w2 = Kt.trace() / B.mass[b] > bar ? largestEigenvalue(Kt) / B.mass[b] : 0.0;
     if (rot) {
-      // In the principal frame, scaled by 1/sqrt(I_a) on each side.
-      const Mat3 R = B.orientation[b].toRotationMatrix();
-      const Vec3 scale = B.inertia[b].cwiseSqrt().cwiseInverse();
-      const Mat3 A = scale.asDiagonal() * (R.transpose() * Kr * R) * scale.asDiagonal();
-      w2 = std::max(w2, largestEigenvalue(A));
+      if (sphere) {  // isotropic inertia: every axis is principal
+        if (Kr.trace() / B.inertia[b].x() > bar) w2 = std::max(w2, largestEigenvalue(Kr) / B.inertia[b].x());
+      } else {  // in the principal frame, scaled by 1/sqrt(I_a) on each side
+        const Mat3 R = B.orientation[b].toRotationMatrix();
+        const Vec3 scale = B.inertia[b].cwiseSqrt().cwiseInverse();
+        const Mat3 A = scale.asDiagonal() * (R.transpose() * Kr * R) * scale.asDiagonal();
+        if (A.trace() > bar) w2 = std::max(w2, largestEigenvalue(A));
+      }
     }
     if (w2 > 0) best = std::min(best, 1.0 / std::sqrt(w2));
   }
@@ -131,23 +153,35 @@ Real TimeStepper::criticalPairStep(const Scene& s) {
     if (kn <= 0) continue;
     const int a = C.b1[c], b = C.b2[c];
     const Real ks = law.shearStiffness(kn);
-    // Mobility of the contact point: its relative acceleration per unit force on body 2 (and the
-    // opposite on body 1).
-    Mat3 W = (1.0 / B.mass[a] + 1.0 / B.mass[b]) * Mat3::Identity();
-    Real rolling = 0;
+    const Real translation = 1.0 / B.mass[a] + 1.0 / B.mass[b];
+    Real w2 = kn * translation;
     if (rot) {
-      for (int side : {1, 2}) {
-        const int body = side == 1 ? a : b;
-        const Mat3 R = B.orientation[body].toRotationMatrix();
-        const Mat3 invI = R * B.inertia[body].cwiseInverse().asDiagonal() * R.transpose();
-        const Mat3 L = cross(arm(s, c, side));
-        W += L.transpose() * invI * L;
+      const Real rolling = law.rollingStiffness(ks, C.rbar[c]) * (1.0 / B.inertia[a].minCoeff() + 1.0 / B.inertia[b].minCoeff());
+      const bool spheres = B.memberCount(a) == 1 && B.memberCount(b) == 1 &&
+                           s.members.offset[C.m1[c]].isZero() && s.members.offset[C.m2[c]].isZero();
+      if (spheres) {
+        // Arms along n: W = translation 1 + turning (1 - n n^T) commutes with K_c, so the modes are
+        // the normal one, k_n translation, and the tangential ones, k_s (translation + turning).
+        const Real l1 = s.members.radius[C.m1[c]] - 0.5 * C.overlap[c];
+        const Real l2 = s.members.radius[C.m2[c]] - 0.5 * C.overlap[c];
+        const Real turning = l1 * l1 / B.inertia[a].x() + l2 * l2 / B.inertia[b].x();
+        w2 = std::max(w2, ks * (translation + turning)) + rolling;
+      } else {
+        // Mobility of the contact point: its relative acceleration per unit force on body 2 (and
+        // the opposite on body 1).
+        Mat3 W = translation * Mat3::Identity();
+        for (int side : {1, 2}) {
+          const int body = side == 1 ? a : b;
+          const Mat3 R = B.orientation[body].toRotationMatrix();
+          const Mat3 invI = R * B.inertia[body].cwiseInverse().asDiagonal() * R.transpose();
+          const Mat3 L = cross(arm(s, c, side));
+          W += L.transpose() * invI * L;
+        }
+        const Vec3& n = C.normal[c];
+        const Mat3 root = std::sqrt(ks) * Mat3::Identity() + (std::sqrt(kn) - std::sqrt(ks)) * n * n.transpose();
+        w2 = largestEigenvalue(root * W * root) + rolling;
       }
-      rolling = law.rollingStiffness(ks, C.rbar[c]) * (1.0 / B.inertia[a].minCoeff() + 1.0 / B.inertia[b].minCoeff());
     }
-    const Vec3& n = C.normal[c];
-    const Mat3 root = std::sqrt(ks) * Mat3::Identity() + (std::sqrt(kn) - std::sqrt(ks)) * n * n.transpose();
-    const Real w2 = largestEigenvalue(root * W * root) + rolling;
     best = std::min(best, 2.0 / std::sqrt(w2));
   }
   return best;

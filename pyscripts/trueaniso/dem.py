@@ -4,6 +4,16 @@ import math
 from . import engines as _e
 
 
+# Time step rules of TimeStepper: name -> (per_axis, safety). "smallest-inertia" is the rule every
+# committed result was made with; "per-axis" is the per-axis bound at the factor measured on undamped
+# packings (docs/time-step.md: stable to 1.7-1.8 times the bound, taken with a margin). The per-axis
+# rule stays an option while path rates, servo gains and hold counts are per step: with a longer step
+# the same per-step settings load the specimen faster.
+TIME_STEP_RULES = {"smallest-inertia": (False, 0.5), "per-axis": (True, 1.2)}
+# The rule a Chain takes when not told (scripts set it from --time-step, cli.resolve_time_step).
+time_step_rule = "smallest-inertia"
+
+
 class Chain:
     """A simulation with the usual order: detection, forces, [controllers], time step, integrator.
 
@@ -11,13 +21,21 @@ class Chain:
     during a probe, where nothing slides and the contact network cannot change).
     """
 
-    def __init__(self, scene, damping=0.2, skin_factor=0.2, safety=0.5, max_dt=None, controllers=()):
+    def __init__(self, scene, damping=0.2, skin_factor=0.2, safety=None, max_dt=None, controllers=(), rule=None):
+        """`rule`: a key of TIME_STEP_RULES (default: the module's time_step_rule); `safety`, when
+        given, replaces the rule's factor."""
         self.scene = scene
+        rule = time_step_rule if rule is None else rule
+        if rule not in TIME_STEP_RULES:
+            raise ValueError("unknown time step rule %r (rules: %s)" % (rule, ", ".join(TIME_STEP_RULES)))
+        per_axis, rule_safety = TIME_STEP_RULES[rule]
+        safety = rule_safety if safety is None else safety
         self.detection = _e.ContactDetection()
         self.detection.skin_factor = skin_factor
         self.forces = _e.ContactForces()
         self.timestep = _e.TimeStepper()
         self.timestep.safety = safety
+        self.timestep.per_axis = per_axis
         self.timestep.max_dt = max_dt if max_dt is not None else reference_time_step(scene)
         self.integrator = _e.NewtonIntegrator()
         self.integrator.damping = damping

@@ -66,7 +66,8 @@ TEST(TimeStepper, PerAxisBoundOfADimer) {
     const Real dimerRot = ks * l * l / p.I.y();
     const Real w2 = std::max({kn / p.M, dimerRot, kn / p.ms, ks * ls * ls / (0.4 * p.ms * p.r * p.r)});
     ASSERT_EQ(w2, dimerRot);  // the dimer's rotation is the stiffest mode here
-    EXPECT_NEAR(TimeStepper::perAxisBound(*p.s) * std::sqrt(w2), 1.0, 1e-9);
+    // 1e-7: the closed-form eigenvalue near a double root (y and z here) keeps ~sqrt(eps) of it.
+    EXPECT_NEAR(TimeStepper::perAxisBound(*p.s) * std::sqrt(w2), 1.0, 1e-7);
     EXPECT_LT(TimeStepper::stiffnessBound(*p.s), 0.01 * TimeStepper::perAxisBound(*p.s));  // sqrt(I_x): 1e-3
   }
 }
