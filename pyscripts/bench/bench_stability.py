@@ -31,7 +31,6 @@ if HERE not in sys.path:
 import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
 from trueaniso import cli  # noqa: E402
 
-PROBE_FRICTION = 1e23  # nothing slides (the probe's friction)
 BLOW_UP = 100.0        # energy rise, in initial kinetic energies, taken as unstable
 
 
@@ -73,10 +72,10 @@ def options():
 def held_specimen(path):
     """The specimen with its cell held, no sliding, forces evaluated."""
     import numpy as np
-    from trueaniso import dem, specimen_file
+    from trueaniso import dem, engines, specimen_file
     s, _ = specimen_file.load(path)
     s.velocity_gradient = np.zeros((3, 3))
-    s.friction = PROBE_FRICTION
+    s.friction = engines.PROBE_FRICTION  # nothing slides
     s.block_rotations = False
     dem.refresh(s)
     return s

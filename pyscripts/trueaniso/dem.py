@@ -36,7 +36,7 @@ class Chain:
         self.timestep = _e.TimeStepper()
         self.timestep.safety = safety
         self.timestep.per_axis = per_axis
-        self.timestep.max_dt = max_dt if max_dt is not None else reference_time_step(scene)
+        self.timestep.max_dt = max_dt if max_dt is not None else reference_time_step(scene, safety=safety)
         self.integrator = _e.NewtonIntegrator()
         self.integrator.damping = damping
         self.controllers = list(controllers)
@@ -69,8 +69,13 @@ def reference_contact_force(scene, pressure):
     return 4.0 * d * d * pressure
 
 
-def reference_time_step(scene, pressure=100e3, safety=0.5, coordination=12):
-    """Time step for contacts carrying the reference force at `pressure` (k_n of Eq. 5)."""
+def reference_time_step(scene, pressure=100e3, safety=None, coordination=12):
+    """Time step for contacts carrying the reference force at `pressure` (k_n of Eq. 5): the cap of
+    the time stepper's step. sqrt(m / (Z k_n)) at the stiffest expected contact is below either
+    bound of a packing at that pressure, so it takes the factor of the rule (default: the factor of
+    the module's time_step_rule)."""
+    if safety is None:
+        safety = TIME_STEP_RULES[time_step_rule][1]
     radii = scene.radii
     mmin = float(scene.masses.min())
     force = reference_contact_force(scene, pressure)
