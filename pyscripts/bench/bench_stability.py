@@ -20,6 +20,7 @@ a step, the kinetic at the half step and the elastic at the step (leapfrog), whi
 O(omega dt) but no drift.
 """
 import csv
+import json
 import math
 import os
 import sys
@@ -36,7 +37,10 @@ BLOW_UP = 100.0        # energy rise, in initial kinetic energies, taken as unst
 
 def options():
     p = cli.Parser(description=cli.description(__doc__))
-    p.add_argument("--specimen", action="append", required=True, help="LABEL=PATH of a specimen (.npz), repeatable")
+    p.add_argument("--specimen", action="append", default=[], help="LABEL=PATH of a specimen (.npz), repeatable")
+    p.add_argument("--json", help="write the runs (bounds and rows) to this JSON file")
+    p.add_argument("--merge", action="append", default=[],
+                   help="JSON of earlier runs (--json) to show with these, repeatable (no --specimen: only those)")
     p.add_argument("--factors", default="0.3,0.5,0.7,0.9,1.0,1.1,1.2,1.3,1.4,1.5,1.7",
                    help="time steps as multiples of the per-axis bound, comma separated")
     p.add_argument("--steps", type=cli.at_least(1), default=100000, help="steps per run")
@@ -50,6 +54,8 @@ def options():
     p.add_argument("--safety", type=cli.positive, default=None,
                    help="the chosen factor of the per-axis bound, marked in the figure and the table")
     o = cli.parse(p)
+    if not o.specimen and not o.merge:
+        cli.fail("give --specimen or --merge")
     o.specimens = []
     for item in o.specimen:
         if "=" not in item:
@@ -157,8 +163,10 @@ def table(specs, rows, o):
     for f in o.factors:
         cells = []
         for sp in specs:
-            r = next(r for r in rows if r["label"] == sp["label"] and r["f"] == f)
-            if r["status"] == "stable":
+            r = next((r for r in rows if r["label"] == sp["label"] and r["f"] == f), None)
+            if r is None:
+                cells.append("-")
+            elif r["status"] == "stable":
                 cells.append("%+.1e (%.1e)" % (r["drift"], r["wobble"]))
             else:
                 cells.append("%s at step %d" % (r["status"], r["stopped_at"]))
@@ -226,6 +234,17 @@ def main():
             print("  f = %.2f: %s%s (%d steps, %.0f s)" % (
                 f, r["status"], "" if r["status"] != "stable" else
                 ", drift %+.2e, wobble %.2e" % (r["drift"], r["wobble"]), r["steps"], r["wall"]), flush=True)
+    if o.json:
+        with open(o.json, "w") as fh:
+            json.dump(dict(specs=specs, rows=rows, steps=o.steps, every=o.every, kinetic=o.kinetic), fh, indent=1)
+    for path in o.merge:
+        with open(path) as fh:
+            earlier = json.load(fh)
+        if (earlier["steps"], earlier["every"], earlier["kinetic"]) != (o.steps, o.every, o.kinetic):
+            cli.fail("--merge %s: runs of other --steps, --every or --kinetic" % path)
+        specs += earlier["specs"]
+        rows += earlier["rows"]
+    o.factors = sorted(set(r["f"] for r in rows))
     text = table(specs, rows, o)
     print(text)
     if o.csv:
