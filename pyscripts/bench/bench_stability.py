@@ -72,6 +72,7 @@ def options():
         cli.fail("--factors: each factor must be > 0")
     if o.doc:
         _bench.writable_doc(o.doc)
+    o.threads = os.environ.get("OMP_NUM_THREADS", "all")
     return o
 
 
@@ -185,7 +186,7 @@ def table(specs, rows, o):
     lines.append("")
     lines.append("%d steps a run, energy read every %d steps, initial kinetic energy %.0e of the elastic; "
                  "machine: %s, %s OpenMP thread(s), shared with other jobs." % (
-                     o.steps, o.every, o.kinetic, _bench.machine(), os.environ.get("OMP_NUM_THREADS", "all")))
+                     o.steps, o.every, o.kinetic, _bench.machine(), o.threads))
     return "\n".join(lines)
 
 
@@ -203,13 +204,14 @@ def figure(path, specs, rows, o):
                     label="%s |drift|" % sp["label"])
         ax.semilogy([r["f"] for r in ok], [r["wobble"] for r in ok], ":", color=color, alpha=0.6)
         bad = [r for r in mine if r["status"] != "stable"]
-        ax.semilogy([r["f"] for r in bad], [top] * len(bad), "x", color=color, markersize=9)
+        ax.semilogy([r["f"] for r in bad], [top * 0.4 ** k] * len(bad), "x", color=color, markersize=9)
         ax.axvline(0.5 * sp["old"] / sp["per_axis"], color=color, linestyle="--", linewidth=1)
     if o.safety is not None:
         ax.axvline(o.safety, color="k", linewidth=1.5, label="chosen factor %.2f" % o.safety)
     ax.set_xlabel("dt / per-axis bound")
     ax.set_ylabel("energy drift / initial kinetic energy")
-    ax.set_title("Undamped packings, held cell, %d steps (x: unstable; dashed: old default)" % o.steps, fontsize=9)
+    ax.set_title("Undamped packings, held cell, %d steps (x: unstable; dotted: wobble; dashed: old default)"
+                 % o.steps, fontsize=8)
     ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -236,14 +238,20 @@ def main():
                 ", drift %+.2e, wobble %.2e" % (r["drift"], r["wobble"]), r["steps"], r["wall"]), flush=True)
     if o.json:
         with open(o.json, "w") as fh:
-            json.dump(dict(specs=specs, rows=rows, steps=o.steps, every=o.every, kinetic=o.kinetic), fh, indent=1)
+            json.dump(dict(specs=specs, rows=rows, steps=o.steps, every=o.every, kinetic=o.kinetic, threads=o.threads),
+                      fh, indent=1)
+    threads = {o.threads} if o.specimen else set()
     for path in o.merge:
         with open(path) as fh:
             earlier = json.load(fh)
         if (earlier["steps"], earlier["every"], earlier["kinetic"]) != (o.steps, o.every, o.kinetic):
             cli.fail("--merge %s: runs of other --steps, --every or --kinetic" % path)
+        threads.add(earlier["threads"])
         specs += earlier["specs"]
         rows += earlier["rows"]
+    if len(threads) > 1:
+        cli.fail("--merge: runs on other OpenMP thread counts (%s)" % ", ".join(sorted(threads)))
+    o.threads = threads.pop()
     o.factors = sorted(set(r["f"] for r in rows))
     text = table(specs, rows, o)
     print(text)
