@@ -9,7 +9,7 @@ from . import engines as _e
 # packings (docs/time-step.md: stable to 1.7-1.8 times the bound, taken with a margin). The per-axis
 # rule stays an option while path rates, servo gains and hold counts are per step: with a longer step
 # the same per-step settings load the specimen faster.
-TIME_STEP_RULES = {"smallest-inertia": (False, 0.5), "per-axis": (True, 1.2)}
+TIME_STEP_RULES = {"smallest-inertia": (False, 0.5), "per-axis": (True, 0.8)}
 # The rule a Chain takes when not told (scripts set it from --time-step, cli.resolve_time_step).
 time_step_rule = "smallest-inertia"
 
