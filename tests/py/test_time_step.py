@@ -45,8 +45,8 @@ def test_for_spheres_the_per_axis_bound_is_never_below_the_smallest_inertia_one(
 def test_a_packing_stepped_by_the_per_axis_rule_keeps_its_energy(path, request):
     """Undamped, held cell, no sliding (probe friction), shaken with 1e-4 of its elastic energy,
     the stepper choosing dt every 10 steps by the per-axis rule, uncapped (max_dt 1 s: the step is
-    the rule's own). Measured over 3000 steps, in initial kinetic energies K0: 150 spheres -0.05,
-    200 dimers -1.1 (the clumps' O(dt^2) loss, docs/time-step.md); at 1.95 x the bound both blow up
+    the rule's own). Measured over 3000 steps, in initial kinetic energies K0: 150 spheres -0.03,
+    200 dimers -0.36 (the clumps' O(dt^2) loss, docs/time-step.md); at 1.95 x the bound both blow up
     (1e33 K0, or a step refused as the contacts stiffen). Bounds: no rise above 1 K0, no loss
     beyond 5 K0."""
     if path == "specimen_150":
