@@ -62,6 +62,7 @@ def options(argv=None):
     p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
                    help="cap of the expansion/compression rate as an inertial number")
     p.add_argument("--unbalanced", type=cli.finite, default=1e-3, help="unbalanced force of the final state")
+    cli.add_time_step_option(p)
     cli.add_threads_option(p, study=True, continues="the interrupted preparation of --out (its checkpoint; "
                                                     "the packing's last bits depend on the count)")
     p.add_argument("--checkpoint-every", type=cli.count, default=None,
@@ -146,6 +147,7 @@ def validate(o):
 def main():
     o = options()
     dist = validate(o)
+    cli.resolve_time_step(o)
     o.given = dict(threads=o.threads, checkpoint_every=o.checkpoint_every)  # before a resumed preparation's
     cli.saves_work_in(lambda: os.path.exists(prep_checkpoint.path_for(o.out)))
     directory, name = os.path.split(os.path.abspath(o.out))
@@ -180,18 +182,24 @@ def main():
 
 
 def settings(o):
-    """Every option that makes the specimen (what its preparation checkpoint is bound to)."""
-    return dict(assembly=o.assembly, n=o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu,
+    """Every option that makes the specimen (what its preparation checkpoint is bound to). The time
+    step rule only when it is not the one every earlier file was made with (which records none)."""
+    made = dict(assembly=o.assembly, n=o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu,
                 mu_prep=o.mu_prep, mu=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
                 unbalanced=o.unbalanced)
+    if o.time_step != cli.DEFAULT_TIME_STEP:
+        made["time_step"] = o.time_step
+    return made
 
 
 def differences(o, meta):
     """The settings of this run that the specimen file was not made with ("seed: 5 there, 1 here");
     settings a file does not record (older files) are not compared."""
     p = meta.get("parameters", {})
-    have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"))
-    want = {k: v for k, v in settings(o).items() if have.get(k) is not None}
+    have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"),
+                time_step=p.get("time_step", cli.DEFAULT_TIME_STEP))
+    want = dict(settings(o), time_step=o.time_step)
+    want = {k: v for k, v in want.items() if have.get(k) is not None}
     return study_dir.said(study_dir.differences({k: have[k] for k in want}, want, rel_tol=1e-9))
 
 
@@ -303,6 +311,8 @@ def prepare(o, dist):
         cli.fail(str(exc), 1)
     log["threads"] = engines.threads()  # the count used, not the option (0 means all cores)
     log.setdefault("assembly", o.assembly)
+    if o.time_step != cli.DEFAULT_TIME_STEP:  # the default's files record none
+        log["time_step"] = o.time_step
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)
     specimen_file.write_summary(o.out, meta)  # derived from the .npz; rewritten from it if lost

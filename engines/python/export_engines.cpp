@@ -104,7 +104,9 @@ void exportEngines() {
   bp::class_<TimeStepper, bp::bases<Engine>, std::shared_ptr<TimeStepper>>("TimeStepper")
       .def_readwrite("safety", &TimeStepper::safety)
       .def_readwrite("max_dt", &TimeStepper::maxDt)
+      .def_readwrite("per_axis", &TimeStepper::perAxis, "True: the per-axis bound (per_axis_bound), else stiffness_bound.")
       .def("stiffness_bound", &TimeStepper::stiffnessBound).staticmethod("stiffness_bound")
+      .def("per_axis_bound", &TimeStepper::perAxisBound).staticmethod("per_axis_bound")
       .def("critical_pair_step", &TimeStepper::criticalPairStep).staticmethod("critical_pair_step");
 
   bp::class_<Simulation, std::shared_ptr<Simulation>>("Simulation", bp::init<std::shared_ptr<Scene>>())

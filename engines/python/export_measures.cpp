@@ -1,5 +1,6 @@
 // Measures as free functions returning numpy arrays or plain numbers.
 #include "measure/Coordination.hpp"
+#include "measure/Energy.hpp"
 #include "measure/Stress.hpp"
 #include "python/Numpy.hpp"
 
@@ -19,6 +20,13 @@ bp::dict countsDict(const Coordination& z) {
 bp::dict coordinationDict(const Scene& s) { return countsDict(coordination(s)); }
 bp::dict coordinationGapDict(const Scene& s, Real tol) { return countsDict(coordinationWithinGap(s, tol)); }
 np::ndarray perBody(const Scene& s) { return toNumpy(contactsPerBody(s)); }
+bp::dict energyDict(const Scene& s) {
+  const MechanicalEnergy e = mechanicalEnergy(s);
+  bp::dict d;
+  d["translational"] = e.translational; d["rotational"] = e.rotational; d["normal"] = e.normal;
+  d["tangential"] = e.tangential; d["rolling"] = e.rolling; d["total"] = e.total();
+  return d;
+}
 
 }  // namespace
 
@@ -37,6 +45,9 @@ void exportMeasures() {
           "(measure/Coordination.hpp); needs forces evaluated after the last detection (a loaded or stepped scene).");
   bp::scope().attr("GAP_TOLERANCE") = kGapTolerance;
   bp::def("contacts_per_body", &perBody);
+  bp::def("mechanical_energy", &energyDict,
+          "Kinetic (translational, rotational) and elastic (normal, tangential, rolling) energy and their total (J), "
+          "measure/Energy.hpp; valid after a force evaluation.");
   bp::def("void_ratio", &voidRatio);
 }
 
