@@ -5,6 +5,7 @@
 #                       pytest -m "not long"
 #   ./test.sh --long    the whole setup (./setup.sh: the YADE plugin too), then only the long tests
 #                       (pytest -m long), the plugin's among them
+#   ./test.sh --help    this text
 # The YADE plugin is left to --long: its one large translation unit costs more than two minutes of
 # a core on a fresh clone, a quarter of the quick suite's time, and nothing else needs it.
 # Other arguments go to pytest (e.g. ./test.sh -k probe). pytest runs its test files on as many
@@ -16,7 +17,11 @@ cd "$(dirname "$0")"
 long=0
 args=()
 for a in "$@"; do
-  if [ "$a" = --long ]; then long=1; else args+=("$a"); fi
+  case "$a" in
+    --long) long=1 ;;
+    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) args+=("$a") ;;
+  esac
 done
 if ((long)); then ./setup.sh; else ./setup.sh all; fi
 # One engine thread per process: ctest runs two test programs at once and pytest two workers on

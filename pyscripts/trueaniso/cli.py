@@ -136,7 +136,8 @@ def add_time_step_option(parser):
                         help="time step rule (docs/time-step.md): smallest-inertia, every committed result's, or "
                              "per-axis, steps 1.6 (spheres) to 3 (clumps) times longer at 100 kPa, measured "
                              "stable on undamped packings; per-step path rates and servo gains then load the "
-                             "specimen faster in time")
+                             "specimen faster in time. It applies to the preparation only: run_states.py and run_study.py "
+                             "run their states with smallest-inertia and say so")
 
 
 def resolve_time_step(o):

@@ -70,3 +70,21 @@ def test_a_packing_stepped_by_the_per_axis_rule_keeps_its_energy(path, request):
     chain.run(3000)
     e1 = engines.mechanical_energy(s)["total"]
     assert np.isfinite(e1) and -5 * k0 < e1 - e0 < k0
+
+
+def test_a_study_on_a_per_axis_specimen_says_its_states_take_the_default_rule(specimen_150, tmp_path):
+    """The rule is the preparation's option only (docs/time-step.md): a study's states run with the
+    default rule, and a specimen prepared with the other one is named in a note, not taken silently."""
+    from conftest import run_script
+    scene, meta = specimen_file.load(str(specimen_150))
+    per_axis = tmp_path / "per-axis.npz"
+    specimen_file.save(str(per_axis), scene, seed=meta.get("seed"),
+                       parameters=dict(meta.get("parameters") or {}, time_step="per-axis"), summary=meta.get("summary"))
+    proc = run_script("run_states.py", "--specimen", per_axis, "--ids", "1", "--probes", "z", "--threads", "1",
+                      "--out", tmp_path / "study")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    notes = [x for x in proc.stdout.splitlines() if x.startswith("note:")]
+    assert len(notes) == 1 and "per-axis" in notes[0] and "smallest-inertia" in notes[0], proc.stdout
+    state, _ = specimen_file.load(str(tmp_path / "study" / "states" / "1.npz"))
+    cap = dem.reference_time_step(state)  # the default rule's cap, which binds for spheres at 100 kPa
+    assert state.dt <= cap * (1 + 1e-12)
