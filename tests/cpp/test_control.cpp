@@ -162,9 +162,12 @@ TEST(TrueTriaxialServo, WithoutShearControlTheShearStressesStayAndShearGoalsAreR
 
 // A specimen that cannot carry the state (its stress saturates below the goal) fails with a message
 // naming the stall, long before the step cap.
-TEST(TrueTriaxialServo, FailsCleanlyWhenTheSpecimenCannotFollow) {
+namespace {
+
+// Drives `servo` (its other settings the caller's) towards state 21 on a linear cell whose z stress
+// cannot pass 120 kPa, until it fails or reaches; returns the steps taken.
+long runOnACellThatYieldsAt120kPa(TrueTriaxialServo& servo) {
   LinearCell cell;
-  TrueTriaxialServo servo;
   servo.goal = TrueTriaxialState{0.5, 140e3, 100e3};
   servo.law = CellServoLaw{0.05, 1e3};
   servo.stallSteps = 5000;
@@ -176,6 +179,14 @@ TEST(TrueTriaxialServo, FailsCleanlyWhenTheSpecimenCannotFollow) {
     cell.advance(servo.update(m, cell.dt));
     ++n;
   }
+  return n;
+}
+
+}  // namespace
+
+TEST(TrueTriaxialServo, FailsCleanlyWhenTheSpecimenCannotFollow) {
+  TrueTriaxialServo servo;
+  const long n = runOnACellThatYieldsAt120kPa(servo);
   ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Failed);
   EXPECT_NE(servo.message.find("stopped following the path"), std::string::npos) << servo.message;
   EXPECT_LT(n, 30000);
@@ -297,20 +308,9 @@ TEST(TrueTriaxialServo, FeedForwardReachesState21AndStillFailsByStalling) {
   // this cell; 10 Pa leaves room for round-off and fails if the feed-forward is lost.
   EXPECT_LT(worstLag, 10.0);
 
-  LinearCell weak;
   TrueTriaxialServo failing;
-  failing.goal = TrueTriaxialState{0.5, 140e3, 100e3};
-  failing.law = CellServoLaw{0.05, 1e3};
   failing.feedForward = true;
-  failing.stallSteps = 5000;
-  n = 0;
-  while (failing.status != TrueTriaxialServo::Status::Failed && failing.status != TrueTriaxialServo::Status::Reached &&
-         n < 1000000) {
-    CellMeasurement m = weak.measure();
-    m.stress[2] = std::min(m.stress[2], 120e3);  // the specimen yields at 120 kPa
-    weak.advance(failing.update(m, weak.dt));
-    ++n;
-  }
+  n = runOnACellThatYieldsAt120kPa(failing);
   ASSERT_EQ(failing.status, TrueTriaxialServo::Status::Failed);
   EXPECT_NE(failing.message.find("stopped following the path"), std::string::npos) << failing.message;
   EXPECT_LT(n, 30000);

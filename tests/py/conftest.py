@@ -108,6 +108,24 @@ def specimen_100(tmp_path_factory):
     return path
 
 
+# The eight Table C1 states of the report tests' small table (docs/data/table-c1-spheres-4000.csv).
+SMALL_TABLE_STATES = ("1", "5", "9", "13", "21", "25", "29", "37")
+
+
+@pytest.fixture(scope="module")
+def small_table(tmp_path_factory):
+    """The committed 4000-sphere Table C1 study cut to SMALL_TABLE_STATES: a report in seconds."""
+    import csv
+    path = tmp_path_factory.mktemp("report") / "probes.csv"
+    with open(os.path.join(REPO, "docs", "data", "table-c1-spheres-4000.csv")) as f:
+        rows = list(csv.reader(f))
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(rows[0])
+        w.writerows(r for r in rows[1:] if r[0] in SMALL_TABLE_STATES)
+    return str(path)
+
+
 def committed_specimen(name, tmp_path_factory):
     """A copy of tests/data/NAME (tests/data/README.md says how each was made), first loaded
     through specimen_file.load: its checksum and every field are checked."""

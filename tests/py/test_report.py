@@ -12,24 +12,11 @@ import warnings
 import numpy as np
 import pytest
 
-from conftest import REPO
+from conftest import REPO, SMALL_TABLE_STATES
 from analysis import chain, figures, hyperelastic, report
 from analysis.results import ResultsError
 
-DATA = os.path.join(REPO, "docs", "data", "table-c1-spheres-4000.csv")
-STATES = ("1", "5", "9", "13", "21", "25", "29", "37")
-
-
-@pytest.fixture(scope="module")
-def small_table(tmp_path_factory):
-    path = tmp_path_factory.mktemp("report") / "probes.csv"
-    with open(DATA) as f:
-        rows = list(csv.reader(f))
-    with open(path, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(rows[0])
-        w.writerows(r for r in rows[1:] if r[0] in STATES)
-    return str(path)
+STATES = SMALL_TABLE_STATES
 
 
 @pytest.fixture

@@ -15,22 +15,8 @@ from conftest import REPO
 from analysis import chain, cross_anisotropy, figures, hyperelastic, report
 
 DATA = os.path.join(REPO, "docs", "data")
-TABLE = os.path.join(DATA, "table-c1-spheres-4000.csv")
-STATES = ("1", "5", "9", "13", "21", "25", "29", "37")
 # The units an axis may carry; "-" marks a dimensionless quantity (a ratio, Zm, a state's index).
 UNITS = {"-", "kPa", "MPa", "m$^{7/3}$ N$^{1/3}$"}
-
-
-@pytest.fixture(scope="module")
-def small_table(tmp_path_factory):
-    path = tmp_path_factory.mktemp("figs") / "probes.csv"
-    with open(TABLE) as f:
-        rows = list(csv.reader(f))
-    with open(path, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(rows[0])
-        w.writerows(r for r in rows[1:] if r[0] in STATES)
-    return str(path)
 
 
 def _plain(text):
