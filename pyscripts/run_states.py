@@ -71,6 +71,7 @@ def parser():
                    help="friction coefficient while states are reached (the paper's 0.5; probes always suppress "
                         "sliding)")
     cli.add_path_rate_option(p)
+    cli.add_time_step_option(p, study=True)
     p.add_argument("--rolling-stiffness", type=cli.non_negative, default=0.0,
                    help="rolling resistance (not in the paper; docs/rolling.md): beta of the rolling stiffness "
                         "k_r = beta k_s rbar^2, from the specimen on through states and probes; 0 = off. Give "
@@ -120,6 +121,7 @@ def validate(o):
         raise cli.InputError(problem)
     cli.resolve_threads(o)
     cli.resolve_path_rate(o)
+    cli.resolve_study_time_step(o)
     if o.path == "cross-anisotropic":
         if o.states is not None or o.table_c1 or o.ids is not None:
             raise cli.InputError("--path cross-anisotropic takes its states from --sigma-v, not from --states, "
@@ -281,7 +283,7 @@ def main(argv=None):
     try:
         study.run_states(o.specimen, states, o.out, probes=o.probe_axes, gamma=o.gamma, path=o.path,
                          restrain_rotations=o.rotations == "restrained", skip_detection=o.skip_detection,
-                         damping=o.damping, state_options=dict(friction=o.mu, path_rate=o.path_rate,
+                         damping=o.damping, state_options=dict(friction=o.mu, path_rate=o.path_rate, time_step=o.time_step,
                                                                 rolling_stiffness=o.rolling_stiffness,
                                                                 rolling_friction=o.rolling_friction), wait=o.wait,
                          force_new=o.force_new, progress_every=o.progress_every,

@@ -54,6 +54,7 @@ def parser():
                    help="friction coefficient while states are reached (the paper's 0.5; the specimen is "
                         "consolidated with 0.5, and probes always suppress sliding)")
     cli.add_path_rate_option(p)
+    cli.add_time_step_option(p, study=True)
     cli.add_threads_option(p, study=True)
     p.add_argument("--out", default="results/default", help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
@@ -72,6 +73,7 @@ def validate(o):
     # A study, or a preparation for one killed before the study began, goes on at its own count.
     cli.resolve_threads(o, preparation=prep_checkpoint.path_for(os.path.join(o.out, SPECIMEN)))
     cli.resolve_path_rate(o)
+    cli.resolve_study_time_step(o)
     if o.assembly != "sphere":
         try:
             clump_specimen.check_count(o.assembly, o.n)
@@ -197,7 +199,8 @@ def main(argv=None):
         if o.force_new:
             study_dir.supersede(o.out, log)
         path = os.path.join(o.out, SPECIMEN)
-        options = dict(state_options=dict(friction=o.mu, path_rate=o.path_rate), recipe=recipe(o))
+        options = dict(state_options=dict(friction=o.mu, path_rate=o.path_rate, time_step=o.time_step),
+                       recipe=recipe(o))
         scene = check_recipe(o, log)  # a refusal changes nothing
         if scene is not None:
             study.check(path, states, o.out, **options)  # the whole fingerprint, before anything is written

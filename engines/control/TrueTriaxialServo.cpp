@@ -16,6 +16,7 @@ void TrueTriaxialServo::validate() const {
           "nothing would servo them");
   require(pathRate > 0 && stressTolerance > 0 && followTolerance > 0 && maxStrain > 0,
           "servo tolerances and path rate must be > 0");
+  require(std::isfinite(stepScale) && stepScale > 0, "servo: the step scale must be a finite number > 0");
   require(std::isfinite(loadingFriction) && loadingFriction > 0,
           "servo: the loading friction must be a finite number > 0");
   tangent.validate();
@@ -34,7 +35,12 @@ void TrueTriaxialServo::apply(Scene& s) {
     return;
   }
   if (!started_) throw InputError("TrueTriaxialServo: call start(scene) before running it");
+  stepScale = s.stepScale();
   s.cell.velGrad = CellServoLaw::velocityGradient(update(CellMeasurement::of(s), s.dt));
+}
+
+long TrueTriaxialServo::scaled(long n) const {
+  return stepScale == 1.0 ? n : std::max(1L, std::lround(static_cast<Real>(n) / stepScale));
 }
 
 Vec6 TrueTriaxialServo::finalStress() const {
@@ -77,7 +83,7 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   if (status == Status::Loading) {
     if (follow < followTolerance) {
       const Real length = (final - startStress).cwiseAbs().maxCoeff();
-      progress = length > 0 ? std::min(1.0, progress + pathRate / length) : 1.0;
+      progress = length > 0 ? std::min(1.0, progress + pathRate * stepScale / length) : 1.0;
       stalled = 0;
       if (progress >= 1.0) status = Status::Holding;
     } else {
@@ -94,16 +100,16 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
 
   const Vec6 strain = strainBetween(startDeformation, m.deformation);
   if (status == Status::Holding) ++holding;
-  if (strain.cwiseAbs().maxCoeff() > maxStrain || steps > maxSteps || stalled > stallSteps ||
-      holding > holdSteps) {
+  const long maxRun = scaled(maxSteps), maxStall = scaled(stallSteps), maxHold = scaled(holdSteps);
+  if (strain.cwiseAbs().maxCoeff() > maxStrain || steps > maxRun || stalled > maxStall || holding > maxHold) {
     std::ostringstream msg;
     msg << "state b = " << goal.b << ", sigma_z = " << goal.sigmaZ / 1e3 << " kPa not reached: ";
-    if (steps > maxSteps) msg << "no equilibrium within " << maxSteps << " steps";
-    else if (holding > holdSteps)
-      msg << "held " << holdSteps << " steps without settling (stress off by "
+    if (steps > maxRun) msg << "no equilibrium within " << maxRun << " steps";
+    else if (holding > maxHold)
+      msg << "held " << maxHold << " steps without settling (stress off by "
           << gap.error() << " Pa, unbalanced force " << unbalanced << ")";
-    else if (stalled > stallSteps)
-      msg << "the specimen stopped following the path for " << stallSteps << " steps (it fails, at "
+    else if (stalled > maxStall)
+      msg << "the specimen stopped following the path for " << maxStall << " steps (it fails, at "
           << 100 * progress << " % of the path)";
     else msg << "strain " << strain.cwiseAbs().maxCoeff() << " beyond " << maxStrain << " (the specimen fails)";
     msg << " at stresses (" << stress[0] / 1e3 << ", " << stress[1] / 1e3 << ", " << stress[2] / 1e3
@@ -116,7 +122,7 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   if (status == Status::Holding) {
     const bool ok = gap.error() < stressTolerance && unbalanced < unbalancedTolerance;
     settled = ok ? settled + 1 : 0;
-    if (settled >= settleSteps) {
+    if (settled >= scaled(settleSteps)) {
       status = Status::Reached;
       done = true;
       return Vec6::Zero();
@@ -125,10 +131,13 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   Vec6 goalNow = target;
   for (int k = 0; k < 6; ++k)
     if (!(mask >> k & 1u)) goalNow[k] = 0;  // held shear strains: rate 0
-  if (!feedForward) return law.rates(goalNow, mask, stress, m.stiffness, dt);
+  // The gain closes its fraction of the error per reference step (capped at the whole error).
+  CellServoLaw stepLaw = law;
+  if (stepScale != 1.0) stepLaw.gain = std::min(1.0, law.gain * stepScale);
+  if (!feedForward) return stepLaw.rates(goalNow, mask, stress, m.stiffness, dt);
   // The goal's rate this step: zero while it waits and once it is held.
   const Vec6 goalRate = (target - previousTarget) / dt;
-  const Vec6 r = law.rates(goalNow, mask, stress, m.stiffness, dt, goalRate, tangent.ratio());
+  const Vec6 r = stepLaw.rates(goalNow, mask, stress, m.stiffness, dt, goalRate, tangent.ratio());
   predicted_ = -m.stiffness.cwiseProduct(r) * dt;
   return r;
 }

@@ -48,7 +48,14 @@ class TrueTriaxialServo : public Engine {
   // the probe owns kProbeFriction. (update() alone, as the YADE adapter uses it, leaves friction
   // to the host.)
   Real loadingFriction = kLoadingFriction;
-  Real pathRate = 2.0;             // Pa per step: the fastest the goal moves along the path
+  // The per-step settings below (pathRate, the law's gain, the step counts) are per reference
+  // step, the step of the reference time step rule (Scene::referenceDt): a step stepScale times
+  // longer moves the goal stepScale times as far, closes stepScale times the error, and counts
+  // for stepScale steps, so the loading's rate in time, and the state it reaches, do not depend on
+  // the rule but by integration error. apply() takes stepScale from the scene; a host that calls
+  // update() alone (the YADE adapter) leaves it at 1, its own step being the unit.
+  Real stepScale = 1.0;
+  Real pathRate = 2.0;             // Pa per (reference) step: the fastest the goal moves along the path
   Real followTolerance = 1000.0;   // Pa
   Real stressTolerance = 500.0;    // Pa: principal and shear stresses, within 0.5 kPa
   Real unbalancedTolerance = 1e-4;  // as reach_state and docs/triaxial.md
@@ -108,6 +115,8 @@ class TrueTriaxialServo : public Engine {
 
  private:
   bool started_ = false;
+  // A step count given per reference step, in steps of the current length (itself at scale 1).
+  long scaled(long n) const;
   Vec6 predicted_ = Vec6::Zero();  // the affine stress change of the last rates (TangentRatio)
 };
 

@@ -22,12 +22,19 @@ struct Scene {
   Contacts contacts;
 
   Real dt = 0;       // time step; set by TimeStepper or by the user
+  // The step the reference rule (the smallest-inertia bound at its factor, TimeStepper) would take
+  // now: the unit of time of the servos' per-step settings (path rate, gain, step counts), so that
+  // a longer step under another rule loads at the same rate in time. 0: unknown, the step is the unit.
+  Real referenceDt = 0;
   Real time = 0;
   long step = 0;
   bool blockRotations = false;  // scene-wide: no angular velocity is integrated
   // Set whenever something outside the integrator moves bodies, changes radii or the cell,
   // so that the contact detection rebuilds its list before the next force evaluation.
   bool detectionInvalid = true;
+
+  // dt in units of referenceDt (1 while referenceDt is unknown).
+  Real stepScale() const { return referenceDt > 0 ? dt / referenceDt : 1.0; }
 
   int addSphere(const Vec3& pos, Real radius);
   // A rigid clump of a template's shape (clump/ClumpTemplate.hpp), its lengths times `scale`:

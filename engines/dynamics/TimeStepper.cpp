@@ -190,9 +190,13 @@ Real TimeStepper::criticalPairStep(const Scene& s) {
 void TimeStepper::apply(Scene& s) {
   // At 2 the body alone, its neighbours held, is at its own limit 2/omega: no packing is stable there.
   require(safety > 0 && safety < 2, "time step safety factor must lie in (0, 2)");
-  const Real bound = perAxis ? perAxisBound(s) : stiffnessBound(s);
+  require(referenceSafety > 0 && referenceSafety < 2, "reference time step safety factor must lie in (0, 2)");
+  const Real reference = stiffnessBound(s);
+  const Real bound = perAxis ? perAxisBound(s) : reference;
   s.dt = std::min(maxDt, std::isfinite(bound) ? safety * bound : maxDt);
   require(s.dt > 0 && std::isfinite(s.dt), "time step is not positive: check maxDt");
+  const Real referenceCap = referenceMaxDt > 0 ? referenceMaxDt : maxDt * referenceSafety / safety;
+  s.referenceDt = std::min(referenceCap, std::isfinite(reference) ? referenceSafety * reference : referenceCap);
 }
 
 }  // namespace trueaniso

@@ -39,6 +39,11 @@ class TimeStepper : public Engine {
   // Upper bound used while there are few or no contacts (a loose gas would otherwise get a huge
   // step right before its first collisions); the caller sets it from the expected contact force.
   Real maxDt = 1.0;
+  // The reference rule, stiffnessBound at referenceSafety capped by referenceMaxDt (<= 0: maxDt x
+  // referenceSafety / safety, the cap at the reference factor), sets scene.referenceDt: the unit of
+  // time of the servos' per-step settings. Under the default rule it is dt itself, to the bit.
+  Real referenceSafety = 0.5;
+  Real referenceMaxDt = 0;
 
   void apply(Scene& scene) override;
   std::string name() const override { return "TimeStepper"; }

@@ -186,7 +186,9 @@ void exportControl() {
       .def("validate", &TrueTriaxialServo::validate)
       .add_property("gain", &getGain<TrueTriaxialServo>, &setGain<TrueTriaxialServo>)
       .add_property("max_strain_rate", &getRate<TrueTriaxialServo>, &setRate<TrueTriaxialServo>)
-      .def_readwrite("path_rate", &TrueTriaxialServo::pathRate, "Pa per step along the path")
+      .def_readwrite("path_rate", &TrueTriaxialServo::pathRate, "Pa per reference step along the path")
+      .def_readwrite("step_scale", &TrueTriaxialServo::stepScale,
+                     "The step in reference steps, taken from the scene at every step (path rate, gain and step counts are per reference step).")
       .def_readwrite("feed_forward", &TrueTriaxialServo::feedForward,
                      "Feed the goal's motion forward through the cell's measured tangent stiffness (default off).")
       .add_property("tangent_ratio", +[](const TrueTriaxialServo& s) { return toNumpy(s.tangent.ratio()); },

@@ -104,6 +104,10 @@ void exportEngines() {
   bp::class_<TimeStepper, bp::bases<Engine>, std::shared_ptr<TimeStepper>>("TimeStepper")
       .def_readwrite("safety", &TimeStepper::safety)
       .def_readwrite("max_dt", &TimeStepper::maxDt)
+      .def_readwrite("reference_safety", &TimeStepper::referenceSafety,
+                     "Factor of the reference rule (stiffness_bound) that sets scene.reference_dt.")
+      .def_readwrite("reference_max_dt", &TimeStepper::referenceMaxDt,
+                     "Cap of the reference rule (<= 0: max_dt x reference_safety / safety).")
       .def_readwrite("per_axis", &TimeStepper::perAxis, "True: the per-axis bound (per_axis_bound), else stiffness_bound.")
       .def("stiffness_bound", &TimeStepper::stiffnessBound).staticmethod("stiffness_bound")
       .def("per_axis_bound", &TimeStepper::perAxisBound).staticmethod("per_axis_bound")

@@ -286,6 +286,9 @@ void exportScene() {
       .add_property("Cn", &cn, "C_n of Eq. (5)")
       .add_property("Cs", &cs, "C_s of Eq. (6)")
       .def_readwrite("dt", &Scene::dt)
+      .def_readwrite("reference_dt", &Scene::referenceDt,
+                     "The step of the reference time step rule (0: unknown), the unit of the servos' per-step settings.")
+      .add_property("step_scale", &Scene::stepScale, "dt / reference_dt (1 while reference_dt is 0).")
       .def_readwrite("time", &Scene::time)
       .def_readwrite("step", &Scene::step)
       .def_readwrite("block_rotations", &Scene::blockRotations)

@@ -131,19 +131,39 @@ def add_path_rate_option(parser):
 DEFAULT_TIME_STEP = "smallest-inertia"  # the rule of every committed result (dem.TIME_STEP_RULES)
 
 
-def add_time_step_option(parser):
-    parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=DEFAULT_TIME_STEP,
-                        help="time step rule (docs/time-step.md): smallest-inertia, every committed result's, or "
-                             "per-axis, steps 1.6 (spheres) to 3 (clumps) times longer at 100 kPa, measured "
-                             "stable on undamped packings; per-step path rates and servo gains then load the "
-                             "specimen faster in time. It applies to the preparation only: run_states.py and run_study.py "
-                             "run their states with smallest-inertia and say so")
+def add_time_step_option(parser, study=False):
+    if not study:
+        parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=DEFAULT_TIME_STEP,
+                            help="time step rule (docs/time-step.md): smallest-inertia, every committed result's, or "
+                                 "per-axis, steps 1.6 (spheres) to 3 (clumps) times longer at 100 kPa, measured "
+                                 "stable on undamped packings; the preparation's rates are per unit time, so it "
+                                 "takes fewer steps, and makes another packing")
+        return
+    parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=None,
+                        help="time step rule while states are reached (docs/time-step.md; when not given: the rule "
+                             "of the study --out holds, else smallest-inertia, every committed study's). The path "
+                             "rate, servo gain and step counts are per step of smallest-inertia, so per-axis "
+                             "reaches each state at the same rate in time in 1.6 (spheres) to 3 (clumps) times "
+                             "fewer steps; probes and the static solve take smallest-inertia")
 
 
 def resolve_time_step(o):
-    """--time-step: the rule every engine chain of this run takes (dem.time_step_rule)."""
+    """--time-step of prepare_specimen.py: the rule every engine chain of this run takes (dem.time_step_rule)."""
     from . import dem
     dem.time_step_rule = o.time_step
+    return o.time_step
+
+
+def resolve_study_time_step(o):
+    """--time-step of a study when not given: the rule of the study --out holds (a rerun continues
+    it, as --path-rate), else the default. Says which."""
+    from . import study_dir
+    if o.time_step is None:
+        held = None if getattr(o, "force_new", False) else study_dir.state_option_of(o.out, "time_step")
+        o.time_step = held if held in ("smallest-inertia", "per-axis") else DEFAULT_TIME_STEP
+        if held is not None and held != DEFAULT_TIME_STEP:
+            print("%s: --time-step not given: its study reached its states with the %s rule, so this run does too"
+                  % (o.out, held), flush=True)
     return o.time_step
 
 

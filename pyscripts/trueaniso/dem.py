@@ -11,6 +11,9 @@ from . import engines as _e
 # rule stays an option while path rates, servo gains and hold counts are per step: with a longer step
 # the same per-step settings load the specimen faster.
 TIME_STEP_RULES = {"smallest-inertia": (False, 0.5), "per-axis": (True, 0.8)}
+# The rule whose step is the unit of time of the servos' per-step settings (path rate, gain, step
+# counts; scene.reference_dt): under any other rule they load at the same rate in time.
+REFERENCE_TIME_STEP = "smallest-inertia"
 # The rule a Chain takes when not told (scripts set it from --time-step, cli.resolve_time_step).
 time_step_rule = "smallest-inertia"
 
@@ -38,6 +41,12 @@ class Chain:
         self.timestep.safety = safety
         self.timestep.per_axis = per_axis
         self.timestep.max_dt = max_dt if max_dt is not None else reference_time_step(scene, safety=safety)
+        # The reference rule's cap, the one its own chain would take (scene.reference_dt: the unit of
+        # the servos' per-step settings; under the reference rule itself it is max_dt, to the bit).
+        reference_safety = TIME_STEP_RULES[REFERENCE_TIME_STEP][1]
+        self.timestep.reference_safety = reference_safety
+        if max_dt is None:
+            self.timestep.reference_max_dt = reference_time_step(scene, safety=reference_safety)
         self.integrator = _e.NewtonIntegrator()
         self.integrator.damping = damping
         self.controllers = list(controllers)

@@ -121,7 +121,10 @@ def save(path, scene, seed=None, parameters=None, summary=None):
                               density=scene.density, friction=scene.friction,
                               **(dict(rolling_stiffness=scene.rolling_stiffness, rolling_friction=scene.rolling_friction)
                                  if scene.rolling_stiffness > 0 else {})),
-                dt=scene.dt, time=scene.time, step=scene.step, block_rotations=bool(scene.block_rotations))
+                dt=scene.dt, time=scene.time, step=scene.step, block_rotations=bool(scene.block_rotations),
+                # Stored where it is not dt itself (a longer step than the reference rule's), so a
+                # file made under the reference rule is the same bytes with or without the field.
+                **({} if scene.reference_dt in (0.0, scene.dt) else dict(reference_dt=scene.reference_dt)))
     problem = meta_problem(json.loads(json.dumps(meta, default=atomic._jsonable)))
     if problem:
         raise SpecimenFileError("refusing to save %s: %s" % (path, problem))
@@ -425,6 +428,7 @@ def load(path):
     s.set_contact_history(a["c_member1"], a["c_member2"], a["c_shift"], a["c_normal"],
                           a["c_normal_force"], a["c_shear_force"], a.get(_ROLLING))
     s.dt, s.time, s.step = meta["dt"], meta["time"], meta["step"]
+    s.reference_dt = meta.get("reference_dt", meta["dt"])
     s.block_rotations = meta["block_rotations"]
     if not np.allclose(s.masses, a["masses"], rtol=1e-12):
         raise SpecimenFileError("corrupt specimen file %s (masses disagree with radii and density)" % path)

@@ -138,12 +138,14 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
     summary = _summary(specimen_path, spec_meta)
-    prepared_with = (spec_meta.get("parameters") or {}).get("time_step", dem.time_step_rule)
-    if prepared_with != dem.time_step_rule:
-        # The rule is a preparation option only: a study's fingerprint does not hold it, so every
-        # state of a study takes the one rule the engines default to (docs/time-step.md).
-        say("note: %s was prepared with the %s time step; the states are run with the %s one"
-            % (specimen_path, prepared_with, dem.time_step_rule))
+    prepared_with = (spec_meta.get("parameters") or {}).get("time_step", dem.REFERENCE_TIME_STEP)
+    states_with = (state_options or {}).get("time_step", dem.REFERENCE_TIME_STEP)
+    if prepared_with not in (states_with, dem.REFERENCE_TIME_STEP):
+        # The rule is in the study's fingerprint (state.time_step), the specimen's in its file: two
+        # choices. A specimen prepared with the longer step is another packing, not the same one
+        # made faster, and a study that does not take that rule may be a surprise: said.
+        say("note: %s was prepared with the %s time step; the states are run with the %s one (--time-step)"
+            % (specimen_path, prepared_with, states_with))
     _refuse_unloaded(specimen_path, summary)
     _refuse_exploded(specimen_path, scene, states, path)
     _refuse_unreachable(states, path, dict(spec_meta, summary=summary), state_options)

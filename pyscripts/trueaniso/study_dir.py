@@ -39,6 +39,7 @@ LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code
           # "state.friction is 0.5 there, 0.3 in this run").
           "state.friction": "the loading friction (--mu; state.friction)",
           "state.path_rate": "the path rate (--path-rate; state.path_rate)",
+          "state.time_step": "the time step rule of the states (--time-step; state.time_step)",
           "state.rolling_stiffness": "the rolling stiffness (--rolling-stiffness; state.rolling_stiffness)",
           "state.rolling_friction": "the rolling friction (--rolling-friction; state.rolling_friction)",
           "probe.damping": "the damping (--damping; probe.damping)",
@@ -173,6 +174,15 @@ def threads_of(out):
     except (StudyMismatch, OSError, TypeError, KeyError):
         return None
     return t if isinstance(t, int) and t > 0 else None
+
+
+def state_option_of(out, name):
+    """A setting of the states (fingerprint state.<name>) of the study `out` holds, or None (no
+    study, none readable, or one from before the setting existed)."""
+    try:
+        return read_metadata(out)["fingerprint"]["state"][name]
+    except (StudyMismatch, OSError, TypeError, KeyError):
+        return None
 
 
 def path_rate_of(out):

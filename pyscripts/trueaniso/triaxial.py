@@ -120,7 +120,7 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
                 unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
                 stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
                 control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0,
-                gain=None, feed_forward=False):
+                gain=None, feed_forward=False, time_step="smallest-inertia"):
     """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
 
     Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
@@ -134,7 +134,10 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     study's; bench_state_split.py compares others). feed_forward: feed the path's rate forward through
     the cell's measured tangent stiffness, so that the stresses keep pace with the goal instead of
     lagging it (docs/triaxial.md; off, every study's default; bench_state_speed.py and
-    bench_state_split.py compare the two).
+    bench_state_split.py compare the two). time_step: the time step rule of the loading
+    (dem.TIME_STEP_RULES; docs/time-step.md). The path rate, the gain and the step counts are per
+    step of the reference rule (smallest-inertia, every committed study's), so a rule with a longer
+    step reaches the state at the same rate in time, in fewer steps.
     Raises StateNotReached if the specimen cannot get there: it
     stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
     strains beyond `max_strain`, or runs `max_steps`.
@@ -159,7 +162,7 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     servo.loading_friction = friction  # the servo sets it on the scene (a scene may carry 1e23)
     d50 = 2.0 * float(np.median(scene.radii))
     servo.max_strain_rate = dem.strain_rate_for_inertial_number(inertial_number, d50, scene.density, p)
-    chain = dem.Chain(scene, damping=damping, controllers=[servo])
+    chain = dem.Chain(scene, damping=damping, controllers=[servo], rule=time_step)
     servo.start(scene)
     t0 = time.time()
     while servo.status not in ("reached", "failed"):

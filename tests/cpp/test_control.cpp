@@ -131,6 +131,46 @@ TEST(TrueTriaxialServo, ReachesState21AlongTheConstantBAndPPath) {
   EXPECT_LT(servo.steps, 40000);
 }
 
+// The path rate, the gain and the step counts are per reference step: a servo whose step is 1.5
+// reference steps (stepScale, a longer time step rule) moves the goal 3 Pa a step, closes 1.5 times
+// the fraction of the error, and takes 1.5 times fewer steps to reach the same state, which it holds
+// as tightly. The path's 40 kPa at 2 x 1.5 Pa a step: 13,334 steps for the goal.
+TEST(TrueTriaxialServo, PerStepSettingsAreInReferenceSteps) {
+  auto reach = [](Real scale, long& steps, Vec6& stress) {
+    LinearCell cell;
+    cell.dt *= scale;  // the same motion in time: the cell's rates are per second
+    TrueTriaxialServo servo;
+    servo.goal = TrueTriaxialState{0.5, 140e3, 100e3};
+    servo.law = CellServoLaw{0.05, 1e3};
+    servo.stepScale = scale;
+    bool firstGoalStep = true;
+    while (servo.status != TrueTriaxialServo::Status::Reached && servo.status != TrueTriaxialServo::Status::Failed &&
+           servo.steps < 1000000) {
+      cell.advance(servo.update(cell.measure(), cell.dt));
+      if (firstGoalStep) {  // the goal's first move: pathRate x stepScale along its longest component
+        EXPECT_NEAR((servo.target - servo.startStress).cwiseAbs().maxCoeff(), 2.0 * scale, 1e-9);
+        firstGoalStep = false;
+      }
+    }
+    ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Reached) << servo.message;
+    steps = servo.steps;
+    stress = cell.measure().stress;
+  };
+  long n1 = 0, n15 = 0;
+  Vec6 s1, s15;
+  reach(1.0, n1, s1);
+  reach(1.5, n15, s15);
+  EXPECT_GE(n15, 13334);
+  // The ramp, the proportional tail and the 200 settle steps all shrink by 1.5 (to the step).
+  EXPECT_NEAR(static_cast<Real>(n1) / n15, 1.5, 0.02);
+  // Both held within the tolerance of the same goal (0.5 kPa), so within 1 kPa of each other.
+  EXPECT_LT((s1 - s15).cwiseAbs().maxCoeff(), 1e3);
+  TrueTriaxialServo bad;
+  bad.goal = TrueTriaxialState{0.5, 140e3, 100e3};
+  bad.stepScale = 0;
+  EXPECT_THROW(bad.validate(), InputError);
+}
+
 // With the shear stresses left out (controlShear off: the cell's shear strains held, an
 // orthorhombic servo), the normal stresses still reach their goals but nothing holds the shear
 // stresses: they stay at the start's 2.4 kPa plus what the coupling adds. That is why the full

@@ -166,3 +166,36 @@ TEST(MechanicalEnergy, ShearSpringStoresItsWork) {
   // The normal moves by u / (2r - delta) radians, which changes delta by O(u^2 / r): 1e-9 relative.
   EXPECT_NEAR(mechanicalEnergy(*s).tangential / (0.5 * ks * u * u), 1.0, 1e-6);
 }
+
+// The reference step (Scene::referenceDt, the unit of the servos' per-step settings) is the
+// smallest-inertia rule's step whatever rule sets dt: under that rule itself it is dt to the bit (a
+// step scale of exactly 1, so its results do not change), under the per-axis rule it is the
+// smallest-inertia bound at the reference factor, and the cap takes the reference factor too.
+TEST(TimeStepper, ReferenceStepIsTheSmallestInertiaRules) {
+  DimerAndSphere pair(Quat::Identity(), 1e-6);
+  Scene& s = *pair.s;
+  TimeStepper plain;
+  plain.apply(s);
+  EXPECT_EQ(s.referenceDt, s.dt);
+  EXPECT_EQ(s.stepScale(), 1.0);
+  EXPECT_EQ(s.dt, plain.safety * TimeStepper::stiffnessBound(s));
+  TimeStepper fast;
+  fast.perAxis = true;
+  fast.safety = 0.8;
+  fast.apply(s);
+  EXPECT_EQ(s.dt, 0.8 * TimeStepper::perAxisBound(s));
+  EXPECT_EQ(s.referenceDt, 0.5 * TimeStepper::stiffnessBound(s));
+  EXPECT_GT(s.stepScale(), 1.0);  // the dimer's I_x, tiny, binds only the smallest-inertia rule
+  // A binding cap: dt = maxDt, the reference at maxDt x 0.5 / 0.8 (or the cap it is given).
+  fast.maxDt = 0.1 * s.dt;
+  fast.apply(s);
+  EXPECT_EQ(s.dt, fast.maxDt);
+  EXPECT_DOUBLE_EQ(s.referenceDt, std::min(fast.maxDt * 0.5 / 0.8, 0.5 * TimeStepper::stiffnessBound(s)));
+  fast.referenceMaxDt = 1e-30;
+  fast.apply(s);
+  EXPECT_EQ(s.referenceDt, 1e-30);
+  fast.referenceSafety = 2.0;
+  EXPECT_THROW(fast.apply(s), InputError);
+  Scene bare;
+  EXPECT_EQ(bare.stepScale(), 1.0);  // no reference known: the step is the unit
+}

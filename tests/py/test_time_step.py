@@ -73,8 +73,9 @@ def test_a_packing_stepped_by_the_per_axis_rule_keeps_its_energy(path, request):
 
 
 def test_a_study_on_a_per_axis_specimen_says_its_states_take_the_default_rule(specimen_150, tmp_path):
-    """The rule is the preparation's option only (docs/time-step.md): a study's states run with the
-    default rule, and a specimen prepared with the other one is named in a note, not taken silently."""
+    """A specimen's rule and a study's are two choices (docs/time-step.md): a study run without
+    --time-step takes the default rule, and a specimen prepared with the other one is named in a
+    note, not taken silently."""
     from conftest import run_script
     scene, meta = specimen_file.load(str(specimen_150))
     per_axis = tmp_path / "per-axis.npz"
@@ -88,3 +89,60 @@ def test_a_study_on_a_per_axis_specimen_says_its_states_take_the_default_rule(sp
     state, _ = specimen_file.load(str(tmp_path / "study" / "states" / "1.npz"))
     cap = dem.reference_time_step(state)  # the default rule's cap, which binds for spheres at 100 kPa
     assert state.dt <= cap * (1 + 1e-12)
+
+
+def _reach(path, monkeypatch, factor, b=0.5, sigma_z=120e3):
+    from trueaniso import fabric, statics, triaxial
+    monkeypatch.setitem(dem.TIME_STEP_RULES, "per-axis", (True, factor))
+    scene, _ = specimen_file.load(str(path))
+    info = triaxial.reach_state(scene, b, sigma_z, time_step="per-axis")
+    return info, scene, fabric.fabric(scene)["Zm"], statics.static_stiffness(scene, rotations=True)["E"]
+
+
+def test_a_longer_step_reaches_the_same_state_in_fewer_steps(specimen_150, monkeypatch):
+    """The path rate, the gain and the step counts are per reference step (scene.reference_dt), so a
+    step 20 % longer reaches a state in 1.2 times fewer steps, and the state is the same: on this
+    fixture (b = 0.5, sigma_z = 120 kPa) the two differ by 1e-6 in E_i (measured), the history's
+    floor (path rate 1.9 against 2) is 3e-7; the bound, 1e-4, is a sixth of the default probe's own
+    error (6e-4). Per-step settings would take the same steps at both, and fail the first check."""
+    a, sa, zm_a, e_a = _reach(specimen_150, monkeypatch, 0.8)
+    b, sb, zm_b, e_b = _reach(specimen_150, monkeypatch, 0.8 / 1.2)
+    assert sa.dt / sb.dt == pytest.approx(1.2, rel=0.01)
+    assert sa.reference_dt == pytest.approx(sb.reference_dt, rel=1e-12)  # the unit does not move with the rule
+    assert b["steps"] / a["steps"] == pytest.approx(1.2, abs=0.05)
+    assert np.max(np.abs(np.asarray(e_a) / np.asarray(e_b) - 1)) < 1e-4
+    assert zm_a == pytest.approx(zm_b, abs=0.01)
+
+
+def test_a_study_keeps_its_time_step_rule(specimen_150, tmp_path):
+    """--time-step is part of a study's fingerprint: a rerun without it continues with the study's
+    rule (and says so), one with the other rule is refused naming the option; the checkpoint holds
+    the per-axis step and the reference step it was loaded with."""
+    from conftest import run_script
+    from trueaniso import study_dir
+    out = tmp_path / "study"
+    common = ("--specimen", specimen_150, "--probes", "z", "--threads", "1", "--out", out)
+    proc = run_script("run_states.py", "--ids", "1", "--time-step", "per-axis", *common)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert not [x for x in proc.stdout.splitlines() if x.startswith("note:")], proc.stdout
+    assert study_dir.read_metadata(str(out))["fingerprint"]["state"]["time_step"] == "per-axis"
+    state, meta = specimen_file.load(str(out / "states" / "1.npz"))
+    assert meta["reference_dt"] < meta["dt"] and state.reference_dt == meta["reference_dt"]
+    assert state.step_scale == pytest.approx(dem.TIME_STEP_RULES["per-axis"][1] / 0.5, rel=1e-9)  # the cap binds
+    again = run_script("run_states.py", "--ids", "1,2", *common)
+    assert again.returncode == 0, again.stderr[-2000:]
+    assert "--time-step not given" in again.stdout and "per-axis" in again.stdout
+    other = run_script("run_states.py", "--ids", "1,2", "--time-step", "smallest-inertia", *common)
+    assert other.returncode != 0 and "--time-step" in other.stderr, other.stderr[-2000:]
+
+
+def test_a_specimen_file_keeps_a_reference_step_that_is_not_its_step(specimen_150, tmp_path):
+    """Saved only where it differs from dt: a file made under the reference rule is the same bytes."""
+    scene, meta = specimen_file.load(str(specimen_150))
+    assert "reference_dt" not in meta and scene.reference_dt == scene.dt
+    scene.reference_dt = 0.5 * scene.dt
+    path = tmp_path / "s.npz"
+    specimen_file.save(str(path), scene, seed=meta.get("seed"), parameters=meta.get("parameters"))
+    again, meta2 = specimen_file.load(str(path))
+    assert meta2["reference_dt"] == again.reference_dt == 0.5 * scene.dt
+    assert again.step_scale == 2.0
