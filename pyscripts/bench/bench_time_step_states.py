@@ -29,7 +29,8 @@ def options():
     p.add_argument("--specimen", required=True, help="specimen file (.npz)")
     p.add_argument("--ids", default="1,10,21,30,39", help="Table C1 states by number")
     p.add_argument("--rules", default="smallest-inertia,per-axis", help="time step rules, the first is the reference")
-    p.add_argument("--doc", help="Markdown file whose table between <!-- time-step-states:begin/end --> is replaced")
+    p.add_argument("--doc", help="Markdown file whose table between <!-- BLOCK:begin/end --> is replaced")
+    p.add_argument("--block", default="time-step-states", help="the block of --doc (default time-step-states)")
     o = cli.parse(p)
     from trueaniso import dem
     o.rules = o.rules.split(",")
@@ -93,7 +94,7 @@ def main():
     text = "\n".join(lines)
     print(text)
     if o.doc:
-        _bench.replace_block(o.doc, "time-step-states", text)
+        _bench.replace_block(o.doc, o.block, text)
 
 
 if __name__ == "__main__":

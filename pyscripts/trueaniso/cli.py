@@ -122,7 +122,8 @@ def _check_openmp_count():
 
 def add_path_rate_option(parser):
     parser.add_argument("--path-rate", type=positive_or_inf, default=None,
-                        help="servo's path rate while states are reached, in Pa per step (when not given: the rate "
+                        help="servo's path rate while states are reached, in Pa per step of the smallest-inertia time step rule "
+                             "(per unit time: under --time-step per-axis a step moves it further; when not given: the rate "
                              "of the study --out holds, else 2, every committed study's; 20 reaches a state in "
                              "2.1-2.3 times fewer steps, with moduli within the probe's own error at 4000 spheres "
                              "but not at 1000; inf: the whole load at once; docs/state-speed.md)")

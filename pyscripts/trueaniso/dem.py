@@ -7,9 +7,7 @@ from . import engines as _e
 # Time step rules of TimeStepper: name -> (per_axis, safety). "smallest-inertia" is the rule every
 # committed result was made with; "per-axis" is the per-axis bound at the largest factor at which
 # undamped packings of spheres, clump1 and clump2 keep their energy over 100,000 steps
-# (docs/time-step.md; the runs' local damping is the margin). The per-axis
-# rule stays an option while path rates, servo gains and hold counts are per step: with a longer step
-# the same per-step settings load the specimen faster.
+# (docs/time-step.md; the runs' local damping is the margin).
 TIME_STEP_RULES = {"smallest-inertia": (False, 0.5), "per-axis": (True, 0.8)}
 # The rule whose step is the unit of time of the servos' per-step settings (path rate, gain, step
 # counts; scene.reference_dt): under any other rule they load at the same rate in time.
