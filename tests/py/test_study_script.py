@@ -37,6 +37,7 @@ def finished(small_specimen, tmp_path_factory):
     out = tmp_path_factory.mktemp("study") / "out"
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(out))
     assert proc.returncode == 0, proc.stderr
+    (out.parent / "stdout.txt").write_text(proc.stdout)  # the run's log, beside the study
     return out
 
 
@@ -68,6 +69,21 @@ def test_one_row_per_state_and_probe(finished):
         np.testing.assert_allclose(principal, sorted(goal, reverse=True), atol=500.0)
         assert float(x["tau_max"]) == max(abs(s["yz"]), abs(s["xz"]), abs(s["xy"])) < 500.0
 
+
+
+def test_the_last_line_times_the_whole_run(finished):
+    """A state's 'done' line times its probes, its 'reached' line the loading; the run's last line
+    names the whole run, so it is at least their sum (each printed to 0.1 s: 0.05 s of rounding a
+    line, the run's own included)."""
+    import re
+    lines = (finished.parent / "stdout.txt").read_text().splitlines()
+    last = re.fullmatch(r"results: (.*); this run took ([0-9.]+) s \(states reached, probed and written\)", lines[-1])
+    assert last, lines[-1]
+    assert last.group(1) == str(finished / "probes.csv")
+    parts = [float(m.group(1)) for line in lines
+             for m in [re.match(r"state \d+: (?:reached in \d+ steps|done) \(([0-9.]+) s\)", line)] if m]
+    assert len(parts) == 4  # two states, each reached and probed
+    assert float(last.group(2)) >= sum(parts) - 0.05 * (len(parts) + 1)
 
 def test_metadata_says_what_produced_the_rows(finished, small_specimen):
     meta = json.loads((finished / "metadata.json").read_text())
