@@ -295,7 +295,7 @@ def main(argv=None):
             executor.shutdown(wait=False, cancel_futures=True)
     # The whole run, as run_study.py's last line: each state's "done" line counts its probes only,
     # and its "reached" line the loading.
-    progress.say("results: %s; this run took %.1f s (states reached, probed and written)"
+    progress.say("results: %s; this run took %.1f s in all"
                  % (os.path.join(o.out, "probes.csv"), time.time() - t0))
 
 

@@ -77,7 +77,7 @@ def test_the_last_line_times_the_whole_run(finished):
     line, the run's own included)."""
     import re
     lines = (finished.parent / "stdout.txt").read_text().splitlines()
-    last = re.fullmatch(r"results: (.*); this run took ([0-9.]+) s \(states reached, probed and written\)", lines[-1])
+    last = re.fullmatch(r"results: (.*); this run took ([0-9.]+) s in all", lines[-1])
     assert last, lines[-1]
     assert last.group(1) == str(finished / "probes.csv")
     parts = [float(m.group(1)) for line in lines
