@@ -101,7 +101,7 @@ def test_resumed_run_redoes_nothing(finished, small_specimen):
     before = (finished / "probes.csv").read_bytes()
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(finished))
     assert proc.returncode == 0, proc.stderr
-    assert "probe" not in proc.stdout  # no probe ran again
+    assert ": probe " not in proc.stdout, proc.stdout  # no probe ran again (a probe's line: 'state 1: probe z  E = ...')
     assert (finished / "probes.csv").read_bytes() == before
 
 
