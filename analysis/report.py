@@ -83,6 +83,11 @@ def _state_order(states):
     return sorted(range(len(states)), key=lambda k: key(states[k]))
 
 
+FIG13_MARKERS = "os^"  # a_x^2, a_y^2, a_z^2
+FIG13_LEGEND_COLOUR = "0.3"  # a grey: no colour of the Zm map
+FIG13_SIZE = 18  # points^2, as scatter takes it; a legend's marker takes its square root
+
+
 def fig13(tab, a2_by_zeta, path):
     """Micromechanical against DEM a_i^2 at each zeta, coloured by Zm (the paper's Fig. 13)."""
     plt = _plt()
@@ -90,17 +95,22 @@ def fig13(tab, a2_by_zeta, path):
                              layout="constrained")
     lo = min(tab["a2_dem"].min(), min(a.min() for _, a in a2_by_zeta)) - 0.01
     hi = max(tab["a2_dem"].max(), max(a.max() for _, a in a2_by_zeta)) + 0.01
+    from matplotlib.lines import Line2D  # after _plt(), which chooses the backend
     for ax, (label, a2) in zip(axes[0], a2_by_zeta):
-        for i, mark in zip(range(3), "os^"):
-            sc = ax.scatter(tab["a2_dem"][:, i], a2[:, i], c=tab["Zm"], marker=mark, s=18, cmap="viridis",
-                            label="$a_%s^2$" % AXES[i])
+        for i, mark in zip(range(3), FIG13_MARKERS):
+            sc = ax.scatter(tab["a2_dem"][:, i], a2[:, i], c=tab["Zm"], marker=mark, s=FIG13_SIZE, cmap="viridis")
         _identity(ax, lo, hi)
         ax.set_xlim(lo, hi)
         ax.set_ylim(lo, hi)
         ax.set_title(_tex(label), fontsize=9)
         ax.set_xlabel("DEM $a_i^2$, Eq. 25 (-)")
         ax.set_ylabel("micromechanical $a_i^2$ (-)")
-        ax.legend(fontsize=7)
+        # Colour is Zm (the colour bar), so the axis is told by its marker alone: a scatter's own
+        # legend entry would take one Zm's colour for all three and suggest that Zm.
+        ax.legend(handles=[Line2D([], [], ls="none", marker=mark, markersize=np.sqrt(FIG13_SIZE),
+                                  color=FIG13_LEGEND_COLOUR, label="$a_%s^2$" % a)
+                           for a, mark in zip(AXES, FIG13_MARKERS)] + ax.get_legend_handles_labels()[0],
+                  fontsize=7)
     fig.colorbar(sc, ax=axes[0].tolist(), label=figures.ZM_LABEL)
     return _save(fig, path)
 

@@ -5,7 +5,8 @@
 # builds without the plugin); 1: a source was found but is not the right one.
 #
 # Where the source comes from, in order:
-#  - TRUEANISO_YADE_SOURCE: the orig tarball or an unpacked source directory;
+#  - TRUEANISO_YADE_SOURCE: the orig tarball, the directory that holds it, or an unpacked source
+#    directory;
 #  - `apt-get source yade=2023.02a-1` through a temporary deb-src list, downloading only (the
 #    system's apt configuration is not changed, no root needed).
 # The tarball's sha256 is the one in Debian's signed source description of yade 2023.02a-1. A
@@ -35,10 +36,13 @@ fi
 
 src="${TRUEANISO_YADE_SOURCE:-}"
 if [ -n "$src" ]; then
+  if [ -d "$src" ] && [ ! -f "$src/core/Scene.hpp" ] && [ -f "$src/$TARBALL" ]; then
+    src="$src/$TARBALL"  # the directory the tarball lies in (../shared/deps), as the docs name it
+  fi
   if [ -d "$src" ]; then
     # A directory: the tree of that same release, recognised by its version file and a core header.
     if [ ! -f "$src/core/Scene.hpp" ] || ! grep -q "2023.02a" "$src/RELEASE" 2>/dev/null; then
-      echo "TRUEANISO_YADE_SOURCE=$src is not a YADE 2023.02a source tree (no core/Scene.hpp, or RELEASE is not 2023.02a)" >&2
+      echo "TRUEANISO_YADE_SOURCE=$src is not a YADE 2023.02a source tree (no core/Scene.hpp, or RELEASE is not 2023.02a) and holds no $TARBALL" >&2
       exit 1
     fi
     (cd "$src" && echo "$PWD")

@@ -18,6 +18,7 @@ states is fine), or refuses in one line if it asks for something else (docs/runs
 import os
 import signal
 import sys
+import time
 
 # Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
 # and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
@@ -272,6 +273,7 @@ def mpi_executor(o):
 
 
 def main(argv=None):
+    t0 = time.time()
     o = cli.parse(parser(), argv)
     states = validate(o)
     cli.saves_work_in(lambda: study_dir.has_saved_work(o.out),
@@ -293,6 +295,10 @@ def main(argv=None):
     finally:
         if executor is not None:
             executor.shutdown(wait=False, cancel_futures=True)
+    # The whole run, as run_study.py's last line: each state's "done" line counts its probes only,
+    # and its "reached" line the loading.
+    progress.say("results: %s; this run took %.1f s in all"
+                 % (os.path.join(o.out, "probes.csv"), time.time() - t0))
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import (even inside YADE) runs nothing

@@ -19,7 +19,7 @@ import json
 import os
 import time
 
-from . import buildarch, engines, provenance, specimen_file, study_dir
+from . import buildarch, engines, provenance, specimen_file, study_dir, validate
 from .refusal import Refusal
 
 EVERY = 50_000  # steps: 3 min of a 4000-sphere preparation, 11 min of clump1-4000, 30 min at 53,004
@@ -119,6 +119,12 @@ class Checkpoints:
         try:
             if key not in _read:
                 _, meta = specimen_file.read(self.path)
+                # Checked whole here, where every reader of the file starts (resume() reads the place
+                # of the version checked): a field missing or of the wrong kind is named, not met
+                # later as a KeyError or TypeError (schemas/prep_checkpoint.schema.json).
+                found = validate.problem(meta, "prep_checkpoint")
+                if found:
+                    raise specimen_file.SpecimenFileError("%s: %s" % found)
                 _read.clear()
                 _read[key] = meta["parameters"]["checkpoint"]["recipe"]
             return dict(_read[key])

@@ -2,7 +2,8 @@
 
 The schemas are JSON Schema (draft 7) files in ``schemas/``, checked with Debian's
 python3-jsonschema: ``specimen`` (the metadata of a specimen file), ``checkpoint`` (a study's
-state checkpoint: a specimen whose parameters name its state and study), ``study`` (a study's
+state checkpoint: a specimen whose parameters name its state and study), ``prep_checkpoint`` (a
+preparation's checkpoint: a specimen whose parameters hold its recipe and place), ``study`` (a study's
 metadata.json), ``probes`` (a row of probes.csv, its cells as text), ``statics_record`` (a
 study's statics_*.json) and ``param_table`` (a line of a yade-batch table), ``fig16_states`` and ``clump_anisotropy`` (the
 JSON the report's --fig16 and --clumps read). The arrays of a
@@ -25,7 +26,7 @@ import jsonschema
 from .refusal import InputError
 
 SCHEMAS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "schemas")
-NAMES = ("specimen", "checkpoint", "study", "probes", "statics_record", "param_table", "fig16_states",
+NAMES = ("specimen", "checkpoint", "prep_checkpoint", "study", "probes", "statics_record", "param_table", "fig16_states",
          "clump_anisotropy")
 
 

@@ -196,7 +196,6 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     Returns the YADE ids of our bodies.
     """
     O = O or _yade()
-    import yade
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
                       InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
                       Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator, Vector3, utils)

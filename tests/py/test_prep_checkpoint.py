@@ -439,3 +439,88 @@ def test_a_kept_clump_specimen_reports_the_summary_it_was_saved_with(tmp_path):
     said = [json.loads(p.stdout.strip().splitlines()[-1]) for p in (first, again)]
     assert said[0] == said[1]
     assert said[0]["unbalanced"] == float("%.3g" % json.load(open(tmp_path / "c.json"))["summary"]["unbalanced"])
+
+
+def _written_checkpoint(tmp_path, prepare, settings):
+    """The preparation checkpoint that `prepare(checkpoints, hook)` writes first, as for_specimen
+    binds it (threads, code, build, interval), the run stopped right after it."""
+    out = str(tmp_path / "s.npz")
+    ck = prep_checkpoint.path_for(out)
+    with pytest.raises(Interrupt):
+        prepare(prep_checkpoint.for_specimen(out, settings, prep_checkpoint.CHUNK), _stop_after_checkpoints(ck, 1))
+    return ck
+
+
+@pytest.mark.parametrize("assembly", ["sphere", "clump1"])
+def test_a_written_checkpoint_fits_its_schema_which_names_every_field(tmp_path, assembly):
+    """What the code writes validates, and every field of the place and every key for_specimen adds
+    to the recipe is a property of schemas/prep_checkpoint.schema.json (a field written but not
+    described would be neither checked nor on the format's reference page)."""
+    from trueaniso import validate
+    if assembly == "sphere":
+        ck = _written_checkpoint(tmp_path, lambda c, h: specimen.prepare_spheres(100, seed=7, checkpoints=c, progress=h),
+                                 dict(assembly="sphere", n=100, seed=7))
+    else:
+        ck = _written_checkpoint(tmp_path, lambda c, h: clump_specimen.prepare_clumps(
+            "clump1", 60, seed=4, inertial_number=5e-2, shape="dimer-1.5", checkpoints=c, progress=h,
+            max_steps=200_000), dict(assembly="clump1", n=60, seed=4))
+    meta = specimen_file.read(ck)[1]
+    assert validate.problem(meta, "prep_checkpoint") is None
+    written = meta["parameters"]["checkpoint"]
+    described = validate.schema("prep_checkpoint")["allOf"][1]["properties"]["parameters"]["properties"]["checkpoint"]
+    assert set(written) == set(described["properties"])
+    assert set(written["place"]) <= set(described["properties"]["place"]["properties"])
+    assert {"threads", "code", "build", "every"} <= set(written["recipe"])
+    assert {"threads", "code", "build", "every"} == set(described["properties"]["recipe"]["properties"])
+    if assembly == "clump1":
+        assert "generation_time" in written["place"]
+    # The study's state checkpoint schema does not take it (it names no state), nor this one a plain specimen.
+    assert validate.problem(meta, "checkpoint")[1] == "missing"
+
+
+def _drop(*keys):
+    def edit(meta):
+        d = meta["parameters"]
+        for k in keys[:-1]:
+            d = d[k]
+        del d[keys[-1]]
+    return edit
+
+
+def _set(value, *keys):
+    def edit(meta):
+        d = meta["parameters"]
+        for k in keys[:-1]:
+            d = d[k]
+        d[keys[-1]] = value
+    return edit
+
+
+@pytest.mark.parametrize("edit,words", [
+    (_drop("checkpoint", "place", "stage"), "parameters.checkpoint.place.stage: missing"),
+    (_set("stage 2", "checkpoint", "place", "stage"), "parameters.checkpoint.place.stage: must be one of"),
+    (_set("many", "checkpoint", "place", "steps", "expansion"),
+     "parameters.checkpoint.place.steps.expansion: must be an integer >= 0, not \"many\""),
+    (_set(-1.0, "checkpoint", "place", "grown_scale"), "parameters.checkpoint.place.grown_scale: must be a finite "
+                                                       "number > 0"),
+    (_set(0, "checkpoint", "recipe", "threads"), "parameters.checkpoint.recipe.threads: must be an integer >= 1"),
+    (_set([1, 2], "checkpoint", "recipe"), "parameters.checkpoint.recipe: must be a table"),
+    (_drop("checkpoint"), "parameters.checkpoint: missing"),  # a specimen (sealed, valid) where the checkpoint lies
+])
+def test_a_malformed_checkpoint_is_refused_naming_the_field(tmp_path, edit, words):
+    """A checkpoint whose metadata parse but do not fit the schema (resealed, so the checksum
+    passes) is refused before any step, naming the field, by the library and by the script, not
+    met as a KeyError or TypeError when the preparation resumes."""
+    from test_specimen_file import _rewrite
+    settings = dict(assembly="sphere", n=100, seed=9, pressure=100e3, d50=None)
+    ck = _written_checkpoint(tmp_path, lambda c, h: specimen.prepare_spheres(100, seed=9, checkpoints=c, progress=h),
+                             settings)
+    _rewrite(ck, ck + ".npz", edit_meta=edit, reseal=True)
+    os.replace(ck + ".npz", ck)
+    with pytest.raises(prep_checkpoint.CheckpointMismatch) as exc:
+        specimen.prepare_spheres(100, seed=9, checkpoints=prep_checkpoint.for_specimen(str(tmp_path / "s.npz"),
+                                                                                       settings, 2000))
+    assert "the preparation checkpoint %s is unusable (%s" % (ck, words) in str(exc.value), str(exc.value)
+    assert str(exc.value).endswith("remove it, or use --force to prepare from the start")
+    proc = run_script("prepare_specimen.py", "--n", 100, "--seed", 9, "--threads", 1, "--out", tmp_path / "s.npz")
+    one_line_error(proc, "is unusable (%s" % words, "--force")

@@ -485,7 +485,7 @@ def test_every_analysis_refuses_a_bad_row_the_same_way(tmp_path, edit, words):
     """The shared reader (analysis/results.py) refuses a table appended twice and a modulus that is
     not a positive number, naming the row: figures and path_fidelity used them without a word (a
     NaN E moved the K r^2 from 0.976 to 0.950), the report refused without naming the row."""
-    from analysis import path_fidelity, results
+    from analysis import results
     path = _edited(tmp_path, edit)
     with pytest.raises(ResultsError) as exc:
         results.read_probes(path)

@@ -256,3 +256,41 @@ def test_fig16b_on_clump2_names_its_size(tmp_path):
     assert worst == pytest.approx(max(abs(m["G_ratio"] / m["E_ratio_root"] - 1) for m in rows))
     assert 0.13 < worst < 0.14 and len(rows) == 11
     assert (tmp_path / "fig16.png").stat().st_size > 5000
+
+
+def _marker_and_colour(artist):
+    """(the marker's outline in points, its RGBA face colour) of a scatter's series or of a legend
+    entry (a scatter's own PathCollection, or a Line2D drawn with a marker)."""
+    from matplotlib.collections import PathCollection
+    from matplotlib.markers import MarkerStyle
+    if isinstance(artist, PathCollection):
+        return artist.get_paths()[0].vertices, [tuple(c) for c in artist.get_facecolors()]
+    style = MarkerStyle(artist.get_marker())
+    rgba = figures._plt().matplotlib.colors.to_rgba(artist.get_markerfacecolor())
+    return style.get_path().transformed(style.get_transform()).vertices, [rgba]
+
+
+def test_fig13_legend_tells_each_axis_by_its_marker_in_no_zm_colour(tmp_path, monkeypatch):
+    """Fig. 13 colours every point by its Zm, so a legend entry must show its series' marker and a
+    colour no point has: a Zm colour would stand for one Zm, and the three a_i^2 entries in the same
+    one could only be told apart by their outline."""
+    caught = []
+    monkeypatch.setattr(figures, "_save", lambda fig, path: caught.append(fig))
+    plt = figures._plt()
+    monkeypatch.setattr(plt, "close", lambda fig=None: None)  # the figure is read below, after _save
+    a2 = np.array([[1.05, 0.97, 0.98], [0.95, 1.02, 1.03], [1.0, 1.0, 1.0]])
+    tab = dict(a2_dem=a2, Zm=np.array([5.6, 5.8, 6.0]))
+    report.fig13(tab, [("zeta = 1", a2 * 1.01), ("zeta = 0.5", a2 * 0.99)], str(tmp_path / "f13.png"))
+    (fig,) = caught
+    fig.canvas.draw()  # the points take their Zm colours when drawn
+    for ax in fig.axes[:2]:
+        series = ax.collections[:3]
+        point_colours = {c for s in series for c in _marker_and_colour(s)[1]}
+        legend = ax.get_legend()
+        handles = getattr(legend, "legend_handles", None) or legend.legendHandles
+        entries = dict(zip([t.get_text() for t in legend.get_texts()], handles))
+        for a, s in zip("xyz", series):
+            outline, colours = _marker_and_colour(entries["$a_%s^2$" % a])
+            np.testing.assert_allclose(outline, _marker_and_colour(s)[0], atol=1e-12)  # the series' own marker
+            assert not point_colours & set(colours), "legend entry a_%s^2 is drawn in a Zm colour" % a
+    plt.close(fig)

@@ -205,7 +205,7 @@ def test_rerun_of_a_finished_study_does_nothing(base, specimen_100, tmp_path):
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"}
     proc = states(specimen_100, out, "--ids", "1,2,3", "--probes", "zx")
     assert proc.returncode == 0, proc.stderr
-    assert "probe" not in proc.stdout
+    assert ": probe " not in proc.stdout, proc.stdout  # no probe's line ('state 1: probe z  E = ...')
     assert "no state to run" in proc.stdout, proc.stdout  # said, beyond continuing the study
     # and changes nothing, as the manual says: metadata.json does not add the run to its runs
     after = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".lock"}

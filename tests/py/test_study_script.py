@@ -37,6 +37,7 @@ def finished(small_specimen, tmp_path_factory):
     out = tmp_path_factory.mktemp("study") / "out"
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(out))
     assert proc.returncode == 0, proc.stderr
+    (out.parent / "stdout.txt").write_text(proc.stdout)  # the run's log, beside the study
     return out
 
 
@@ -69,6 +70,21 @@ def test_one_row_per_state_and_probe(finished):
         assert float(x["tau_max"]) == max(abs(s["yz"]), abs(s["xz"]), abs(s["xy"])) < 500.0
 
 
+
+def test_the_last_line_times_the_whole_run(finished):
+    """A state's 'done' line times its probes, its 'reached' line the loading; the run's last line
+    names the whole run, so it is at least their sum (each printed to 0.1 s: 0.05 s of rounding a
+    line, the run's own included)."""
+    import re
+    lines = (finished.parent / "stdout.txt").read_text().splitlines()
+    last = re.fullmatch(r"results: (.*); this run took ([0-9.]+) s in all", lines[-1])
+    assert last, lines[-1]
+    assert last.group(1) == str(finished / "probes.csv")
+    parts = [float(m.group(1)) for line in lines
+             for m in [re.match(r"state \d+: (?:reached in \d+ steps|done) \(([0-9.]+) s\)", line)] if m]
+    assert len(parts) == 4  # two states, each reached and probed
+    assert float(last.group(2)) >= sum(parts) - 0.05 * (len(parts) + 1)
+
 def test_metadata_says_what_produced_the_rows(finished, small_specimen):
     meta = json.loads((finished / "metadata.json").read_text())
     fp = meta["fingerprint"]
@@ -85,7 +101,7 @@ def test_resumed_run_redoes_nothing(finished, small_specimen):
     before = (finished / "probes.csv").read_bytes()
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(finished))
     assert proc.returncode == 0, proc.stderr
-    assert "probe" not in proc.stdout  # no probe ran again
+    assert ": probe " not in proc.stdout, proc.stdout  # no probe ran again (a probe's line: 'state 1: probe z  E = ...')
     assert (finished / "probes.csv").read_bytes() == before
 
 

@@ -248,3 +248,37 @@ def test_a_plugin_built_without_one_definition_is_refused(plugin, tmp_path):
                           env=dict(os.environ, YADE_PREFIX=str(stage), OMP_NUM_THREADS="1"))
     assert proc.returncode != 0
     assert "self-test:" in proc.stderr and "passed" not in proc.stdout, proc.stdout[-2000:] + proc.stderr[-2000:]
+
+
+def test_a_probe_saved_mid_probe_restarts_when_loaded(plugin, specimen_100, tmp_path):
+    """O.save 300 steps into a z probe, O.load in a new process: the scene keeps our engines, law
+    and the probe's attributes, and the probe starts again from the scene it finds (its snapshot
+    of the held state lives in memory only), so its modulus is the uninterrupted one's to the
+    probe's own precision (measured 1e-5 on 300 spheres at state 21; the tolerance, 1e-3, is the
+    peer tolerance of the plugin's probe against our stepper's). The in-process probe puts the
+    held state back (positions, friction 0.5)."""
+    saved = tmp_path / "mid-probe.yade.gz"
+    a = run_plugin("plugin_probe_save", specimen_100, "save:300:%s" % saved, cwd=tmp_path)
+    b = run_plugin("plugin_probe_save", specimen_100, "load:%s" % saved, cwd=tmp_path)
+    assert 1 <= a["saved"]["stage"] <= 3 and b["loaded"] == a["saved"]  # saved mid-probe, loaded as saved
+    assert "StressProbe" in b["engines"] and "Law2_ScGeom_SimplifiedMindlinPhys_Mindlin" in b["laws"]
+    assert a["stage"] == b["stage"] == 4, (a["message"], b["message"])
+    assert b["E"] == pytest.approx(a["E"], rel=1e-3)
+    np.testing.assert_allclose(a["nu"], b["nu"], rtol=0, atol=5e-3)
+    # tan(frictionAngle) of the material: 0.5 to round-off
+    assert a["friction_after"] == a["friction_before"] and a["friction_before"] == [pytest.approx(0.5, rel=1e-15)]
+    # the restore, then that step's integration at the restored velocities: 5e-12 of the edge measured;
+    # the probe itself moves bodies by about gamma = 1e-6 of it
+    np.testing.assert_allclose(a["positions"], a["held_positions"], rtol=0, atol=1e-8 * a["edge"])
+
+
+@pytest.mark.xfail(strict=True, reason="StressProbe's snapshot of the held state is not saved: a probe loaded "
+                                       "mid-probe takes its snapshot of the loaded scene, where every contact "
+                                       "already has probeFriction, and puts that back (docs/yade-peer.md)")
+def test_a_probe_loaded_mid_probe_puts_the_held_state_back(plugin, specimen_100, tmp_path):
+    saved = tmp_path / "mid-probe.yade.gz"
+    a = run_plugin("plugin_probe_save", specimen_100, "save:300:%s" % saved, cwd=tmp_path)
+    b = run_plugin("plugin_probe_save", specimen_100, "load:%s" % saved, cwd=tmp_path)
+    assert b["stage"] == 4
+    assert b["friction_after"] == a["friction_before"]
+    np.testing.assert_allclose(b["positions"], a["held_positions"], rtol=0, atol=1e-8 * a["edge"])

@@ -12,7 +12,7 @@ import sys
 HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
 sys.path[:0] = [HERE, os.path.join(HERE, "..", "..", "..", "pyscripts")]
 import numpy as np  # noqa: E402
-from yade import (O, Matrix3, Vector3, Vector3i, utils, FrictMat, ViscElMat, ForceResetter, InsertionSortCollider, Bo1_Sphere_Aabb,  # noqa: E402
+from yade import (O, Matrix3, Vector3, Vector3i, utils, ViscElMat, ForceResetter, InsertionSortCollider, Bo1_Sphere_Aabb,  # noqa: E402
                   InteractionLoop, Ig2_Sphere_Sphere_ScGeom, Ip2_FrictMat_FrictMat_FrictPhys,
                   Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator)
 
@@ -77,7 +77,7 @@ def fixed():
 
 
 def damped():
-    linear_ok = yade_bridge.yade_scene_from(ours, O)  # with contacts: MindlinPhys, then given damping
+    yade_bridge.yade_scene_from(ours, O)  # with contacts: MindlinPhys, then given damping
     for I in O.interactions:
         if I.isReal:
             I.phys.betan = 0.5

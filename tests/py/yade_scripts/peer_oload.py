@@ -14,7 +14,7 @@ sys.path[:0] = [HERE, os.path.join(HERE, "..", "..", "..", "pyscripts")]
 import numpy as np  # noqa: E402
 from yade import O, GlobalStiffnessTimeStepper, NewtonIntegrator, PeriTriaxController, utils  # noqa: E402
 
-from trueaniso import dem, engines, triaxial, yade_adapter, yade_bridge  # noqa: E402
+from trueaniso import engines, triaxial, yade_adapter, yade_bridge  # noqa: E402
 from yade_scenes import yade_user_probe  # noqa: E402
 
 pack, out = sys.argv[1], sys.argv[-1]

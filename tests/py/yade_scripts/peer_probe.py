@@ -33,7 +33,7 @@ inc = ours["d_stress"][2]
 
 def yade_state():
     s, _ = specimen_file.load(path)
-    ids = yade_bridge.yade_scene_from(s, O, damping=damping)
+    yade_bridge.yade_scene_from(s, O, damping=damping)
     yade_adapter.set_friction(O, 1e23)
     return s
 

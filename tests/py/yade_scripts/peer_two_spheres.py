@@ -10,7 +10,7 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(sys.argv[0])), "..", "..", "..", "pyscripts"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
 import numpy as np  # noqa: E402
-from yade import O, Matrix3, Vector3  # noqa: E402
+from yade import O, Vector3  # noqa: E402
 
 from yade_scenes import two_spheres_both  # noqa: E402
 
