@@ -646,7 +646,7 @@ class _Run:
             else:
                 self.log("state %s: probe %s  G = %.1f MPa  (%d steps, %.1f s)"
                          % (sid, name, r["G"] / 1e6, r["steps"], r["wall_time"]))
-        self.log("state %s: done (%.1f s)" % (sid, time.time() - t0))
+        self.log("state %s: probes done (%.1f s)" % (sid, time.time() - t0))
 
 
 def state_id(b, sigma_z):

@@ -72,7 +72,7 @@ def test_one_row_per_state_and_probe(finished):
 
 
 def test_the_last_line_times_the_whole_run(finished):
-    """A state's 'done' line times its probes, its 'reached' line the loading; the run's last line
+    """A state's 'probes done' line times its probes, its 'reached' line the loading; the run's last line
     names the whole run, so it is at least their sum (each printed to 0.1 s: 0.05 s of rounding a
     line, the run's own included)."""
     import re
@@ -81,7 +81,7 @@ def test_the_last_line_times_the_whole_run(finished):
     assert last, lines[-1]
     assert last.group(1) == str(finished / "probes.csv")
     parts = [float(m.group(1)) for line in lines
-             for m in [re.match(r"state \d+: (?:reached in \d+ steps|done) \(([0-9.]+) s\)", line)] if m]
+             for m in [re.match(r"state \d+: (?:reached in \d+ steps|probes done) \(([0-9.]+) s\)", line)] if m]
     assert len(parts) == 4  # two states, each reached and probed
     assert float(last.group(2)) >= sum(parts) - 0.05 * (len(parts) + 1)
 
