@@ -116,7 +116,8 @@ def validate(o):
     if o.switch_pressure is not None:
         if o.assembly != "sphere":
             raise cli.InputError("--switch-pressure is for spheres: the clump recipes have their own stages")
-        problem = specimen.switch_pressure_problem(o.switch_pressure, o.pressure, name="--switch-pressure")
+        problem = switched_below(o) and specimen.switch_pressure_problem(o.switch_pressure, o.pressure,
+                                                                         name="--switch-pressure")
         if problem:
             raise cli.InputError(problem)
         problem = triaxial.hertz_range_problem(o.switch_pressure, material.shear_modulus, material.poisson,

@@ -153,7 +153,8 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
         raise ValueError("pressure must be > 0")
     if switch_pressure is None:
         switch_pressure = pressure
-    problem = switch_pressure_problem(switch_pressure, pressure, stress_tolerance)
+    # The switch at the final pressure is the recipe itself, at any pressure the recipe accepts.
+    problem = switch_pressure != pressure and switch_pressure_problem(switch_pressure, pressure, stress_tolerance)
     if problem:
         raise ValueError(problem)
     if mu_prep < 0 or mu_final < 0:

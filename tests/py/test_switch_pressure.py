@@ -83,6 +83,16 @@ def test_a_switch_pressure_out_of_range_is_refused(switch):
         specimen.prepare_spheres(N, seed=SEED, switch_pressure=switch)
 
 
+def test_the_lower_bound_holds_only_for_a_switch_below_the_final_pressure():
+    """A final pressure below the bound (1 kPa) is still the default recipe's to make: the bound is
+    on a switch below it, not on the switch the default puts at the final pressure."""
+    assert specimen.switch_pressure_problem(500.0, 100e3) is not None
+    with pytest.raises(ValueError, match="switch pressure 400 Pa"):
+        specimen.prepare_spheres(N, seed=SEED, pressure=500.0, switch_pressure=400.0)
+    _, log = specimen.prepare_spheres(N, seed=SEED, pressure=500.0, unbalanced=1e-2, switch_pressure=500.0)
+    assert "switch_pressure" not in log
+
+
 @pytest.mark.parametrize("args,words", [
     (["--switch-pressure", "200e3"], ["--switch-pressure 200000 Pa", "at most the final pressure"]),
     # below it the expansion's stop is met 10 % off, or by an unjammed packing: 5 million steps, then a failure
