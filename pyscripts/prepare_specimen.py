@@ -57,6 +57,11 @@ def options(argv=None):
     p.add_argument("--cu", type=cli.finite, help="uniformity coefficient D60/D10; default 1.25, clump2 1.43")
     p.add_argument("--mu-prep", type=cli.finite, help="friction while radii grow; default per assembly")
     p.add_argument("--mu", type=cli.finite, default=0.5, help="friction of the consolidated state")
+    p.add_argument("--switch-pressure", type=cli.finite, default=None,
+                   help="spheres: mean stress (Pa) at which the radii stop growing and the friction becomes --mu; "
+                        "the cell servo then compresses the packing to --pressure at --mu (a specimen consolidated "
+                        "at the final friction from a denser start; docs/path-fidelity.md). Default: --pressure "
+                        "(the friction is switched at the final stress)")
     p.add_argument("--phi-cell", type=cli.finite,
                    help="solid fraction at which the final sizes would fill the cell; default per assembly")
     p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
@@ -108,6 +113,17 @@ def validate(o):
         raise cli.InputError(problem)
     if o.mu_prep < 0 or o.mu < 0:
         raise cli.InputError("friction coefficients must be >= 0")
+    if o.switch_pressure is not None:
+        if o.assembly != "sphere":
+            raise cli.InputError("--switch-pressure is for spheres: the clump recipes have their own stages")
+        problem = switched_below(o) and specimen.switch_pressure_problem(o.switch_pressure, o.pressure,
+                                                                         name="--switch-pressure")
+        if problem:
+            raise cli.InputError(problem)
+        problem = triaxial.hertz_range_problem(o.switch_pressure, material.shear_modulus, material.poisson,
+                                               what="--switch-pressure")
+        if problem:
+            raise cli.InputError(problem)
     if not 0.3 < o.phi_cell < 0.74:
         raise cli.InputError("--phi-cell %.3g: the size distribution cannot fit the box "
                              "(spheres fill at most 0.74 of space; use 0.3 < phi < 0.74)" % o.phi_cell)
@@ -189,7 +205,16 @@ def settings(o):
                 unbalanced=o.unbalanced)
     if o.time_step != cli.DEFAULT_TIME_STEP:
         made["time_step"] = o.time_step
+    if switched_below(o):
+        made["switch_pressure"] = o.switch_pressure
     return made
+
+
+def switched_below(o):
+    """Whether the friction is switched below the final pressure (--switch-pressure given and lower):
+    only then is the switch a setting, recorded and compared; at the final pressure it is the recipe
+    of every file made before the option."""
+    return o.switch_pressure is not None and o.switch_pressure != o.pressure
 
 
 def differences(o, meta):
@@ -197,8 +222,10 @@ def differences(o, meta):
     settings a file does not record (older files) are not compared."""
     p = meta.get("parameters", {})
     have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"),
-                time_step=p.get("time_step", cli.DEFAULT_TIME_STEP))
-    want = dict(settings(o), time_step=o.time_step)
+                time_step=p.get("time_step", cli.DEFAULT_TIME_STEP),
+                switch_pressure=p.get("switch_pressure", p.get("pressure")))
+    want = dict(settings(o), time_step=o.time_step,
+                switch_pressure=o.switch_pressure if switched_below(o) else o.pressure)
     want = {k: v for k, v in want.items() if have.get(k) is not None}
     return study_dir.said(study_dir.differences({k: have[k] for k in want}, want, rel_tol=1e-9))
 
@@ -301,7 +328,8 @@ def prepare(o, dist):
             scene, log = specimen.prepare_spheres(
                 o.n, seed=o.seed, size_distribution=dist, pressure=o.pressure, mu_prep=o.mu_prep,
                 mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
-                unbalanced=o.unbalanced, progress=None if o.quiet else bar.preparation, checkpoints=checkpoints)
+                unbalanced=o.unbalanced, progress=None if o.quiet else bar.preparation, checkpoints=checkpoints,
+                switch_pressure=o.switch_pressure if switched_below(o) else None)
         else:
             scene, log = clump_specimen.prepare_clumps(
                 o.assembly, o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu, mu_prep=o.mu_prep,

@@ -5,7 +5,8 @@ Recipe (choices and reasons are in docs/specimens.md):
  1. random sequential addition at solid fraction 0.30 in a cubic periodic cell sized so that the
     final radii would fill it to ``phi_cell``; particles ordered along the cell grid for locality;
  2. radius expansion at fixed cell with friction ``mu_prep``, the growth servoed on the mean
-    stress, until p = target and the unbalanced force is below ``prep_unbalanced``;
+    stress, until p = target (or ``switch_pressure``, below it) and the unbalanced force is below
+    ``prep_unbalanced``;
  3. a similarity rescale back to the exact size distribution (Hertz stresses do not change);
  4. friction set to ``mu_final`` (0.5), the cell servoed to the isotropic target stress (its
     shear stresses to zero: the cell shears a little) until every principal stress and every
@@ -122,18 +123,40 @@ def consolidation(pressure, gain, rate, stress_tolerance, unbalanced):
     return servo
 
 
+def switch_pressure_problem(switch_pressure, pressure, stress_tolerance=100.0, name="switch pressure"):
+    """Why the radii cannot stop growing at `switch_pressure` (None if they can): above `pressure`
+    the servo would have to unload; below 10 stress tolerances the expansion's stop (p within one
+    tolerance of its goal) is met more than 10 % off, or by a packing not yet jammed (p near 0)."""
+    least = 10.0 * stress_tolerance
+    if not least <= switch_pressure <= pressure:
+        return ("%s %g Pa must lie in [%g, %g] Pa (at least 10 times the stress tolerance %g Pa, "
+                "at most the final pressure)" % (name, switch_pressure, least, pressure, stress_tolerance))
+    return None
+
+
 def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=100e3,
                     mu_prep=0.015, mu_final=0.5, phi_cell=0.60, damping=0.4, inertial_number=1e-2,
                     prep_unbalanced=1e-2, unbalanced=1e-3, stress_tolerance=100.0, gain=0.002,
-                    max_steps=5_000_000, progress=None, checkpoints=None):
+                    max_steps=5_000_000, progress=None, checkpoints=None, switch_pressure=None):
     """A sphere specimen consolidated isotropically to `pressure`; returns (scene, log dict).
 
     With `checkpoints` (prep_checkpoint.Checkpoints) the preparation writes its place every so
     many steps and goes on from the file, and starts from the checkpoint on disk if there is one:
     an interrupted preparation resumes. Without, nothing is written (the specimen is the same bits
-    as with checkpoints never due)."""
+    as with checkpoints never due).
+
+    `switch_pressure` (None: `pressure`) is the mean stress at which the radii stop growing and
+    the friction becomes `mu_final`: below `pressure`, the packing grown at `mu_prep` is compressed
+    to `pressure` by the cell servo at `mu_final` (a specimen consolidated at the final friction
+    from a denser start). The time step and rate caps stay those of `pressure`."""
     if pressure <= 0:
         raise ValueError("pressure must be > 0")
+    if switch_pressure is None:
+        switch_pressure = pressure
+    # The switch at the final pressure is the recipe itself, at any pressure the recipe accepts.
+    problem = switch_pressure != pressure and switch_pressure_problem(switch_pressure, pressure, stress_tolerance)
+    if problem:
+        raise ValueError(problem)
     if mu_prep < 0 or mu_final < 0:
         raise ValueError("friction coefficients must be >= 0")
     t0 = time.time()
@@ -151,7 +174,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
 
     def build(st):
         if st.at("expansion"):
-            st.controller = expansion(pressure, gain, rate, stress_tolerance, prep_unbalanced)
+            st.controller = expansion(switch_pressure, gain, rate, stress_tolerance, prep_unbalanced)
             st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller], max_dt=st.place["max_dt"])
         else:
             st.controller = consolidation(pressure, gain, rate, stress_tolerance, unbalanced)
@@ -188,6 +211,8 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
                radius_scale=st.place["start_scale"] * st.place["grown_scale"],
                steps_expansion=st.steps("expansion"), steps_consolidation=st.steps("consolidation"),
                wall_time=st.elapsed(), d50=size_distribution.d50, cu=size_distribution.cu)
+    if switch_pressure != pressure:  # absent: the switch at the final pressure, every earlier file's recipe
+        log["switch_pressure"] = switch_pressure
     if checkpoints is not None:
         log["checkpoint_every"] = checkpoints.every
     return scene, log
