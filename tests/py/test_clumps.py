@@ -441,3 +441,42 @@ def test_a_clump_specimen_with_a_wrong_volume_is_refused_before_the_study_begins
     one_line_error(run_script("run_states.py", "--specimen", bad, "--ids", "1", "--out", out),
                    "body 0: its volume", "disagrees with its members' union")
     assert not out.exists()
+
+
+def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path):
+    """A named variant of a clump recipe (clump_recipes.VARIANTS) is a set of prepare_clumps keywords:
+    each one a recipe parameter or a keyword of prepare_clumps (a misspelt one would change nothing),
+    given as a copy; prepare_specimen.py --recipe takes its settings as the assembly's defaults (an
+    option given still wins), records its name, and refuses a name the assembly does not have."""
+    import inspect
+    from trueaniso import clump_recipes, clump_specimen, cli
+    keywords = set(inspect.signature(clump_specimen.prepare_clumps).parameters) - {"overrides"}
+    for assembly, named in clump_recipes.VARIANTS.items():
+        for name, settings in named.items():
+            assert settings and set(settings) <= set(clump_recipes.RECIPES[assembly]) | keywords, (assembly, name)
+    v = clump_recipes.variant("clump2", "frictionless")
+    assert v == {"mu_prep": 0.0}
+    v["mu_prep"] = 1.0
+    assert clump_recipes.variant("clump2", "frictionless") == {"mu_prep": 0.0}
+    with pytest.raises(ValueError, match="clump1 has no recipe variant 'frictionless'"):
+        clump_recipes.variant("clump1", "frictionless")
+    with pytest.raises(ValueError, match="unknown clump assembly"):
+        clump_recipes.variant("clump9", "frictionless")
+
+    sys.path.insert(0, os.path.join(REPO, "pyscripts"))
+    import prepare_specimen
+    out = str(tmp_path / "s.npz")
+
+    def validated(*args):
+        o = prepare_specimen.options(["--assembly", "clump2", "--n", "1000", "--out", out, *args])
+        prepare_specimen.validate(o)
+        return o
+    default = validated()
+    assert default.mu_prep == clump_recipes.RECIPES["clump2"]["mu_prep"] == 0.01
+    assert "recipe" not in prepare_specimen.settings(default)  # a default preparation's checkpoint is bound as before
+    o = validated("--recipe", "frictionless")
+    assert o.mu_prep == 0.0 and prepare_specimen.settings(o)["recipe"] == "frictionless"
+    assert validated("--recipe", "frictionless", "--mu-prep", "0.003").mu_prep == 0.003
+    with pytest.raises(cli.InputError, match="--recipe: clump1 has no recipe variant"):
+        prepare_specimen.validate(prepare_specimen.options(["--assembly", "clump1", "--recipe", "frictionless",
+                                                            "--out", out]))
