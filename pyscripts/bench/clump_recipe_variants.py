@@ -10,6 +10,12 @@ particle rotations restrained and free (docs/statics.md). One JSON object a run,
 own settings (inertial_number, prep_unbalanced, unbalanced, damping, gain); --recipe NAME starts from a
 named variant (clump_recipes.VARIANTS). The specimen is saved with its settings, so that
 run_states.py can take it through Table C1's states.
+
+    /usr/bin/python3 pyscripts/bench/clump_recipe_variants.py --study DIR --json DIR/statics.json
+
+measures the states 1 and 21 of a run_states.py study instead (its checkpoints DIR/states/1.npz and
+21.npz: e, Zm, rattlers, the static E_i, rotations restrained and free, and their ratios state 21 /
+state 1), written as one JSON object.
 """
 import json
 import os
@@ -33,19 +39,45 @@ def value(text):
         return text
 
 
+def measure_states(study, ids=("1", "21")):
+    """e, Zm, rattlers and the static E_i of the study's checkpoints of states `ids`, and the ratios
+    of E_i at the last state to the first, rotations restrained and free."""
+    from trueaniso import specimen, specimen_file, statics
+    out = {}
+    for sid in ids:
+        scene, _ = specimen_file.load(os.path.join(study, "states", "%s.npz" % sid))
+        st = specimen.state(scene)
+        row = dict(e=st["void_ratio"], Zm=st["Zm"], Np0=st["Np0"], Np1=st["Np1"],
+                   sigma=[st["sigma_x"], st["sigma_y"], st["sigma_z"]])
+        for rot in ("restrained", "free"):
+            r = statics.static_stiffness(scene, rotations=(rot == "free"))
+            row["E_" + rot] = [float(x) for x in r["E"]]
+            row["rattlers_" + rot] = len(r["rattlers"])
+        out[sid] = row
+    for rot in ("restrained", "free"):
+        out["ratio_" + rot] = [a / b for a, b in zip(out[ids[-1]]["E_" + rot], out[ids[0]]["E_" + rot])]
+    return out
+
+
 def main():
     p = cli.Parser(description=cli.description(__doc__))
-    p.add_argument("--assembly", choices=("clump1", "clump2"), required=True, help="clump assembly")
+    p.add_argument("--assembly", choices=("clump1", "clump2"), help="clump assembly (to prepare)")
     p.add_argument("--n", type=int, default=1000, help="number of clumps")
     p.add_argument("--seed", type=int, default=1, help="seed of the random packing")
     p.add_argument("--recipe", default=None, help="a named variant of the assembly's recipe")
     p.add_argument("--set", action="append", default=[], help="KEY=VALUE, repeatable")
     p.add_argument("--label", default=None, help="name of the row (default: the settings)")
-    p.add_argument("--out", required=True, help="specimen file (.npz)")
-    p.add_argument("--json", required=True, help="JSON-lines file a row is appended to")
+    p.add_argument("--out", help="specimen file (.npz)")
+    p.add_argument("--study", help="a run_states.py study of states 1 and 21: measure those instead")
+    p.add_argument("--json", required=True, help="JSON-lines file a row is appended to (with --study: written)")
     o = cli.parse(p)
-    from trueaniso import clump_recipes, clump_specimen, engines, specimen, specimen_file, statics
+    from trueaniso import atomic, clump_recipes, clump_specimen, engines, specimen, specimen_file, statics
     engines.set_threads(1)
+    if o.study:
+        atomic.write_json(o.json, measure_states(o.study))
+        return
+    if not (o.out and o.assembly):
+        raise cli.InputError("give --assembly and --out (the specimen), or --study")
     changed = {}
     for item in o.set:
         k, _, v = item.partition("=")
@@ -64,7 +96,7 @@ def main():
                assembly=o.assembly, n=o.n, seed=o.seed, recipe=o.recipe, settings=changed,
                e=st["void_ratio"], Zm=st["Zm"], Np0=st["Np0"], Np1=st["Np1"],
                steps_expansion=log["steps_expansion"], steps_consolidation=log["steps_consolidation"],
-               wall_prep=prep_wall, specimen=o.out)
+               wall_prep=prep_wall)
     for rot in ("restrained", "free"):
         r = statics.static_stiffness(scene, rotations=(rot == "free"))
         row["E_" + rot] = [float(x) for x in r["E"]]
