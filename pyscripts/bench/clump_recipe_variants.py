@@ -59,6 +59,61 @@ def measure_states(study, ids=("1", "21")):
     return out
 
 
+def variants_table(rows):
+    """The Markdown table of docs/clumps.md ("clump2 recipe variants") from the JSON-lines rows."""
+    out = ["| variant | seed | e | Zm | rattlers | E_z/E_x restrained | free | E_x, E_y, E_z restrained (MPa) "
+           "| steps (expansion + consolidation) | wall |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        out.append("| %s | %d | %.4f | %.3f | %d (%.1f %%) | %.3f | %.3f | %.1f, %.1f, %.1f | %d + %d | %.0f s |" % (
+            r["label"], r["seed"], r["e"], r["Zm"], r["rattlers_free"], 100.0 * r["rattler_fraction"],
+            r["Ez_Ex_restrained"], r["Ez_Ex_free"], *[x / 1e6 for x in r["E_restrained"]], r["steps_expansion"],
+            r["steps_consolidation"], r["wall_prep"]))
+    return "\n".join(out)
+
+
+def state21_table(runs):
+    """The Markdown table of the state-21 runs: (label, seed, statics record, probes.csv rows, steps, wall)."""
+    out = ["| variant | seed | e: state 1 -> 21 | Zm | rattlers | E_x, E_y, E_z at 21 / at 1, probes | static solve "
+           "| rotations free, static | steps to state 21 | wall |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for label, seed, st, probes, steps, wall in runs:
+        a, b = st["1"], st["21"]
+        out.append("| %s | %d | %.3f -> %.3f | %.2f -> %.2f | %d -> %d | %s | %s | %s | %s | %s |" % (
+            label, seed, a["e"], b["e"], a["Zm"], b["Zm"], a["rattlers_free"], b["rattlers_free"],
+            ", ".join("%.3f" % x for x in probes), ", ".join("%.3f" % x for x in st["ratio_restrained"]),
+            ", ".join("%.3f" % x for x in st["ratio_free"]), "{:,}".format(steps), wall))
+    out.append("| paper (Table B1, restrained) | | 0.636 | | | 0.987, 0.880, 1.072 | | | | |")
+    return "\n".join(out)
+
+
+def state21_runs(data):
+    """(label, seed, statics record, probe ratios, steps, wall) of every state21-LABEL-sSEED directory in `data`."""
+    import csv
+    runs = []
+    for name in sorted(os.listdir(data)):
+        if not name.startswith("state21-"):
+            continue
+        label, seed = name[len("state21-"):].rsplit("-s", 1)
+        with open(os.path.join(data, name, "statics.json")) as f:
+            st = json.load(f)
+        with open(os.path.join(data, name, "probes.csv")) as f:
+            rows = list(csv.DictReader(f))
+        E = {}
+        for r in rows:
+            E.setdefault((r["state"], r["probe"]), []).append(float(r["E"]))
+        probes = [sum(E[("21", a)]) / len(E[("21", a)]) / (sum(E[("1", a)]) / len(E[("1", a)])) for a in "xyz"]
+        at21 = next(r for r in rows if r["state"] == "21")
+        runs.append((label, int(seed), st, probes, int(float(at21["state_steps"])),
+                     "%.0f s" % float(at21["state_wall_time"])))
+    return runs
+
+
+def write_doc(doc, data):
+    with open(os.path.join(data, "variants-1000.jsonl")) as f:
+        rows = [json.loads(line) for line in f if line.strip()]
+    _bench.replace_block(doc, "clump2-variants", variants_table([r for r in rows if r["assembly"] == "clump2"]))
+    _bench.replace_block(doc, "clump2-state21", state21_table(state21_runs(data)))
+
+
 def main():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--assembly", choices=("clump1", "clump2"), help="clump assembly (to prepare)")
@@ -69,8 +124,15 @@ def main():
     p.add_argument("--label", default=None, help="name of the row (default: the settings)")
     p.add_argument("--out", help="specimen file (.npz)")
     p.add_argument("--study", help="a run_states.py study of states 1 and 21: measure those instead")
-    p.add_argument("--json", required=True, help="JSON-lines file a row is appended to (with --study: written)")
+    p.add_argument("--json", help="JSON-lines file a row is appended to (with --study: written)")
+    p.add_argument("--doc", help="rewrite the tables of this Markdown file (docs/clumps.md) from --data instead")
+    p.add_argument("--data", default="docs/data/clump2-recipes", help="the measurements the tables are made of")
     o = cli.parse(p)
+    if o.doc:
+        write_doc(o.doc, o.data)
+        return
+    if not o.json:
+        raise cli.InputError("give --json")
     from trueaniso import atomic, clump_recipes, clump_specimen, engines, specimen, specimen_file, statics
     engines.set_threads(1)
     if o.study:
