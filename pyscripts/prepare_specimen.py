@@ -59,7 +59,8 @@ def options(argv=None):
     p.add_argument("--mu", type=cli.finite, default=0.5, help="friction of the consolidated state")
     p.add_argument("--recipe", help="a named variant of a clump assembly's recipe, whose settings replace the "
                                     "defaults that depend on the assembly (docs/clumps.md, \"Recipe variants\"): %s"
-                                    % "; ".join("%s: %s" % (a, ", ".join(v)) for a, v in clump_recipes.VARIANTS.items()))
+                                    % "; ".join("%s: %s" % (a, ", ".join(v))
+                                                for a, v in clump_recipes.VARIANTS.items()))
     p.add_argument("--phi-cell", type=cli.finite,
                    help="solid fraction at which the final sizes would fill the cell; default per assembly")
     p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
