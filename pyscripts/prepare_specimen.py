@@ -58,7 +58,7 @@ def options(argv=None):
     p.add_argument("--mu-prep", type=cli.finite, help="friction while radii grow; default per assembly")
     p.add_argument("--mu", type=cli.finite, default=0.5, help="friction of the consolidated state")
     p.add_argument("--recipe", help="a named variant of a clump assembly's recipe, whose settings replace the "
-                                    "defaults that depend on the assembly (docs/clumps.md, \"Recipe variants\"): %s"
+                                    "defaults that depend on the assembly (docs/clumps.md, section 5b): %s"
                                     % "; ".join("%s: %s" % (a, ", ".join(v))
                                                 for a, v in clump_recipes.VARIANTS.items()))
     p.add_argument("--phi-cell", type=cli.finite,

@@ -29,7 +29,7 @@ def recipe(assembly, **overrides):
 
 
 # Named variants of a recipe: settings of prepare_clumps (recipe parameters or its own keywords)
-# that differ from the assembly's defaults (docs/clumps.md, "Recipe variants", has their measurements).
+# that differ from the assembly's defaults (docs/clumps.md, section 5b, has their measurements).
 VARIANTS = {
     # clump2 with its radii grown frictionless (mu_prep 0): fewer rattlers and a higher Zm at 1000 clumps,
     # e 0.01 below the paper's 0.636 instead of 0.01 above it.
