@@ -4,7 +4,7 @@ another, as the static solve finds them) and E_x, E_y, E_z from the exact static
 particle rotations restrained and free (docs/statics.md). One JSON object a run, appended to --json.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 pyscripts/bench/clump_recipe_variants.py --assembly clump2 --n 1000 \
-        --seed 1 --set unbalanced=1e-4 --out /tmp/c2-u1e-4.npz --json docs/data/clump2-recipes/variants.jsonl
+        --seed 1 --set unbalanced=1e-4 --out /tmp/c2-u1e-4.npz --json docs/data/clump-recipes/clump2-variants-1000.jsonl
 
 --set KEY=VALUE (repeatable) is a recipe parameter (clump_recipes.RECIPES) or one of the preparation's
 own settings (inertial_number, prep_unbalanced, unbalanced, damping, gain); --recipe NAME starts from a
@@ -108,9 +108,10 @@ def state21_runs(data):
 
 
 def write_doc(doc, data):
-    with open(os.path.join(data, "variants-1000.jsonl")) as f:
-        rows = [json.loads(line) for line in f if line.strip()]
-    _bench.replace_block(doc, "clump2-variants", variants_table([r for r in rows if r["assembly"] == "clump2"]))
+    for block, name in (("clump2-variants", "clump2-variants-1000.jsonl"),
+                        ("clump1-variants", "clump1-variants-300.jsonl")):
+        with open(os.path.join(data, name)) as f:
+            _bench.replace_block(doc, block, variants_table([json.loads(line) for line in f if line.strip()]))
     _bench.replace_block(doc, "clump2-state21", state21_table(state21_runs(data)))
 
 
@@ -126,7 +127,7 @@ def main():
     p.add_argument("--study", help="a run_states.py study of states 1 and 21: measure those instead")
     p.add_argument("--json", help="JSON-lines file a row is appended to (with --study: written)")
     p.add_argument("--doc", help="rewrite the tables of this Markdown file (docs/clumps.md) from --data instead")
-    p.add_argument("--data", default="docs/data/clump2-recipes", help="the measurements the tables are made of")
+    p.add_argument("--data", default="docs/data/clump-recipes", help="the measurements the tables are made of")
     o = cli.parse(p)
     if o.doc:
         write_doc(o.doc, o.data)

@@ -484,13 +484,13 @@ def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path
 
 def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
     """docs/clumps.md's clump2 variant and state-21 tables are what clump_recipe_variants.py --doc
-    writes from docs/data/clump2-recipes (no number typed by hand), and a state-21 ratio there is
+    writes from docs/data/clump-recipes (no number typed by hand), and a state-21 ratio there is
     E at state 21 over E at state 1 of the run's probes.csv (read here with the csv module: the
     frictionless seed-1 run's x probe, 309.8 / 387.0 MPa in its log)."""
     import csv
     sys.path.insert(0, os.path.join(REPO, "pyscripts", "bench"))
     import clump_recipe_variants as crv
-    data = os.path.join(REPO, "docs", "data", "clump2-recipes")
+    data = os.path.join(REPO, "docs", "data", "clump-recipes")
     doc = tmp_path / "clumps.md"
     shutil.copy(os.path.join(REPO, "docs", "clumps.md"), doc)
     crv.write_doc(str(doc), data)
