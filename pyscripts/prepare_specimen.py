@@ -27,8 +27,8 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
 try:
-    from trueaniso import (clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance, psd,
-                           resources, specimen, specimen_file, study_dir, triaxial)
+    from trueaniso import (clump_recipes, clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance,
+                           psd, resources, specimen, specimen_file, study_dir, triaxial)
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
     sys.stderr.write("error: %s\n" % exc)
     os._exit(2)
@@ -37,10 +37,10 @@ except ImportError as exc:  # the compiled module not built (or a Debian package
 SPHERE_DEFAULTS = dict(d50=0.195e-3, cu=1.25, mu_prep=0.015, phi_cell=0.60)
 
 
-def assembly_defaults(assembly):
+def assembly_defaults(assembly, variant=None):
     if assembly == "sphere":
         return dict(SPHERE_DEFAULTS)
-    r = clump_specimen.RECIPES[assembly]
+    r = clump_specimen.recipe(assembly, **(clump_recipes.variant(assembly, variant) if variant else {}))
     return dict(d50=r["d50"], cu=r["cu"], mu_prep=r["mu_prep"], phi_cell=r["phi_cell"])
 
 
@@ -62,6 +62,10 @@ def options(argv=None):
                         "the cell servo then compresses the packing to --pressure at --mu (a specimen consolidated "
                         "at the final friction from a denser start; docs/path-fidelity.md). Default: --pressure "
                         "(the friction is switched at the final stress)")
+    p.add_argument("--recipe", help="a named variant of a clump assembly's recipe, whose settings replace the "
+                                    "defaults that depend on the assembly (docs/clumps.md, section 5b): %s"
+                                    % "; ".join("%s: %s" % (a, ", ".join(v))
+                                                for a, v in clump_recipes.VARIANTS.items()))
     p.add_argument("--phi-cell", type=cli.finite,
                    help="solid fraction at which the final sizes would fill the cell; default per assembly")
     p.add_argument("--inertial-number", type=cli.finite, default=1e-2,
@@ -90,7 +94,12 @@ def options(argv=None):
 
 
 def validate(o):
-    for k, v in assembly_defaults(o.assembly).items():
+    if o.recipe is not None:
+        try:
+            clump_recipes.variant(o.assembly, o.recipe)
+        except ValueError as exc:
+            raise cli.InputError("--recipe: %s" % exc) from None
+    for k, v in assembly_defaults(o.assembly, o.recipe).items():
         if getattr(o, k) is None:
             setattr(o, k, v)
     if o.assembly != "sphere":
@@ -203,6 +212,8 @@ def settings(o):
     made = dict(assembly=o.assembly, n=o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu,
                 mu_prep=o.mu_prep, mu=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
                 unbalanced=o.unbalanced)
+    if o.recipe is not None:  # the default recipe's files record none
+        made["recipe"] = o.recipe
     if o.time_step != cli.DEFAULT_TIME_STEP:
         made["time_step"] = o.time_step
     if switched_below(o):
@@ -334,11 +345,15 @@ def prepare(o, dist):
             scene, log = clump_specimen.prepare_clumps(
                 o.assembly, o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu, mu_prep=o.mu_prep,
                 mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number, unbalanced=o.unbalanced,
-                progress=None if o.quiet else bar.preparation, checkpoints=checkpoints)
+                progress=None if o.quiet else bar.preparation, checkpoints=checkpoints,
+                **{k: v for k, v in (clump_recipes.variant(o.assembly, o.recipe) if o.recipe else {}).items()
+                   if k not in assembly_defaults(o.assembly)})
     except (ValueError, specimen.PreparationError, clump_specimen.PreparationError) as exc:
         cli.fail(str(exc), 1)
     log["threads"] = engines.threads()  # the count used, not the option (0 means all cores)
     log.setdefault("assembly", o.assembly)
+    if o.recipe is not None:
+        log["recipe"] = o.recipe
     if o.time_step != cli.DEFAULT_TIME_STEP:  # the default's files record none
         log["time_step"] = o.time_step
     summary = specimen.state(scene)

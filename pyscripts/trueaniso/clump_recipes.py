@@ -26,3 +26,22 @@ def recipe(assembly, **overrides):
     if not r["stage1_pressure"] > 0:
         raise ValueError("stage1_pressure must be > 0")
     return r
+
+
+# Named variants of a recipe: settings of prepare_clumps (recipe parameters or its own keywords)
+# that differ from the assembly's defaults (docs/clumps.md, section 5b, has their measurements).
+VARIANTS = {
+    # clump2 with its radii grown frictionless (mu_prep 0): fewer rattlers and a higher Zm at 1000 clumps,
+    # e 0.01 below the paper's 0.636 instead of 0.01 above it.
+    "clump2": {"frictionless": dict(mu_prep=0.0)},
+}
+
+
+def variant(assembly, name):
+    """The settings of the named variant of an assembly's recipe (a dict of prepare_clumps keywords)."""
+    if assembly not in RECIPES:
+        raise ValueError("unknown clump assembly %r (available: %s)" % (assembly, ", ".join(RECIPES)))
+    own = VARIANTS.get(assembly, {})
+    if name not in own:
+        raise ValueError("%s has no recipe variant %r (variants: %s)" % (assembly, name, ", ".join(own) or "none"))
+    return dict(own[name])

@@ -441,3 +441,63 @@ def test_a_clump_specimen_with_a_wrong_volume_is_refused_before_the_study_begins
     one_line_error(run_script("run_states.py", "--specimen", bad, "--ids", "1", "--out", out),
                    "body 0: its volume", "disagrees with its members' union")
     assert not out.exists()
+
+
+def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path):
+    """A named variant of a clump recipe (clump_recipes.VARIANTS) is a set of prepare_clumps keywords:
+    each one a recipe parameter or a keyword of prepare_clumps (a misspelt one would change nothing),
+    given as a copy; prepare_specimen.py --recipe takes its settings as the assembly's defaults (an
+    option given still wins), records its name, and refuses a name the assembly does not have."""
+    import inspect
+    from trueaniso import clump_recipes, clump_specimen, cli
+    keywords = set(inspect.signature(clump_specimen.prepare_clumps).parameters) - {"overrides"}
+    for assembly, named in clump_recipes.VARIANTS.items():
+        for name, settings in named.items():
+            assert settings and set(settings) <= set(clump_recipes.RECIPES[assembly]) | keywords, (assembly, name)
+    v = clump_recipes.variant("clump2", "frictionless")
+    assert v == {"mu_prep": 0.0}
+    v["mu_prep"] = 1.0
+    assert clump_recipes.variant("clump2", "frictionless") == {"mu_prep": 0.0}
+    with pytest.raises(ValueError, match="clump1 has no recipe variant 'frictionless'"):
+        clump_recipes.variant("clump1", "frictionless")
+    with pytest.raises(ValueError, match="unknown clump assembly"):
+        clump_recipes.variant("clump9", "frictionless")
+
+    sys.path.insert(0, os.path.join(REPO, "pyscripts"))
+    import prepare_specimen
+    out = str(tmp_path / "s.npz")
+
+    def validated(*args):
+        o = prepare_specimen.options(["--assembly", "clump2", "--n", "1000", "--out", out, *args])
+        prepare_specimen.validate(o)
+        return o
+    default = validated()
+    assert default.mu_prep == clump_recipes.RECIPES["clump2"]["mu_prep"] == 0.01
+    assert "recipe" not in prepare_specimen.settings(default)  # a default preparation's checkpoint is bound as before
+    o = validated("--recipe", "frictionless")
+    assert o.mu_prep == 0.0 and prepare_specimen.settings(o)["recipe"] == "frictionless"
+    assert validated("--recipe", "frictionless", "--mu-prep", "0.003").mu_prep == 0.003
+    with pytest.raises(cli.InputError, match="--recipe: clump1 has no recipe variant"):
+        prepare_specimen.validate(prepare_specimen.options(["--assembly", "clump1", "--recipe", "frictionless",
+                                                            "--out", out]))
+
+
+def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
+    """docs/clumps.md's clump2 variant and state-21 tables are what clump_recipe_variants.py --doc
+    writes from docs/data/clump-recipes (no number typed by hand), and a state-21 ratio there is
+    E at state 21 over E at state 1 of the run's probes.csv (read here with the csv module: the
+    frictionless seed-1 run's x probe, 309.8 / 387.0 MPa in its log)."""
+    import csv
+    sys.path.insert(0, os.path.join(REPO, "pyscripts", "bench"))
+    import clump_recipe_variants as crv
+    data = os.path.join(REPO, "docs", "data", "clump-recipes")
+    doc = tmp_path / "clumps.md"
+    shutil.copy(os.path.join(REPO, "docs", "clumps.md"), doc)
+    crv.write_doc(str(doc), data)
+    assert doc.read_text() == open(os.path.join(REPO, "docs", "clumps.md")).read()
+    with open(os.path.join(data, "state21-frictionless-s1", "probes.csv")) as f:
+        E = {(r["state"], r["probe"]): float(r["E"]) for r in csv.DictReader(f)}
+    ratio = E[("21", "x")] / E[("1", "x")]
+    assert ratio == pytest.approx(309.8 / 387.0, abs=2e-4)  # the log's rounding to 0.1 MPa
+    runs = {(label, seed): probes for label, seed, _, probes, _, _ in crv.state21_runs(data)}
+    assert runs[("frictionless", 1)][0] == pytest.approx(ratio, rel=1e-12)
