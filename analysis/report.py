@@ -236,6 +236,11 @@ def _study_line(results, rows=()):
     reached = ("states reached with the whole load at once (--path-rate inf)" if rate == "inf"
                else "states reached at the default 2 Pa per step" if float(rate) == 2.0
                else "states reached at %s Pa per step" % rate)
+    if state.get("time_step", "smallest-inertia") != "smallest-inertia":
+        # The rates are per step of the smallest-inertia rule (docs/time-step.md): another rule's
+        # longer step reached the same states in fewer steps, at the same rate in time.
+        reached += (" of the smallest-inertia time step, taken in the %s rule's longer steps (--time-step %s)"
+                    % (state["time_step"], state["time_step"]))
     seed = spec.get("seed")
     # The probes' settings, so that a study run with --skip-detection or rotations restrained does
     # not read like any other in its report.

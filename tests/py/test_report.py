@@ -381,6 +381,21 @@ def test_the_study_line_names_the_path_rate(small_table, tmp_path, text_only):
         assert words in open(path).read()
 
 
+def test_the_study_line_names_the_time_step_rule(small_table, tmp_path, text_only):
+    """A study whose states took the per-axis time step says so; one without the field (every study
+    made before the option) or with the default reads as before."""
+    study = tmp_path / "study"
+    study.mkdir()
+    shutil.copy(small_table, study / "probes.csv")
+    said = {}
+    for rule in (None, "smallest-inertia", "per-axis"):
+        state = dict(path_rate=2.0, **({} if rule is None else dict(time_step=rule)))
+        (study / "metadata.json").write_text(json.dumps(dict(fingerprint=dict(state=state))))
+        path, _ = report.build(str(study), str(tmp_path / ("rep-%s" % rule)), log=lambda m: None)
+        said[rule] = "--time-step per-axis" in open(path).read()
+    assert said == {None: False, "smallest-inertia": False, "per-axis": True}
+
+
 def test_the_study_line_names_the_probe_settings(small_table, tmp_path, text_only):
     """A study probed with --skip-detection or rotations restrained does not read like any other in
     its report: the probes' strain, rotations and detection are said."""
