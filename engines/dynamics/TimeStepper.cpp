@@ -47,6 +47,18 @@ Vec3 arm(const Scene& s, int c, int side) {
   return s.bodies.orientation[b] * s.members.offset[m] + (side == 1 ? r : -r) * C.normal[c];
 }
 
+// Calls f(e, c, kn) for each contact of body b that carries load (k_n > 0), in incidence order: c
+// the contact, e its incidence entry (>= 0: b is the contact's second body), kn its k_n (Eq. 5).
+template <class F>
+void forEachLoadedContact(const Contacts& C, int b, F&& f) {
+  for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
+    const int e = C.incidence[q];
+    const int c = e >= 0 ? e : ~e;
+    const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
+    if (kn > 0) f(e, c, kn);
+  }
+}
+
 }  // namespace
 
 Real TimeStepper::stiffnessBound(const Scene& s) {
@@ -59,11 +71,7 @@ Real TimeStepper::stiffnessBound(const Scene& s) {
 #pragma omp parallel for schedule(static) reduction(min : best) if (worthThreads(nb))
   for (int b = 0; b < nb; ++b) {
     Real kt = 0, kr = 0;
-    for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
-      const int e = C.incidence[q];
-      const int c = e >= 0 ? e : ~e;
-      const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
-      if (kn <= 0) continue;
+    forEachLoadedContact(C, b, [&](int e, int c, Real kn) {
       kt += kn;
       if (rot) {
         // Lever arm of the contact point about this body's centre: member offset + radius.
@@ -73,7 +81,7 @@ Real TimeStepper::stiffnessBound(const Scene& s) {
         // The rolling spring adds k_r to this body's rotational stiffness (0 when off: same bits).
         kr += ks * l * l + law.rollingStiffness(ks, C.rbar[c]);
       }
-    }
+    });
     if (kt > 0) best = std::min(best, std::sqrt(B.mass[b] / kt));
     if (kr > 0) best = std::min(best, std::sqrt(B.inertia[b].minCoeff() / kr));
   }
@@ -94,18 +102,14 @@ Real TimeStepper::perAxisBound(const Scene& s) {
     Mat3 Kt = Mat3::Zero(), Kr = Mat3::Zero();
     const bool sphere = B.memberCount(b) == 1 && s.members.offset[B.memberBegin[b]].isZero();
     bool loaded = false;
-    for (int q = C.incBegin[b]; q < C.incBegin[b + 1]; ++q) {
-      const int e = C.incidence[q];
-      const int c = e >= 0 ? e : ~e;
-      const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
-      if (kn <= 0) continue;
+    forEachLoadedContact(C, b, [&](int e, int c, Real kn) {
       loaded = true;
       const Real ks = law.shearStiffness(kn);
       const Vec3& n = C.normal[c];
       const Mat3 nn = n * n.transpose();
       Kt.diagonal().array() += ks;
       Kt += (kn - ks) * nn;
-      if (!rot) continue;
+      if (!rot) return;
       // The rolling spring resists the rotation normal to n (k_r = 0 when off).
       const Real kr = law.rollingStiffness(ks, C.rbar[c]);
       if (sphere) {  // l = -/+ (r - delta/2) n: c = 0, |l|^2 1 - l l^T = l^2 (1 - n n^T)
@@ -119,7 +123,7 @@ Real TimeStepper::perAxisBound(const Scene& s) {
         Kr.diagonal().array() += ks * l.squaredNorm() + kr;
         Kr += (kn - ks) * cr * cr.transpose() - ks * l * l.transpose() - kr * nn;
       }
-    }
+    });
     if (!loaded) continue;
     // The eigenvalue only where it can lower the minimum: the trace bounds it from above, so a body
     // whose 1/sqrt(trace) is not below the best so far cannot be the minimum (the same result).
