@@ -49,6 +49,24 @@ struct LinearCell {
   void advance(const Vec6& rates) { F = (Mat3::Identity() + dt * CellServoLaw::velocityGradient(rates)) * F; }
 };
 
+// Steps `servo` on `cell` until it reaches or fails its state (at most 1,000,000 steps), calling
+// afterStep() after each step; returns the steps taken (servo.steps counts them as they go).
+template <class AfterStep>
+long runToEnd(TrueTriaxialServo& servo, LinearCell& cell, AfterStep afterStep) {
+  long n = 0;
+  while (servo.status != TrueTriaxialServo::Status::Reached && servo.status != TrueTriaxialServo::Status::Failed &&
+         n < 1000000) {
+    cell.advance(servo.update(cell.measure(), cell.dt));
+    ++n;
+    afterStep();
+  }
+  return n;
+}
+
+long runToEnd(TrueTriaxialServo& servo, LinearCell& cell) {
+  return runToEnd(servo, cell, [] {});
+}
+
 Vec6 normalOnly(const Vec3& s) {
   Vec6 v = Vec6::Zero();
   v.head<3>() = s;
@@ -103,15 +121,11 @@ TEST(TrueTriaxialServo, ReachesState21AlongTheConstantBAndPPath) {
   ASSERT_NEAR(goal.x(), 100e3, 1e-9);
   ASSERT_NEAR(goal.y(), 60e3, 1e-9);
   Real worstB = 0, worstP = 0;
-  long n = 0;
-  while (servo.status != TrueTriaxialServo::Status::Reached && servo.status != TrueTriaxialServo::Status::Failed &&
-         n < 1000000) {
-    cell.advance(servo.update(cell.measure(), cell.dt));
-    ++n;
+  runToEnd(servo, cell, [&] {
     const Vec6& t = servo.target;
     if (std::abs(t[2] - t[1]) > 1e3) worstB = std::max(worstB, std::abs((t[0] - t[1]) / (t[2] - t[1]) - 0.5));
     worstP = std::max(worstP, std::abs(t.head<3>().sum() / 3 - 100e3));
-  }
+  });
   ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Reached) << servo.message;
   const Vec6 s = cell.measure().stress;
   // Independent check of the acceptance: principal values of the measured tensor (Eigen's solver
@@ -143,15 +157,10 @@ TEST(TrueTriaxialServo, PerStepSettingsAreInReferenceSteps) {
     servo.goal = TrueTriaxialState{0.5, 140e3, 100e3};
     servo.law = CellServoLaw{0.05, 1e3};
     servo.stepScale = scale;
-    bool firstGoalStep = true;
-    while (servo.status != TrueTriaxialServo::Status::Reached && servo.status != TrueTriaxialServo::Status::Failed &&
-           servo.steps < 1000000) {
-      cell.advance(servo.update(cell.measure(), cell.dt));
-      if (firstGoalStep) {  // the goal's first move: pathRate x stepScale along its longest component
+    runToEnd(servo, cell, [&] {
+      if (servo.steps == 1)  // the goal's first move: pathRate x stepScale along its longest component
         EXPECT_NEAR((servo.target - servo.startStress).cwiseAbs().maxCoeff(), 2.0 * scale, 1e-9);
-        firstGoalStep = false;
-      }
-    }
+    });
     ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Reached) << servo.message;
     steps = servo.steps;
     stress = cell.measure().stress;
@@ -181,12 +190,7 @@ TEST(TrueTriaxialServo, WithoutShearControlTheShearStressesStayAndShearGoalsAreR
   servo.goal = TrueTriaxialState{0.5, 140e3, 100e3};
   servo.law = CellServoLaw{0.05, 1e3};
   servo.controlShear = false;
-  long n = 0;
-  while (servo.status != TrueTriaxialServo::Status::Reached && servo.status != TrueTriaxialServo::Status::Failed &&
-         n < 1000000) {
-    cell.advance(servo.update(cell.measure(), cell.dt));
-    ++n;
-  }
+  runToEnd(servo, cell);
   ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Reached) << servo.message;
   const Vec6 s = cell.measure().stress;
   EXPECT_LT((s.head<3>() - servo.goal.stresses()).cwiseAbs().maxCoeff(), servo.stressTolerance);
@@ -328,14 +332,10 @@ TEST(TrueTriaxialServo, FeedForwardReachesState21AndStillFailsByStalling) {
   servo.goal = TrueTriaxialState{0.5, 140e3, 100e3};
   servo.law = CellServoLaw{0.05, 1e3};
   servo.feedForward = true;
-  long n = 0;
   Real worstLag = 0;
-  while (servo.status != TrueTriaxialServo::Status::Reached && servo.status != TrueTriaxialServo::Status::Failed &&
-         n < 1000000) {
-    cell.advance(servo.update(cell.measure(), cell.dt));
-    ++n;
-    if (servo.status == TrueTriaxialServo::Status::Loading && n > 2000) worstLag = std::max(worstLag, servo.lag);
-  }
+  runToEnd(servo, cell, [&] {
+    if (servo.status == TrueTriaxialServo::Status::Loading && servo.steps > 2000) worstLag = std::max(worstLag, servo.lag);
+  });
   ASSERT_EQ(servo.status, TrueTriaxialServo::Status::Reached) << servo.message;
   EXPECT_LT((cell.measure().stress - servo.finalStress()).cwiseAbs().maxCoeff(), servo.stressTolerance);
   EXPECT_LT(servo.overshoot.maxCoeff(), servo.stressTolerance);
@@ -350,7 +350,7 @@ TEST(TrueTriaxialServo, FeedForwardReachesState21AndStillFailsByStalling) {
 
   TrueTriaxialServo failing;
   failing.feedForward = true;
-  n = runOnACellThatYieldsAt120kPa(failing);
+  const long n = runOnACellThatYieldsAt120kPa(failing);
   ASSERT_EQ(failing.status, TrueTriaxialServo::Status::Failed);
   EXPECT_NE(failing.message.find("stopped following the path"), std::string::npos) << failing.message;
   EXPECT_LT(n, 30000);
