@@ -44,8 +44,7 @@ def options():
 
 
 def measure(path, b, sz, rule):
-    from trueaniso import dem, fabric, specimen_file, statics, triaxial
-    dem.time_step_rule = rule
+    from trueaniso import fabric, specimen_file, statics, triaxial
     scene, _ = specimen_file.load(path)
     t0 = scene.time
     info = triaxial.reach_state(scene, b, sz, time_step=rule)

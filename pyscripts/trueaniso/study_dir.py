@@ -189,11 +189,7 @@ def path_rate_of(out):
     """The servo's path rate (Pa per step) of the study `out` holds, or None (no study, none
     readable, or one from before the rate was an option: the checks that follow say what is wrong)."""
     try:
-        r = read_metadata(out)["fingerprint"]["state"]["path_rate"]
-    except (StudyMismatch, OSError, TypeError, KeyError):
-        return None
-    try:
-        return float(r)  # "inf" is how metadata.json keeps an infinite rate (study._effective)
+        return float(state_option_of(out, "path_rate"))  # "inf" is how metadata.json keeps an infinite rate (study._effective)
     except (TypeError, ValueError):
         return None
 
