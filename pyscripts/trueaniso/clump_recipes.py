@@ -34,6 +34,9 @@ VARIANTS = {
     # clump2 with its radii grown frictionless (mu_prep 0): fewer rattlers and a higher Zm at 1000 clumps,
     # e 0.01 below the paper's 0.636 instead of 0.01 above it.
     "clump2": {"frictionless": dict(mu_prep=0.0)},
+    # clump1 with the cell holding the normal stresses at their mean while the radii grow
+    # (RadiusExpansion.hold_deviator): the same recipe otherwise (docs/clumps.md, "clump1 preparation").
+    "clump1": {"hold-deviator": dict(hold_deviator=True)},
 }
 
 
