@@ -11,6 +11,7 @@ namespace trueaniso {
 void RadiusExpansion::apply(Scene& s) {
   require(targetPressure > 0, "radius expansion target pressure must be > 0");
   require(gain > 0 && gain <= 1, "radius expansion gain must lie in (0, 1]");
+  require(!holdDeviator || (deviatorGain > 0 && deviatorGain <= 1), "radius expansion deviator gain must lie in (0, 1]");
   const int nb = s.bodies.size();
   const bool clumps = s.hasClumps();
   if (base_.size() != s.members.radius.size() || baseMass_.size() != static_cast<size_t>(nb)) {
@@ -61,7 +62,7 @@ Mat3 RadiusExpansion::deviatorGradient(const Vec3& normal, const Vec3& stiffness
   const Real p = normal.mean();
   Vec3 rate;
   for (int k = 0; k < 3; ++k)  // compression positive: an axis above the mean extends
-    rate[k] = std::clamp(gain * (normal[k] - p) / (stiffness[k] * dt), -maxGrowthRate, maxGrowthRate);
+    rate[k] = std::clamp(deviatorGain * (normal[k] - p) / (stiffness[k] * dt), -maxGrowthRate, maxGrowthRate);
   Mat3 L = Mat3::Zero();
   L.diagonal() = rate.array() - rate.mean();
   return L;

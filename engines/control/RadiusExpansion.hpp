@@ -9,9 +9,11 @@
 // holdDeviator: the cell also holds the three normal stresses at their mean while the radii grow,
 // by a velocity gradient with no trace (the cell's volume is kept: the mean stress stays the
 // growth's to servo) and no shear (the cell stays orthorhombic). Per axis the strain rate is the
-// proportional law of CellServoLaw toward the measured mean, sigma_k - p over the axis's affine
-// stiffness, the same gain as the growth, then less the mean of the three; capped at
-// maxGrowthRate before the mean is taken out. A packing whose fabric makes one axis softer (a
+// proportional law of CellServoLaw toward the measured mean, deviatorGain x (sigma_k - p) over the
+// axis's affine stiffness, then less the mean of the three; capped at maxGrowthRate before the
+// mean is taken out. Its own gain: a near-frictionless packing of elongated clumps resists a
+// deviatoric strain far less than its affine estimate says (it rearranges), so the growth's gain
+// leaves the deviator where the fixed cell has it (docs/clumps.md, "clump1 preparation"). A packing whose fabric makes one axis softer (a
 // fixed cubic cell then carries less stress along it) is let relax that way during the growth
 // instead of creeping towards it under the stage-2 servo. Off by default: the growth at a fixed
 // cell, to the bit.
@@ -30,6 +32,7 @@ class RadiusExpansion : public Engine {
   Real unbalancedTolerance = 1e-3;
   bool stopWhenReached = false;
   bool holdDeviator = false;
+  Real deviatorGain = 0.05;
 
   Real scale = 1.0;              // current radius / base radius
   Real pressure = 0, unbalanced = 0;

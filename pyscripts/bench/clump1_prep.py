@@ -39,7 +39,7 @@ def table(rows):
            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         out.append("| %s | %s | %d | %d + %d | %.4f | %.3f | %d | %.3f | %.3f | %.1f, %.1f, %.1f | %.4f | %.0f s |" % (
-            r["recipe"] or "default", r["time_step"], r["seed"], r["steps_expansion"], r["steps_consolidation"],
+            "hold, gain %g" % r["hold_deviator"] if r.get("hold_deviator") else "default", r["time_step"], r["seed"], r["steps_expansion"], r["steps_consolidation"],
             r["e"], r["Zm"], r["rattlers_free"], r["Ez_Ex_restrained"], r["Ez_Ex_free"],
             *[x / 1e6 for x in r["E_restrained"]], r["q_over_p_end_expansion"], r["wall_prep"]))
     return "\n".join(out)
@@ -52,6 +52,9 @@ def main():
     p.add_argument("--seed", type=int, default=1, help="seed of the random packing")
     p.add_argument("--recipe", default=None, help="a named variant of the assembly's recipe")
     p.add_argument("--time-step", default=None, help="the time step rule (as prepare_specimen.py --time-step)")
+    p.add_argument("--hold-deviator", type=float, default=None,
+                   help="the deviator hold's gain (prepare_clumps hold_deviator), over the recipe's")
+    p.add_argument("--max-steps", type=int, default=5_000_000, help="steps a stage may take (prepare_clumps)")
     p.add_argument("--no-statics", action="store_true", help="the trace and the state only, no static solve")
     p.add_argument("--out", help="specimen file (.npz)")
     p.add_argument("--json", help="JSON-lines file a row is appended to")
@@ -80,10 +83,19 @@ def main():
                           shear=[float(sig[1, 2]), float(sig[0, 2]), float(sig[0, 1])], p=float(pm),
                           q_over_p=float(q / pm) if pm > 0 else None, unbalanced=float(engine.unbalanced),
                           scale=float(getattr(engine, "scale", 1.0)), dt=float(scene.dt)))
+        if len(trace) % 20 == 0:
+            t = trace[-1]
+            sys.stderr.write("%s %d: sigma %s kPa, q/p %.4f, unbalanced %.2e\n" % (
+                t["stage"], t["steps"], " ".join("%.2f" % (x / 1e3) for x in t["sigma"]), t["q_over_p"] or 0.0,
+                t["unbalanced"]))
+            sys.stderr.flush()
 
     kwargs = dict(clump_recipes.variant(o.assembly, o.recipe)) if o.recipe else {}
+    if o.hold_deviator is not None:
+        kwargs["hold_deviator"] = o.hold_deviator
     t0 = time.time()
-    scene, log = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, progress=progress, **kwargs)
+    scene, log = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, progress=progress,
+                                               max_steps=o.max_steps, **kwargs)
     log["threads"] = 1
     if o.recipe:
         log["recipe"] = o.recipe
@@ -92,6 +104,7 @@ def main():
     prep_wall = time.time() - t0
     expansion = [t for t in trace if not t["stage"].startswith("consolidation")]
     row = dict(assembly=o.assembly, n=o.n, seed=o.seed, recipe=o.recipe, time_step=rule,
+               hold_deviator=kwargs.get("hold_deviator"),
                e=st["void_ratio"], Zm=st["Zm"], Np0=st["Np0"], Np1=st["Np1"],
                sigma=[st["sigma_x"], st["sigma_y"], st["sigma_z"]],
                steps_expansion=log["steps_expansion"], steps_consolidation=log["steps_consolidation"],

@@ -36,7 +36,7 @@ VARIANTS = {
     "clump2": {"frictionless": dict(mu_prep=0.0)},
     # clump1 with the cell holding the normal stresses at their mean while the radii grow
     # (RadiusExpansion.hold_deviator): the same recipe otherwise (docs/clumps.md, "clump1 preparation").
-    "clump1": {"hold-deviator": dict(hold_deviator=True)},
+    "clump1": {"hold-deviator": dict(hold_deviator=0.05)},
 }
 
 

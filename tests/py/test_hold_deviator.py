@@ -35,7 +35,7 @@ def test_the_cell_rate_is_the_proportional_law_on_the_normal_deviator():
 
     scene = _loaded()
     grow = engines.RadiusExpansion()
-    grow.gain, grow.max_growth_rate, grow.hold_deviator = 0.01, 1e9, True
+    grow.gain, grow.deviator_gain, grow.max_growth_rate, grow.hold_deviator = 0.002, 0.01, 1e9, True
     grow.apply(scene)
     raw = 0.01 * (sig - sig.mean()) / (K * scene.dt)
     want = raw - raw.mean()
@@ -57,7 +57,7 @@ def _deviator_after(hold, steps=3000):
     sig = np.diag(engines.stress(scene))
     before = np.max(np.abs(sig - sig.mean())) / sig.mean()
     grow = engines.RadiusExpansion()
-    grow.target_pressure, grow.gain, grow.hold_deviator = 100e3, 0.01, hold
+    grow.target_pressure, grow.gain, grow.deviator_gain, grow.hold_deviator = 100e3, 0.01, 0.01, hold
     grow.max_growth_rate = dem.strain_rate_for_inertial_number(1e-2, 0.195e-3, scene.density, 100e3)
     dem.Chain(scene, damping=0.4, controllers=[grow]).run(steps)
     sig = np.diag(engines.stress(scene))
@@ -78,7 +78,7 @@ def test_the_hold_takes_the_normal_deviator_away_and_the_fixed_cell_keeps_it():
 
 
 def test_the_default_is_the_fixed_cell_to_the_bit():
-    """hold_deviator=False is the recipe without the option: the same arrays, and no key in the log
+    """hold_deviator=None is the recipe without the option: the same arrays, and no key in the log
     (a specimen made before the option records none)."""
     def prepare(**kw):
         return clump_specimen.prepare_clumps("clump1", 60, seed=4, inertial_number=5e-2, shape="dimer-1.5",
@@ -87,7 +87,7 @@ def test_the_default_is_the_fixed_cell_to_the_bit():
     engines.set_threads(1)
     try:
         a, log_a = prepare()
-        b, log_b = prepare(hold_deviator=False)
+        b, log_b = prepare(hold_deviator=None)
     finally:
         engines.set_threads(threads)
     for name in ("positions", "orientations", "radii", "cell", "velocities"):
@@ -96,8 +96,18 @@ def test_the_default_is_the_fixed_cell_to_the_bit():
     assert log_a["steps_expansion"] == log_b["steps_expansion"]
 
 
+@pytest.mark.parametrize("gain", [0.0, -0.1, 1.5, float("nan")])
+def test_a_deviator_gain_out_of_range_is_refused(gain):
+    with pytest.raises(ValueError, match="gain must lie in"):
+        clump_specimen.prepare_clumps("clump1", 60, seed=4, hold_deviator=gain)
+    grow = engines.RadiusExpansion()
+    grow.hold_deviator, grow.deviator_gain = True, gain
+    with pytest.raises(Exception, match="deviator gain must lie in"):
+        grow.apply(_loaded())
+
+
 def test_the_variant_is_clump1s_and_is_refused_elsewhere(tmp_path):
-    assert clump_recipes.variant("clump1", "hold-deviator") == {"hold_deviator": True}
+    assert set(clump_recipes.variant("clump1", "hold-deviator")) == {"hold_deviator"}
     with pytest.raises(ValueError, match="clump2 has no recipe variant 'hold-deviator'"):
         clump_recipes.variant("clump2", "hold-deviator")
     out = str(tmp_path / "s.npz")
