@@ -54,6 +54,8 @@ def main():
     p.add_argument("--time-step", default=None, help="the time step rule (as prepare_specimen.py --time-step)")
     p.add_argument("--hold-deviator", type=float, default=None,
                    help="the deviator hold's gain (prepare_clumps hold_deviator), over the recipe's")
+    p.add_argument("--set", action="append", default=[],
+                   help="KEY=VALUE, repeatable: a recipe parameter or a keyword of prepare_clumps (prep_unbalanced, gain, ...)")
     p.add_argument("--max-steps", type=int, default=5_000_000, help="steps a stage may take (prepare_clumps)")
     p.add_argument("--no-statics", action="store_true", help="the trace and the state only, no static solve")
     p.add_argument("--out", help="specimen file (.npz)")
@@ -93,6 +95,11 @@ def main():
     kwargs = dict(clump_recipes.variant(o.assembly, o.recipe)) if o.recipe else {}
     if o.hold_deviator is not None:
         kwargs["hold_deviator"] = o.hold_deviator
+    changed = {}
+    for item in o.set:
+        k, _, v = item.partition("=")
+        changed[k] = json.loads(v)
+    kwargs.update(changed)
     t0 = time.time()
     scene, log = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, progress=progress,
                                                max_steps=o.max_steps, **kwargs)
@@ -104,7 +111,7 @@ def main():
     prep_wall = time.time() - t0
     expansion = [t for t in trace if not t["stage"].startswith("consolidation")]
     row = dict(assembly=o.assembly, n=o.n, seed=o.seed, recipe=o.recipe, time_step=rule,
-               hold_deviator=kwargs.get("hold_deviator"),
+               hold_deviator=kwargs.get("hold_deviator"), settings=changed,
                e=st["void_ratio"], Zm=st["Zm"], Np0=st["Np0"], Np1=st["Np1"],
                sigma=[st["sigma_x"], st["sigma_y"], st["sigma_z"]],
                steps_expansion=log["steps_expansion"], steps_consolidation=log["steps_consolidation"],
