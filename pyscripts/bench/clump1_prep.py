@@ -33,15 +33,40 @@ def deviator(sig):
     return p, math.sqrt(3.0 * max(j2, 0.0))
 
 
+def label(r):
+    parts = ["hold, gain %g" % r["hold_deviator"]] if r.get("hold_deviator") else []
+    parts += ["%s %s" % kv for kv in sorted((r.get("settings") or {}).items())]
+    if r.get("time_step", "smallest-inertia") != "smallest-inertia":
+        parts.append("%s step" % r["time_step"])
+    return ", ".join(parts) or "recipe"
+
+
+def summary(r):
+    """From a row's trace: the first stages' steps (gas and stage 1), the free expansion's, the
+    free-expansion step at which p first reached 97 % of its goal, and the medians of q/p and of the
+    normal deviator max |sigma_k - p| / p over the free expansion once p > 50 kPa."""
+    import statistics
+    tr = r["trace"]
+    first = sum(max([t["steps"] for t in tr if t["stage"].startswith(k)] or [0]) for k in ("expansion (gas", "stage 1"))
+    free = [t for t in tr if t["stage"].startswith("expansion (free")]
+    reach = next((t["steps"] for t in free if t["p"] >= 0.97 * 100e3), None)
+    loaded = [t for t in free if t["p"] > 50e3]
+    qp = statistics.median(t["q_over_p"] for t in loaded) if loaded else float("nan")
+    dev = statistics.median(max(abs(x - t["p"]) for x in t["sigma"]) / t["p"] for t in loaded) if loaded else float("nan")
+    return first, r["steps_expansion"] - first, reach, qp, dev
+
+
 def table(rows):
-    out = ["| preparation | time step | seed | steps (expansion + consolidation) | e | Zm | rattlers "
-           "| E_z/E_x restrained | free | E_x, E_y, E_z restrained (MPa) | q/p at the expansion's end | wall |",
+    out = ["| preparation | clumps | seed | steps: first stages + free expansion + consolidation | free-expansion step of p >= 97 kPa | "
+           "q/p, normal deviator / p (median, p > 50 kPa) | e | Zm | rattlers | E_z/E_x restrained | free | wall |",
            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        out.append("| %s | %s | %d | %d + %d | %.4f | %.3f | %d | %.3f | %.3f | %.1f, %.1f, %.1f | %.4f | %.0f s |" % (
-            "hold, gain %g" % r["hold_deviator"] if r.get("hold_deviator") else "default", r["time_step"], r["seed"], r["steps_expansion"], r["steps_consolidation"],
-            r["e"], r["Zm"], r["rattlers_free"], r["Ez_Ex_restrained"], r["Ez_Ex_free"],
-            *[x / 1e6 for x in r["E_restrained"]], r["q_over_p_end_expansion"], r["wall_prep"]))
+    for r in sorted(rows, key=lambda r: (label(r) != "recipe", label(r), r["n"], r["seed"])):
+        first, free, reach, qp, dev = summary(r)
+        out.append("| %s | %d | %d | %d + %d + %d | %s | %.3f, %.3f | %.4f | %.2f | %s | %s | %s | %.0f s |" % (
+            label(r), r["n"], r["seed"], first, free, r["steps_consolidation"], "-" if reach is None else reach,
+            qp, dev, r["e"], r["Zm"], r.get("rattlers_free", "-"),
+            "%.3f" % r["Ez_Ex_restrained"] if "Ez_Ex_restrained" in r else "-",
+            "%.3f" % r["Ez_Ex_free"] if "Ez_Ex_free" in r else "-", r["wall_prep"]))
     return "\n".join(out)
 
 
@@ -64,7 +89,7 @@ def main():
     p.add_argument("--data", default=DATA, help="the measurements the table is made of")
     o = cli.parse(p)
     if o.doc:
-        with open(os.path.join(o.data, "runs.jsonl")) as f:
+        with open(os.path.join(o.data, "runs-300.jsonl")) as f:
             rows = [json.loads(line) for line in f if line.strip()]
         _bench.replace_block(o.doc, "clump1-prep", table(rows))
         return
