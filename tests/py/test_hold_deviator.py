@@ -108,6 +108,7 @@ def test_a_deviator_gain_out_of_range_is_refused(gain):
 
 def test_the_variant_is_clump1s_and_is_refused_elsewhere(tmp_path):
     assert set(clump_recipes.variant("clump1", "hold-deviator")) == {"hold_deviator"}
+    assert clump_recipes.variant("clump1", "fast-growth") == {"gain": 0.1}
     with pytest.raises(ValueError, match="clump2 has no recipe variant 'hold-deviator'"):
         clump_recipes.variant("clump2", "hold-deviator")
     out = str(tmp_path / "s.npz")
