@@ -70,6 +70,16 @@ def table(rows):
     return "\n".join(out)
 
 
+def rows_of(data):
+    """The rows of every runs-*.jsonl in `data`."""
+    rows = []
+    for name in sorted(os.listdir(data)):
+        if name.startswith("runs-") and name.endswith(".jsonl"):
+            with open(os.path.join(data, name)) as f:
+                rows += [json.loads(line) for line in f if line.strip()]
+    return rows
+
+
 def main():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--assembly", choices=("clump1", "clump2"), default="clump1", help="clump assembly")
@@ -89,9 +99,7 @@ def main():
     p.add_argument("--data", default=DATA, help="the measurements the table is made of")
     o = cli.parse(p)
     if o.doc:
-        with open(os.path.join(o.data, "runs-300.jsonl")) as f:
-            rows = [json.loads(line) for line in f if line.strip()]
-        _bench.replace_block(o.doc, "clump1-prep", table(rows))
+        _bench.replace_block(o.doc, "clump1-prep", table(rows_of(o.data)))
         return
     if not (o.json and o.out):
         raise cli.InputError("give --out and --json")

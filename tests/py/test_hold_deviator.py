@@ -2,6 +2,7 @@
 'hold-deviator'): while the radii grow, the cell strains at constant volume so that the normal
 stresses stay at their mean. Off, the growth is at a fixed cell, the default recipe's to the bit."""
 import os
+import sys
 
 import numpy as np
 import pytest
@@ -130,3 +131,31 @@ def test_the_committed_clump_fixture_is_made_again_to_the_bit():
         np.testing.assert_array_equal(getattr(scene, name), getattr(ref, name), err_msg=name)
     assert (log["steps_expansion"], log["steps_consolidation"]) == (meta["parameters"]["steps_expansion"],
                                                                    meta["parameters"]["steps_consolidation"])
+
+
+@pytest.mark.parametrize("name, keyword", [("hold-deviator", "hold_deviator"), ("fast-growth", "gain")])
+def test_prepare_specimen_takes_clump1s_variants(tmp_path, name, keyword):
+    """A variant whose settings are keywords of prepare_clumps, not recipe parameters: validated
+    with the recipe's defaults, bound to the checkpoint by its name."""
+    sys.path.insert(0, os.path.join(REPO, "pyscripts"))
+    import prepare_specimen
+    o = prepare_specimen.options(["--assembly", "clump1", "--n", "300", "--recipe", name,
+                                  "--out", str(tmp_path / "s.npz")])
+    prepare_specimen.validate(o)
+    assert o.mu_prep == clump_recipes.RECIPES["clump1"]["mu_prep"]
+    assert prepare_specimen.settings(o)["recipe"] == name
+    assert keyword in clump_recipes.variant("clump1", name)
+
+
+def test_the_clump1_preparation_table_is_that_of_its_data(tmp_path):
+    """docs/clumps.md's clump1 preparation table is what clump1_prep.py --doc writes from
+    docs/data/clump1-prep (no number typed by hand)."""
+    import shutil
+    sys.path.insert(0, os.path.join(REPO, "pyscripts", "bench"))
+    import clump1_prep
+    doc = tmp_path / "clumps.md"
+    shutil.copy(os.path.join(REPO, "docs", "clumps.md"), doc)
+    import _bench
+    _bench.replace_block(str(doc), "clump1-prep", clump1_prep.table(clump1_prep.rows_of(
+        os.path.join(REPO, "docs", "data", "clump1-prep"))))
+    assert doc.read_text() == open(os.path.join(REPO, "docs", "clumps.md")).read()
