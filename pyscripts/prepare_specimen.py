@@ -40,7 +40,10 @@ SPHERE_DEFAULTS = dict(d50=0.195e-3, cu=1.25, mu_prep=0.015, phi_cell=0.60)
 def assembly_defaults(assembly, variant=None):
     if assembly == "sphere":
         return dict(SPHERE_DEFAULTS)
-    r = clump_specimen.recipe(assembly, **(clump_recipes.variant(assembly, variant) if variant else {}))
+    # A variant's recipe parameters replace the defaults; its other settings (keywords of
+    # prepare_clumps, such as the servo's gain) go to the preparation as they are (prepare).
+    named = clump_recipes.variant(assembly, variant) if variant else {}
+    r = clump_specimen.recipe(assembly, **{k: v for k, v in named.items() if k in clump_recipes.RECIPES[assembly]})
     return dict(d50=r["d50"], cu=r["cu"], mu_prep=r["mu_prep"], phi_cell=r["phi_cell"])
 
 

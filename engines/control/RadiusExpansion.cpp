@@ -11,6 +11,7 @@ namespace trueaniso {
 void RadiusExpansion::apply(Scene& s) {
   require(targetPressure > 0, "radius expansion target pressure must be > 0");
   require(gain > 0 && gain <= 1, "radius expansion gain must lie in (0, 1]");
+  require(!holdDeviator || (deviatorGain > 0 && deviatorGain <= 1), "radius expansion deviator gain must lie in (0, 1]");
   const int nb = s.bodies.size();
   const bool clumps = s.hasClumps();
   if (base_.size() != s.members.radius.size() || baseMass_.size() != static_cast<size_t>(nb)) {
@@ -26,6 +27,9 @@ void RadiusExpansion::apply(Scene& s) {
   const ContactMeasures measured = contactMeasures(s);
   pressure = measured.stress.trace() / 3.0;
   const Real K = measured.stiffness.head<3>().mean();
+  const Vec3 normal = measured.stress.diagonal();
+  deviator = (normal.array() - pressure).abs().maxCoeff();
+  if (holdDeviator) s.cell.velGrad = deviatorGradient(normal, measured.stiffness.head<3>(), s.dt);
   const Real err = targetPressure - pressure;
   // Growing radii by d ln r is, for the contacts, an isotropic affine compression of d ln r.
   Real rate = K > 0 ? gain * err / (K * s.dt) : (err > 0 ? maxGrowthRate : -maxGrowthRate);
@@ -42,13 +46,27 @@ void RadiusExpansion::apply(Scene& s) {
 #pragma omp parallel for schedule(static) if (worthThreads(nc))
   for (int c = 0; c < nc; ++c) rbar[c] *= grow;  // Eq. (7) is homogeneous in the radii
   unbalanced = measured.unbalanced;
-  reached = std::abs(err) < stressTolerance && unbalanced < unbalancedTolerance;
+  reached = std::abs(err) < stressTolerance && unbalanced < unbalancedTolerance &&
+            (!holdDeviator || deviator < stressTolerance);
   if (reached && stopWhenReached) done = true;
 }
 
 }  // namespace trueaniso
 
 namespace trueaniso {
+
+Mat3 RadiusExpansion::deviatorGradient(const Vec3& normal, const Vec3& stiffness, Real dt) const {
+  // Before the network carries load along every axis there is no stiffness to turn an error into
+  // a strain (CellServoLaw would then strain at its cap): the cell waits.
+  if (!(stiffness.minCoeff() > 0)) return Mat3::Zero();
+  const Real p = normal.mean();
+  Vec3 rate;
+  for (int k = 0; k < 3; ++k)  // compression positive: an axis above the mean extends
+    rate[k] = std::clamp(deviatorGain * (normal[k] - p) / (stiffness[k] * dt), -maxGrowthRate, maxGrowthRate);
+  Mat3 L = Mat3::Zero();
+  L.diagonal() = rate.array() - rate.mean();
+  return L;
+}
 
 void RadiusExpansion::growClumps(Scene& s) const {
   const Real f3 = scale * scale * scale, f5 = f3 * scale * scale;

@@ -160,6 +160,11 @@ void exportControl() {
       .def_readwrite("stress_tolerance", &RadiusExpansion::stressTolerance)
       .def_readwrite("unbalanced_tolerance", &RadiusExpansion::unbalancedTolerance)
       .def_readwrite("stop_when_reached", &RadiusExpansion::stopWhenReached)
+      .def_readwrite("hold_deviator", &RadiusExpansion::holdDeviator,
+                     "Strain the cell at constant volume so that the normal stresses stay at their mean while the radii grow.")
+      .def_readwrite("deviator_gain", &RadiusExpansion::deviatorGain,
+                     "Gain of the deviator hold: the fraction of sigma_k - p closed per step through the affine stiffness.")
+      .def_readonly("deviator", &RadiusExpansion::deviator, "Largest |sigma_k - p| over the normal stresses (Pa).")
       .def_readonly("scale", &RadiusExpansion::scale)
       .def_readonly("pressure", &RadiusExpansion::pressure)
       .def_readonly("unbalanced", &RadiusExpansion::unbalanced)

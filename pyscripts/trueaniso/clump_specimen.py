@@ -221,12 +221,16 @@ def check_count(assembly, n):
 
 def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_number=1e-2, prep_unbalanced=1e-2,
                    unbalanced=1e-3, stress_tolerance=100.0, gain=0.002, max_steps=5_000_000, progress=None,
-                   checkpoints=None, **overrides):
+                   checkpoints=None, hold_deviator=None, **overrides):
     """A clump specimen (assembly "clump1" or "clump2", recipe RECIPES[assembly] with `overrides`)
     consolidated isotropically to `pressure`; returns (scene, log dict). The final state is in
     force and moment balance below `unbalanced` (a probe or static solve with rotations free
     starts from it). `checkpoints`: as in specimen.prepare_spheres (an interrupted preparation
-    resumes)."""
+    resumes). hold_deviator (a gain in (0, 1], or None): while the radii grow, the cell holds the
+    normal stresses at their mean at constant volume with that gain (RadiusExpansion.hold_deviator);
+    None, the growth is at a fixed cell."""
+    if hold_deviator is not None and not 0 < hold_deviator <= 1:
+        raise ValueError("hold_deviator %r: the deviator hold's gain must lie in (0, 1]" % (hold_deviator,))
     if pressure <= 0:
         raise ValueError("pressure must be > 0")
     r = recipe(assembly, **overrides)
@@ -265,6 +269,9 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
             # contact network takes 1 % of the target pressure (the rate cap only matters under load).
             st.controller = specimen.expansion(pressure, gain, 10.0 * rate if st.at("gas") else rate,
                                                stress_tolerance, prep_unbalanced)
+            if hold_deviator is not None:
+                st.controller.hold_deviator = True
+                st.controller.deviator_gain = hold_deviator
             st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller], max_dt=st.place["max_dt"])
         else:
             st.controller = specimen.consolidation(pressure, gain, rate, stress_tolerance, unbalanced)
@@ -325,6 +332,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
                generation_time=st.place["generation_time"], wall_time=st.elapsed(),
                aspect_ratio=clump_shapes.aspect_ratio(tmpl), template_volume_error=tmpl.volume_error_estimate,
                **{k: (list(v) if isinstance(v, tuple) else v) for k, v in r.items()})
+    if hold_deviator is not None:  # the default's log records none
+        log["hold_deviator"] = hold_deviator
     if checkpoints is not None:
         log["checkpoint_every"] = checkpoints.every
     return scene, log
