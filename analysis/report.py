@@ -789,9 +789,10 @@ def table_b1(results, paper, own_size=None, other=None):
     """Appendix B / Table B1 at the isotropic state and at state 21: the exact static solve with
     rotations blocked (what a restrained probe measures) against the unmodified (zeta = 1)
     kinematic prediction, from the study's statics records (b1_records). Each E_i with its a_i^2
-    (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i. `other`: a study
-    directory of another size whose records stand for state 21 where the study has none, shown
-    with that study's own isotropic state (a ratio between states holds within one specimen)."""
+    (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i. `other`: the directory
+    of another study (another size, or another specimen) whose records stand for state 21 where
+    the study has none, shown with that study's own isotropic state (a ratio between states holds
+    within one specimen)."""
     out = ["## Table B1: rotations restrained, E_i (MPa) and a_i^2", ""]
     found = b1_records(results) if os.path.isdir(results) else {}
     borrowed = b1_records(other) if other and "21" not in found else {}
@@ -799,12 +800,15 @@ def table_b1(results, paper, own_size=None, other=None):
         return out + ["Not in this study (run_study.py writes the statics records; `python3 -m analysis.report "
                       "DIR --statics` solves them from the state checkpoints).", ""]
     size = study_size(other) if borrowed else None
+    note = _other_size(size, own_size)
+    if size is not None and size == own_size:  # a specimen of the report's size, but not its own
+        size, note = "another specimen of %s" % size, " It is not this report's specimen."
     said = ["From this study's statics records%s." % (" (%s)" % own_size if own_size else "")] if found else \
         ["Not in this study's statics records."]
     if borrowed:
         said.append("This study has no record of state 21: it comes from `%s`%s, beside that specimen's own "
                     "isotropic state (a ratio between states holds within one specimen only).%s"
-                    % (other, " (%s)" % size if size else "", _other_size(size, own_size)))
+                    % (other, " (%s)" % size if size else "", note))
     out += [" ".join(said) + " a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (Eq. 25) of each row; the paper prints its "
             "a_i^2 to two decimals, here computed from its printed E_i.", "",
             "| state | | E_x (a_x^2) | E_y (a_y^2) | E_z (a_z^2) | predicted / DEM, mean E_i | largest \\|a_i^2 "

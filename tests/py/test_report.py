@@ -281,6 +281,10 @@ def test_table_b1_says_when_no_study_has_state_21(tmp_path):
     text = "\n".join(report.table_b1(str(own), paper, "1000 clump2 clumps", study))
     assert "| 21 (b = 0.5, sigma_z = 140 kPa) | paper predicted" in text and "This study has no record" not in text
     assert "ours 0.855, 0.657, 1.064 (1000 clump2 clumps)" in text and "not this report's" not in text
+    # Records of another specimen of the report's own size are named as such, not as its own.
+    text = "\n".join(report.table_b1(study, paper, "1000 clump2 clumps", B1_OTHER))
+    assert "| 21 (b = 0.5, sigma_z = 140 kPa), another specimen of 1000 clump2 clumps | paper predicted" in text
+    assert "It is not this report's specimen." in text and "| isotropic, another specimen of 1000 clump2" in text
 
 
 def test_b1_data_is_refused_before_anything_is_written(tmp_path):
