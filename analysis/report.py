@@ -507,8 +507,8 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     """Write report.md and its PNGs; returns the report's path and the numbers it shows. `fig16`:
     a cross-anisotropic study (or its JSON) for the Fig. 16 section; `clumps`: the JSON of
     anisotropy_clumps.py for the clump section; `statics`: solve Table B1's states from the
-    study's checkpoints first (solve_statics); `b1_data`: a directory of statics records of
-    another study, whose state 21 Table B1 shows where the study has none (table_b1)."""
+    study's checkpoints first (solve_statics); `b1_data`: directories of statics records of other
+    studies, whose state 21 Table B1 shows where the study has none (table_b1)."""
     csv_path = table_path(results)
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     # A study's probes.csv given as the file: its directory's metadata (assembly, material, the
@@ -535,12 +535,13 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     # Inputs of the optional sections are read and checked before anything is written.
     f16_rows = fig16_rows(fig16) if fig16 else None
     clump_rows = clump_entries(clumps) if clumps else None
-    if b1_data:
-        if "21" not in b1_records(b1_data):
-            raise ResultsError("%s: no statics record of state 21 (statics_state-21.json) for Table B1" % b1_data)
-        if study_assembly(b1_data) != assembly:
+    b1_data = [b1_data] if isinstance(b1_data, str) else list(b1_data or ())
+    for d in b1_data:
+        if "21" not in b1_records(d):
+            raise ResultsError("%s: no statics record of state 21 (statics_state-21.json) for Table B1" % d)
+        if study_assembly(d) != assembly:
             raise ResultsError("%s is of %s, not %s: Table B1 compares one assembly with the paper's"
-                               % (b1_data, study_assembly(b1_data) or "no recorded assembly", assembly))
+                               % (d, study_assembly(d) or "no recorded assembly", assembly))
     if statics:
         solve_statics(results, log=log)
     material, where = _material(results)
@@ -785,43 +786,50 @@ def _b1_ratios(found, paper, size):
                              ", ".join("%.3f" % r for r in theirs)))
 
 
-def table_b1(results, paper, own_size=None, other=None):
+def table_b1(results, paper, own_size=None, others=()):
     """Appendix B / Table B1 at the isotropic state and at state 21: the exact static solve with
     rotations blocked (what a restrained probe measures) against the unmodified (zeta = 1)
     kinematic prediction, from the study's statics records (b1_records). Each E_i with its a_i^2
-    (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i. `other`: the directory
-    of another study (another size, or another specimen) whose records stand for state 21 where
-    the study has none, shown with that study's own isotropic state (a ratio between states holds
+    (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i. `others`: directories
+    of other studies (another size, or another specimen) whose records stand for state 21 where
+    the study has none, each shown with its own isotropic state (a ratio between states holds
     within one specimen)."""
     out = ["## Table B1: rotations restrained, E_i (MPa) and a_i^2", ""]
     found = b1_records(results) if os.path.isdir(results) else {}
-    borrowed = b1_records(other) if other and "21" not in found else {}
+    others = [others] if isinstance(others, str) else list(others or ())
+    borrowed = [(d, b1_records(d)) for d in others] if "21" not in found else []
+    borrowed = [(d, recs) for d, recs in borrowed if recs]
     if not found and not borrowed:
         return out + ["Not in this study (run_study.py writes the statics records; `python3 -m analysis.report "
                       "DIR --statics` solves them from the state checkpoints).", ""]
-    size = study_size(other) if borrowed else None
-    note = _other_size(size, own_size)
-    if size is not None and size == own_size:  # a specimen of the report's size, but not its own
-        size, note = "another specimen of %s" % size, " It is not this report's specimen."
     said = ["From this study's statics records%s." % (" (%s)" % own_size if own_size else "")] if found else \
         ["Not in this study's statics records."]
-    if borrowed:
-        said.append("This study has no record of state 21: it comes from `%s`%s, beside that specimen's own "
-                    "isotropic state (a ratio between states holds within one specimen only).%s"
-                    % (other, " (%s)" % size if size else "", note))
+    sizes = []
+    for d, _ in borrowed:
+        size = study_size(d)
+        note = _other_size(size, own_size)
+        if size is not None and size == own_size:  # a specimen of the report's size, but not its own
+            size, note = "another specimen of %s" % size, " It is not this report's specimen."
+        sizes.append(size)
+        said.append("%s `%s`%s, beside that specimen's own isotropic state (a ratio between states holds within "
+                    "one specimen only).%s" % ("This study has no record of state 21: it comes from" if len(sizes) == 1
+                                               else "State 21 also from", d, " (%s)" % size if size else "", note))
     out += [" ".join(said) + " a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (Eq. 25) of each row; the paper prints its "
             "a_i^2 to two decimals, here computed from its printed E_i.", "",
             "| state | | E_x (a_x^2) | E_y (a_y^2) | E_z (a_z^2) | predicted / DEM, mean E_i | largest \\|a_i^2 "
             "predicted - DEM\\| |", "|---|---|---|---|---|---|---|"]
+    shown = set(found)
     for label, st in found.items():
         out += _b1_rows(label, st, paper)
-    where = ", %s" % size if size else ""
-    for label, st in borrowed.items():
-        out += _b1_rows(label, st, paper, where, with_paper=label not in found)
-    ratios = [_b1_ratios(f, paper, s) for f, s in ((found, own_size), (borrowed, size)) if len(f) == 2]
+    for (_, recs), size in zip(borrowed, sizes):
+        for label, st in recs.items():
+            out += _b1_rows(label, st, paper, ", %s" % size if size else "", with_paper=label not in shown)
+            shown.add(label)
+    ratios = [_b1_ratios(f, paper, s) for f, s in [(found, own_size)] + [(r, s) for (_, r), s in zip(borrowed, sizes)]
+              if len(f) == 2]
     if ratios:
         out += [""] + ratios
-    if "21" not in found and "21" not in borrowed:
+    if "21" not in shown:
         out += ["", "State 21: no statics record in this study (no checkpoint of state 21 was kept, or the state "
                 "was not solved); docs/departures.md says why where it is known."]
     return out + [""]
@@ -877,10 +885,10 @@ def main(argv=None):
     p.add_argument("--statics", action="store_true",
                    help="solve the static stiffness of the isotropic state and of state 21 from the study's "
                         "checkpoints (states/1.npz, states/21.npz) where no record exists yet (Table B1)")
-    p.add_argument("--b1-data", metavar="DIR",
+    p.add_argument("--b1-data", metavar="DIR", action="append",
                    help="a directory of statics records (statics_state-1.json, statics_state-21.json) and the "
                         "metadata.json of another study, e.g. of another size: Table B1 shows its state 21, "
-                        "beside its own isotropic state, where the study has no record of state 21")
+                        "beside its own isotropic state, where the study has no record of state 21 (repeatable)")
     o = p.parse_args(argv)
     if o.assembly is not None and o.assembly not in chain.PAPER:
         sys.stderr.write("error: --assembly %s: the paper's assemblies are %s\n"

@@ -285,6 +285,18 @@ def test_table_b1_says_when_no_study_has_state_21(tmp_path):
     text = "\n".join(report.table_b1(study, paper, "1000 clump2 clumps", B1_OTHER))
     assert "| 21 (b = 0.5, sigma_z = 140 kPa), another specimen of 1000 clump2 clumps | paper predicted" in text
     assert "It is not this report's specimen." in text and "| isotropic, another specimen of 1000 clump2" in text
+    # Two other studies: each named by its size with its own ratios; the paper's rows once.
+    second = tmp_path / "second"
+    shutil.copytree(B1_OTHER, second)
+    meta = json.loads((second / "metadata.json").read_text())
+    meta["specimen"]["summary"]["n"] = 2000
+    (second / "metadata.json").write_text(json.dumps(meta))
+    assert report.study_size(str(second)) == "2000 clump2 clumps"
+    text = "\n".join(report.table_b1(study, paper, "4000 clump2 clumps", [B1_OTHER, str(second)]))
+    assert text.count("| paper predicted (zeta = 1) |") == 2  # isotropic and state 21
+    for size in ("1000", "2000"):
+        assert "| 21 (b = 0.5, sigma_z = 140 kPa), %s clump2 clumps |" % size in text
+        assert "ours 0.855, 0.657, 1.064 (%s clump2 clumps)" % size in text
 
 
 def test_b1_data_is_refused_before_anything_is_written(tmp_path):
