@@ -811,9 +811,13 @@ def table_b1(results, paper, own_size=None, others=()):
         if size is not None and size == own_size:  # a specimen of the report's size, but not its own
             size, note = "another specimen of %s" % size, " It is not this report's specimen."
         sizes.append(size)
-        said.append("%s `%s`%s, beside that specimen's own isotropic state (a ratio between states holds within "
-                    "one specimen only).%s" % ("This study has no record of state 21: it comes from" if len(sizes) == 1
-                                               else "State 21 also from", d, " (%s)" % size if size else "", note))
+        summary = ((read_metadata(d) or {}).get("specimen") or {}).get("summary") or {}
+        state = ": e %.4f, Zm %.3f as prepared" % (summary["void_ratio"], summary["Zm"]) \
+            if "void_ratio" in summary and "Zm" in summary else ""
+        said.append("%s `%s`%s, beside that specimen's own isotropic state%s.%s" % (
+            "This study has no record of state 21: it comes from" if len(sizes) == 1 else "State 21 also from", d,
+            " (%s%s)" % (size or "size not recorded", state), " (a ratio between states holds within one specimen "
+                                                                 "only)" if len(sizes) == 1 else "", note))
     out += [" ".join(said) + " a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (Eq. 25) of each row; the paper prints its "
             "a_i^2 to two decimals, here computed from its printed E_i.", "",
             "| state | | E_x (a_x^2) | E_y (a_y^2) | E_z (a_z^2) | predicted / DEM, mean E_i | largest \\|a_i^2 "
@@ -827,8 +831,8 @@ def table_b1(results, paper, own_size=None, others=()):
             shown.add(label)
     ratios = [_b1_ratios(f, paper, s) for f, s in [(found, own_size)] + [(r, s) for (_, r), s in zip(borrowed, sizes)]
               if len(f) == 2]
-    if ratios:
-        out += [""] + ratios
+    for line in ratios:
+        out += ["", line]
     if "21" not in shown:
         out += ["", "State 21: no statics record in this study (no checkpoint of state 21 was kept, or the state "
                 "was not solved); docs/departures.md says why where it is known."]
