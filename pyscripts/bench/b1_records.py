@@ -11,7 +11,6 @@ copied beside the records: it says what specimen they are of, and its size.
     /usr/bin/python3 pyscripts/bench/b1_records.py docs/data/clump-recipes/state21-recipe-s1 \
         --out docs/data/b1-clump2-1000-s1
 """
-import argparse
 import json
 import os
 import shutil
@@ -23,6 +22,8 @@ if HERE not in sys.path:
 import _bench  # noqa: E402,F401  (it makes trueaniso and analysis importable)
 
 import numpy as np  # noqa: E402
+
+from trueaniso import cli  # noqa: E402
 
 STATES = ("1", "21")
 
@@ -64,11 +65,11 @@ def records(study):
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("study", help="a run_states.py study with the statics.json of clump_recipe_variants.py --study")
     p.add_argument("--out", required=True, help="directory for statics_state-1.json, statics_state-21.json "
                                                 "and the study's metadata.json")
-    o = p.parse_args(argv)
+    o = cli.parse(p, argv)
     from trueaniso import atomic, validate
     recs = records(o.study)
     os.makedirs(o.out, exist_ok=True)
@@ -81,4 +82,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    cli.guarded(main)
