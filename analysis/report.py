@@ -634,6 +634,7 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
             sl = slopes[name]
             lines.append("| d%s/dZm | %.1f | %.1f | %.1f | %s |" % (name, sl["paper"], sl["ours"], sl["ours_line"],
                                                                    _fmt(sl["ratio"], "%.2f")))
+        lines += _slopes_undetermined(fits, zm)
         lines += ["", "![Fig. 3](%s) ![Fig. 11](%s)" % (figs["f3"], figs["f11"]), "",
                   "The coefficients of a quadratic over a narrow Zm range are ill-conditioned (large, of "
                   "alternating sign, in the paper too); the value at the reference Zm is the comparable number"
@@ -735,6 +736,21 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     if getattr(rows, "note", None):
         log("note: %s" % rows.note)
     return path, numbers
+
+
+# Below this R^2 a quadratic leaves more than a tenth of K's or G's variation over the states
+# unexplained: its slope is then set by the scatter, not by a trend in Zm.
+SLOPE_R2_FLOOR = 0.9
+
+
+def _slopes_undetermined(fits, zm):
+    """A sentence under the slope table when a fit is too weak for its slope to mean anything."""
+    r2 = {name: fits[name][3] for name in ("K", "G")}
+    if min(r2.values()) >= SLOPE_R2_FLOOR:
+        return []
+    return ["", "Over a Zm range of %.3f the quadratics explain R^2 = %.2f of K's and %.2f of G's variation (below "
+            "%.1f): these slopes are undetermined by our states, not a departure from the paper's."
+            % (zm.max() - zm.min(), r2["K"], r2["G"], SLOPE_R2_FLOOR)]
 
 
 def _b1_cells(E):

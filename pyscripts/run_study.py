@@ -139,6 +139,13 @@ def check_recipe(o, log):
                    study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
     path = os.path.join(o.out, SPECIMEN)
     if not os.path.exists(path):
+        if meta is not None and meta.get("fingerprint", {}).get("recipe") is None:
+            # A run_states.py study keeps its specimen where the user had it, not in the directory.
+            raise study_dir.StudyMismatch(
+                "%s holds a study of run_states.py (from the specimen %s), which run_study.py does not continue: "
+                "rerun it with run_states.py --specimen SPECIMEN --out %s, or %s"
+                % (o.out, meta.get("specimen", {}).get("path", "?"), o.out,
+                   study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
         if meta is not None:
             raise study_dir.StudyMismatch("%s holds a study whose %s is missing; %s" % (
                 o.out, SPECIMEN, study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))

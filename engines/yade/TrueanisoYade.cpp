@@ -400,20 +400,7 @@ REGISTER_SERIALIZABLE(TrueTriaxialServo);
 // scene's probe does itself done here on YADE's scene.
 
 class StressProbe : public GlobalEngine {
-  struct ContactSnap {
-    Vector3r normalForce, shearForce, prevNormal, rollingMoment, geomNormal;
-    Real mu, delta;
-    bool loaded;
-  };
-  struct BodySnap {
-    Vector3r pos, vel, angVel;
-    Quaternionr ori;
-    unsigned blocked;
-  };
   std::unique_ptr<ta::StressProbe> k_;
-  std::vector<BodySnap> bodies_;
-  std::map<std::pair<Body::id_t, Body::id_t>, ContactSnap> contacts_;
-  Matrix3r hSize_, trsf_, prevHSize_;
 
   static int axisIndex(const std::string& a) {
     static const char* names[6] = {"x", "y", "z", "yz", "xz", "xy"};
@@ -422,59 +409,74 @@ class StressProbe : public GlobalEngine {
     throw std::invalid_argument("StressProbe.axis must be one of x, y, z, yz, xz, xy (got '" + a + "')");
   }
 
+  // The held state lives in (hidden) attributes, so that O.save mid-probe keeps it: a probe loaded
+  // mid-probe puts it back and probes again from it, as if never interrupted.
   void snapshot() {
-    bodies_.clear();
-    for (const auto& b : *scene->bodies) {
-      if (!b) { bodies_.push_back(BodySnap{}); continue; }
-      const State& s = *b->state;
-      bodies_.push_back(BodySnap{s.pos, s.vel, s.angVel, s.ori, s.blockedDOFs});
+    const std::size_t nb = scene->bodies->size();
+    heldPos.assign(nb, Vector3r::Zero()); heldVel.assign(nb, Vector3r::Zero());
+    heldAngVel.assign(nb, Vector3r::Zero()); heldOri.assign(nb, Quaternionr::Identity());
+    heldBlocked.assign(nb, 0);
+    for (std::size_t i = 0; i < nb; ++i) {
+      const auto& b = (*scene->bodies)[i];
+      if (!b) continue;
+      const State& st = *b->state;
+      heldPos[i] = st.pos; heldVel[i] = st.vel; heldAngVel[i] = st.angVel; heldOri[i] = st.ori;
+      heldBlocked[i] = static_cast<int>(st.blockedDOFs);
     }
-    contacts_.clear();
+    heldId1.clear(); heldId2.clear(); heldNormalForce.clear(); heldShearForce.clear(); heldPrevNormal.clear();
+    heldRollingMoment.clear(); heldGeomNormal.clear(); heldMu.clear(); heldDelta.clear(); heldLoaded.clear();
     for (const auto& I : *scene->interactions) {
       if (!I->isReal()) continue;
       auto* g = dynamic_cast<ScGeom*>(I->geom.get());
       auto* p = dynamic_cast<FrictPhys*>(I->phys.get());
       if (!g || !p) continue;
-      ContactSnap c{p->normalForce, p->shearForce, Vector3r::Zero(), Vector3r::Zero(), g->normal,
-                    p->tangensOfFrictionAngle, g->penetrationDepth, false};
-      if (auto* sp = dynamic_cast<SimplifiedMindlinPhys*>(p)) {
-        c.prevNormal = sp->prevNormal;
-        c.rollingMoment = sp->rollingMoment;
-        c.loaded = sp->loaded;
-      }
-      contacts_[{I->getId1(), I->getId2()}] = c;
+      auto* sp = dynamic_cast<SimplifiedMindlinPhys*>(p);
+      heldId1.push_back(I->getId1()); heldId2.push_back(I->getId2());
+      heldNormalForce.push_back(p->normalForce); heldShearForce.push_back(p->shearForce);
+      heldPrevNormal.push_back(sp ? sp->prevNormal : Vector3r::Zero());
+      heldRollingMoment.push_back(sp ? sp->rollingMoment : Vector3r::Zero());
+      heldGeomNormal.push_back(g->normal);
+      heldMu.push_back(p->tangensOfFrictionAngle); heldDelta.push_back(g->penetrationDepth);
+      heldLoaded.push_back(sp && sp->loaded ? 1 : 0);
     }
-    hSize_ = scene->cell->hSize;
-    trsf_ = scene->cell->trsf;
-    prevHSize_ = scene->cell->prevHSize;
+    heldHSize = scene->cell->hSize;
+    heldTrsf = scene->cell->trsf;
+    heldPrevHSize = scene->cell->prevHSize;
+  }
+
+  void clearHeld() {
+    for (auto* v : {&heldPos, &heldVel, &heldAngVel, &heldNormalForce, &heldShearForce, &heldPrevNormal,
+                    &heldRollingMoment, &heldGeomNormal})
+      v->clear();
+    for (auto* v : {&heldBlocked, &heldId1, &heldId2, &heldLoaded}) v->clear();
+    heldOri.clear(); heldMu.clear(); heldDelta.clear();
   }
 
   void restore() {
-    for (std::size_t i = 0; i < bodies_.size() && i < scene->bodies->size(); ++i) {
+    for (std::size_t i = 0; i < heldPos.size() && i < scene->bodies->size(); ++i) {
       const auto& b = (*scene->bodies)[i];
       if (!b) continue;
-      State& s = *b->state;
-      const BodySnap& v = bodies_[i];
-      s.pos = v.pos; s.vel = v.vel; s.angVel = v.angVel; s.ori = v.ori; s.blockedDOFs = v.blocked;
+      State& st = *b->state;
+      st.pos = heldPos[i]; st.vel = heldVel[i]; st.angVel = heldAngVel[i]; st.ori = heldOri[i];
+      st.blockedDOFs = static_cast<unsigned>(heldBlocked[i]);
     }
     lostContacts = 0;
-    for (const auto& kv : contacts_) {
-      const shared_ptr<Interaction> I = scene->interactions->find(kv.first.first, kv.first.second);
+    for (std::size_t c = 0; c < heldId1.size(); ++c) {
+      const shared_ptr<Interaction> I = scene->interactions->find(heldId1[c], heldId2[c]);
       if (!I || !I->isReal()) { ++lostContacts; continue; }
       auto* g = dynamic_cast<ScGeom*>(I->geom.get());
       auto* p = dynamic_cast<FrictPhys*>(I->phys.get());
       if (!g || !p) { ++lostContacts; continue; }
-      const ContactSnap& c = kv.second;
-      p->normalForce = c.normalForce; p->shearForce = c.shearForce; p->tangensOfFrictionAngle = c.mu;
-      g->normal = c.geomNormal; g->penetrationDepth = c.delta;
+      p->normalForce = heldNormalForce[c]; p->shearForce = heldShearForce[c]; p->tangensOfFrictionAngle = heldMu[c];
+      g->normal = heldGeomNormal[c]; g->penetrationDepth = heldDelta[c];
       if (auto* sp = dynamic_cast<SimplifiedMindlinPhys*>(p)) {
-        sp->prevNormal = c.prevNormal; sp->rollingMoment = c.rollingMoment; sp->loaded = c.loaded;
+        sp->prevNormal = heldPrevNormal[c]; sp->rollingMoment = heldRollingMoment[c]; sp->loaded = heldLoaded[c] != 0;
       }
     }
     Cell& cell = *scene->cell;
-    cell.hSize = hSize_;
-    cell.trsf = trsf_;
-    cell.prevHSize = prevHSize_;
+    cell.hSize = heldHSize;
+    cell.trsf = heldTrsf;
+    cell.prevHSize = heldPrevHSize;
     cell.setVelGrad(Matrix3r::Zero());
     cell.velGrad = cell.prevVelGrad = Matrix3r::Zero();
     cell.integrateAndUpdate(0);
@@ -484,6 +486,7 @@ class StressProbe : public GlobalEngine {
   void action() override {
     if (!scene->isPeriodic) throw std::runtime_error("StressProbe needs a periodic cell (O.periodic=True)");
     if (finished) return;
+    if (!k_ && stage >= 1 && stage <= 3 && !heldPos.empty()) restore();  // loaded mid-probe: from the held state
     if (!k_) {
       k_.reset(new ta::StressProbe());
       ta::StressProbe& k = *k_;
@@ -531,6 +534,7 @@ class StressProbe : public GlobalEngine {
       }
       if (restoreState) restore();
       else scene->cell->setVelGrad(Matrix3r::Zero());
+      clearHeld();  // a scene saved after the probe need not carry it
       finished = true;
       k_.reset();
       if (pauseWhenDone) stopNextStep(scene);
@@ -546,7 +550,7 @@ class StressProbe : public GlobalEngine {
     "Eq. (12) reaches gammaTarget, holds to equilibrium; then E (Eq. 10) and nu (Eq. 11), or G for a shear axis, "
     "and the scene is put back as it was (positions, velocities, cell, contact forces, friction). Put it after "
     "InteractionLoop and before NewtonIntegrator, alone on the cell (no servo active). A scene saved mid-probe "
-    "restarts the probe when loaded.",
+    "keeps the held state: loaded, the probe puts it back and probes again from it.",
     ((string, axis, "z", , "x, y, z (E, nu) or yz, xz, xy (G)"))
     ((int, sign, 1, , "+1 loads (compression or positive shear), -1 unloads"))
     ((Real, gammaTarget, 1e-6, , "strain at which the ramp stops: gamma of Eq. (12), or the shear strain"))
@@ -574,12 +578,31 @@ class StressProbe : public GlobalEngine {
     ((long, steps, 0, Attr::readonly, "steps of the probe"))
     ((long, lostContacts, 0, Attr::readonly, "contacts of the snapshot that no longer existed at the restore"))
     ((string, message, "", Attr::readonly, "why the probe failed"))
-    ((Matrix3r, hSize0, Matrix3r::Identity(), Attr::readonly, "the cell when the probe started")),
+    ((Matrix3r, hSize0, Matrix3r::Identity(), Attr::readonly, "the cell when the probe started"))
+    ((vector<Vector3r>, heldPos, , Attr::hidden, "held state: body positions"))
+    ((vector<Vector3r>, heldVel, , Attr::hidden, "held state: body velocities"))
+    ((vector<Vector3r>, heldAngVel, , Attr::hidden, "held state: body angular velocities"))
+    ((vector<Quaternionr>, heldOri, , Attr::hidden, "held state: body orientations"))
+    ((vector<int>, heldBlocked, , Attr::hidden, "held state: blockedDOFs"))
+    ((vector<int>, heldId1, , Attr::hidden, "held state: first body of each contact"))
+    ((vector<int>, heldId2, , Attr::hidden, "held state: second body of each contact"))
+    ((vector<Vector3r>, heldNormalForce, , Attr::hidden, "held state: normal forces"))
+    ((vector<Vector3r>, heldShearForce, , Attr::hidden, "held state: shear forces"))
+    ((vector<Vector3r>, heldPrevNormal, , Attr::hidden, "held state: SimplifiedMindlinPhys.prevNormal"))
+    ((vector<Vector3r>, heldRollingMoment, , Attr::hidden, "held state: SimplifiedMindlinPhys.rollingMoment"))
+    ((vector<Vector3r>, heldGeomNormal, , Attr::hidden, "held state: ScGeom.normal"))
+    ((vector<Real>, heldMu, , Attr::hidden, "held state: tan of the friction angle of each contact"))
+    ((vector<Real>, heldDelta, , Attr::hidden, "held state: ScGeom.penetrationDepth"))
+    ((vector<int>, heldLoaded, , Attr::hidden, "held state: SimplifiedMindlinPhys.loaded"))
+    ((Matrix3r, heldHSize, Matrix3r::Identity(), Attr::hidden, "held state: cell hSize"))
+    ((Matrix3r, heldTrsf, Matrix3r::Identity(), Attr::hidden, "held state: cell trsf"))
+    ((Matrix3r, heldPrevHSize, Matrix3r::Identity(), Attr::hidden, "held state: cell prevHSize")),
     ,
     .def("reset", &StressProbe::resetPy, "forget the results and probe again at the next step")
   );
   // clang-format on
   void resetPy() {
+    clearHeld();
     finished = false;
     k_.reset();
     E = G = kNaN;

@@ -155,32 +155,38 @@ def resolve_time_step(o):
     return o.time_step
 
 
+def _continue_held(o, option, held, default, says):
+    """Sets the unset --OPTION of a study run: the value the study --out holds (a rerun continues
+    it instead of being refused for a value the user never chose, as --threads), else the default.
+    Says so when the held value is not the default, since the user did not ask for it."""
+    value = default if held is None else held
+    setattr(o, option, value)
+    if held is not None and held != default:
+        print("%s: --%s not given: %s, so this run does too" % (o.out, option.replace("_", "-"), says % held),
+              flush=True)
+    return value
+
+
 def resolve_study_time_step(o):
-    """--time-step of a study when not given: the rule of the study --out holds (a rerun continues
-    it, as --path-rate), else the default. Says which."""
+    """--time-step of a study when not given: the rule of the study --out holds, else the default."""
     from . import study_dir
-    if o.time_step is None:
-        held = None if getattr(o, "force_new", False) else study_dir.state_option_of(o.out, "time_step")
-        o.time_step = held if held in ("smallest-inertia", "per-axis") else DEFAULT_TIME_STEP
-        if held is not None and held != DEFAULT_TIME_STEP:
-            print("%s: --time-step not given: its study reached its states with the %s rule, so this run does too"
-                  % (o.out, held), flush=True)
-    return o.time_step
+    if o.time_step is not None:
+        return o.time_step
+    held = None if getattr(o, "force_new", False) else study_dir.state_option_of(o.out, "time_step")
+    held = held if held in ("smallest-inertia", "per-axis") else None
+    return _continue_held(o, "time_step", held, DEFAULT_TIME_STEP,
+                          "its study reached its states with the %s rule")
 
 
 def resolve_path_rate(o):
-    """--path-rate when not given: the rate of the study --out holds (a rerun continues it instead
-    of being refused for a rate the user never chose, as --threads), else the default. Says which."""
+    """--path-rate when not given: the rate of the study --out holds, else the default."""
     import inspect
     from . import study_dir, triaxial
-    if o.path_rate is None:
-        default = inspect.signature(triaxial.reach_state).parameters["path_rate"].default  # one home: the servo's
-        held = None if getattr(o, "force_new", False) else study_dir.path_rate_of(o.out)
-        o.path_rate = default if held is None else held
-        if held is not None and held != default:
-            print("%s: --path-rate not given: its study reached its states at %g Pa per step, so this run does too"
-                  % (o.out, held), flush=True)
-    return o.path_rate
+    if o.path_rate is not None:
+        return o.path_rate
+    default = inspect.signature(triaxial.reach_state).parameters["path_rate"].default  # one home: the servo's
+    held = None if getattr(o, "force_new", False) else study_dir.path_rate_of(o.out)
+    return _continue_held(o, "path_rate", held, default, "its study reached its states at %g Pa per step")
 
 
 def description(doc):

@@ -80,3 +80,20 @@ TEST(CoordinationGap, RefusesBadTolerance) {
   EXPECT_THROW(coordinationWithinGap(*s, 0.05), InputError);
   EXPECT_NO_THROW(coordinationWithinGap(*s, 0.049));
 }
+
+// Eq. (14) can fall when near-contacts are counted: a particle with one contact (excluded, only
+// its contact's other end counted) that gains a second enters the mechanical set with 2 contacts,
+// below a mean near 6. Counts of 100 particles, 290 contacts, 4 with one contact: Zm = 576/96 =
+// 6.0; one of the four gains a near-contact: (582 - 3)/97 = 5.969, lower.
+TEST(CoordinationGap, ParticleJoiningWithTwoContactsLowersZm) {
+  Coordination touching;
+  touching.particles = 100;
+  touching.contacts = 290;
+  touching.oneContact = 4;
+  Coordination withGap = touching;
+  withGap.contacts = 291;
+  withGap.oneContact = 3;
+  EXPECT_DOUBLE_EQ(touching.mechanical(), 6.0);
+  EXPECT_DOUBLE_EQ(withGap.mechanical(), 579.0 / 97.0);
+  EXPECT_LT(withGap.mechanical(), touching.mechanical());
+}

@@ -527,6 +527,19 @@ def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path, text_only):
     assert "**The fit stops at a bound: a failure of the model, not noise.**" in text
     assert "with slopes 0.821, 0.820, 0.793 on them" in text
     assert "is negative in 37 of 37 states (median -0.27)" in text
+    # Its Table 2 quadratics explain R^2 0.24 (K) and 0.59 (G) over a Zm range of 0.121: the
+    # slopes are said to be undetermined there, rather than compared as a factor against the paper's.
+    assert ("Over a Zm range of 0.121 the quadratics explain R^2 = 0.24 of K's and 0.59 of G's variation "
+            "(below 0.9): these slopes are undetermined by our states") in text
+
+
+def test_slopes_are_said_undetermined_only_below_the_r2_floor():
+    zm = np.array([5.0, 5.1, 5.3])
+    strong = dict(K=(1.0, 2.0, 3.0, 0.95), G=(1.0, 2.0, 3.0, 0.999))
+    assert report._slopes_undetermined(strong, zm) == []
+    weak = dict(K=(1.0, 2.0, 3.0, 0.95), G=(1.0, 2.0, 3.0, 0.899))
+    blank, line = report._slopes_undetermined(weak, zm)
+    assert blank == "" and "Zm range of 0.300" in line and "R^2 = 0.95 of K's and 0.90 of G's" in line
 
 
 def test_sphere_and_spheres_name_one_assembly(small_table, tmp_path):

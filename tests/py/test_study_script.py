@@ -11,6 +11,8 @@ import sys
 import numpy as np
 import pytest
 
+from conftest import one_line_error
+
 from trueaniso import specimen_file, study
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -182,3 +184,14 @@ def test_metadata_stays_standard_json_with_an_infinite_path_rate(small_specimen,
     meta = json.loads((out / "metadata.json").read_text(), parse_constant=strict)
     assert meta["fingerprint"]["state"]["path_rate"] == "inf"
     assert "no state to run" in proc.stdout
+
+
+def test_run_study_on_a_study_of_run_states_says_whose_it_is(finished, small_specimen, tmp_path):
+    """run_study.py pointed at a run_states.py study names the script that continues it and its
+    specimen, instead of calling the specimen file (which such a study never held) missing."""
+    out = tmp_path / "W"
+    shutil.copytree(finished, out)
+    before = sorted(p.name for p in out.iterdir())
+    proc = run("--n", "150", "--seed", "6", "--out", str(out), script=os.path.join(REPO, "pyscripts", "run_study.py"))
+    one_line_error(proc, "a study of run_states.py", str(small_specimen), "run_states.py --specimen")
+    assert sorted(p.name for p in out.iterdir()) == before
