@@ -503,11 +503,12 @@ def study_assembly(results):
 
 
 def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, log=print, fig16=None,
-          clumps=None, statics=False):
+          clumps=None, statics=False, b1_data=None):
     """Write report.md and its PNGs; returns the report's path and the numbers it shows. `fig16`:
     a cross-anisotropic study (or its JSON) for the Fig. 16 section; `clumps`: the JSON of
     anisotropy_clumps.py for the clump section; `statics`: solve Table B1's states from the
-    study's checkpoints first (solve_statics)."""
+    study's checkpoints first (solve_statics); `b1_data`: directories of statics records of other
+    studies, whose state 21 Table B1 shows where the study has none (table_b1)."""
     csv_path = table_path(results)
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     # A study's probes.csv given as the file: its directory's metadata (assembly, material, the
@@ -534,6 +535,13 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     # Inputs of the optional sections are read and checked before anything is written.
     f16_rows = fig16_rows(fig16) if fig16 else None
     clump_rows = clump_entries(clumps) if clumps else None
+    b1_data = [b1_data] if isinstance(b1_data, str) else list(b1_data or ())
+    for d in b1_data:
+        if "21" not in b1_records(d):
+            raise ResultsError("%s: no statics record of state 21 (statics_state-21.json) for Table B1" % d)
+        if study_assembly(d) != assembly:
+            raise ResultsError("%s is of %s, not %s: Table B1 compares one assembly with the paper's"
+                               % (d, study_assembly(d) or "no recorded assembly", assembly))
     if statics:
         solve_statics(results, log=log)
     material, where = _material(results)
@@ -705,7 +713,7 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                             E_rel_rmse={l: p["E_rel_rmse"] for l, p in preds}, m=exp["m"] if exp else None,
                             m_vertical=exp_v["m"] if exp_v else None, r2_vertical=exp_v["r2"] if exp_v else None,
                             zeta_spearman=rho)
-    lines += table_b1(results, paper, own_size)
+    lines += table_b1(results, paper, own_size, b1_data)
     if not fig16:
         lines += ["## Fig. 16: one anisotropy in G, E and nu", "",
                   "The paper's Fig. 16 covers spheres (16a) and clump2 (16b) only." if assembly == "clump1" else
@@ -751,45 +759,97 @@ def _b1_cells(E):
     return tuple("%.1f (%.3f)" % (e, a) for e, a in zip(E, a2))
 
 
-def table_b1(results, paper, own_size=None):
+def b1_records(directory):
+    """{"isotropic": record, "21": record} of the statics records a study directory keeps
+    (trueaniso.statics.cached_record: run_study.py writes them, `--statics` solves them from the
+    checkpoints), each checked; empty for a bare table."""
+    from trueaniso import statics
+    found = {}
+    if os.path.isdir(directory):
+        for label, candidates in (("isotropic", (None, "1")), ("21", ("21",))):
+            path = next((statics.state_file(directory, c) for c in candidates
+                         if os.path.exists(statics.state_file(directory, c))), None)
+            if path:
+                found[label] = validate.load_json(path, "statics_record", ResultsError)
+    return found
+
+
+def _b1_rows(label, st, paper, where="", with_paper=True):
+    """Table B1's rows of one state: the paper's (unless `with_paper` is off), then ours, the state
+    named with `where` (the size of a study other than the report's)."""
+    pred, dem = np.array(st["E_kinematic"]) / 1e6, np.array(st["E_blocked"]) / 1e6
+    p = paper["B1"][label]
+    name = ("isotropic" if label == "isotropic" else "21 (b = 0.5, sigma_z = 140 kPa)") + where
+    gap = lambda a, b: float(np.max(np.abs(hyperelastic.fabric_a2(a) - hyperelastic.fabric_a2(b))))  # noqa: E731
+    out = ["| %s | paper predicted (zeta = 1) | %s | %s | %s | %.3f | %.3f |"
+           % (name, *_b1_cells(p["pred"]), np.mean(p["pred"]) / np.mean(p["dem"]), gap(p["pred"], p["dem"])),
+           "| | paper DEM | %s | %s | %s | | |" % _b1_cells(p["dem"])] if with_paper else ["| %s | | | | | | |" % name]
+    out += ["| | ours predicted (zeta = 1) | %s | %s | %s | %.3f | %.3f |"
+            % (*_b1_cells(pred), pred.mean() / dem.mean(), gap(pred, dem)),
+            "| | ours static solve, rotations blocked | %s | %s | %s | | |" % _b1_cells(dem)]
+    if "sigma" in st:
+        out.append("| | ours sigma_x, sigma_y, sigma_z (kPa) | %.1f | %.1f | %.1f | | |" % tuple(x / 1e3 for x in st["sigma"]))
+    return out
+
+
+def _b1_ratios(found, paper, size):
+    """The sentence of E_i at state 21 over E_i at the isotropic state, rotations blocked, ours (of
+    one specimen, named by `size`) beside the paper's."""
+    ours = np.array(found["21"]["E_blocked"]) / np.array(found["isotropic"]["E_blocked"])
+    theirs = np.array(paper["B1"]["21"]["dem"]) / np.array(paper["B1"]["isotropic"]["dem"])
+    return ("E_i at state 21 / E_i at the isotropic state, rotations blocked (E_x, E_y, E_z): ours %s%s, the "
+            "paper's %s." % (", ".join("%.3f" % r for r in ours), " (%s)" % size if size else "",
+                             ", ".join("%.3f" % r for r in theirs)))
+
+
+def table_b1(results, paper, own_size=None, others=()):
     """Appendix B / Table B1 at the isotropic state and at state 21: the exact static solve with
     rotations blocked (what a restrained probe measures) against the unmodified (zeta = 1)
-    kinematic prediction, from the study's statics records (trueaniso.statics.cached_record:
-    run_study.py writes them, `--statics` solves them from the checkpoints). Each E_i with its
-    a_i^2 (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i."""
-    from trueaniso import statics
+    kinematic prediction, from the study's statics records (b1_records). Each E_i with its a_i^2
+    (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i. `others`: directories
+    of other studies (another size, or another specimen) whose records stand for state 21 where
+    the study has none, each shown with its own isotropic state (a ratio between states holds
+    within one specimen)."""
     out = ["## Table B1: rotations restrained, E_i (MPa) and a_i^2", ""]
-    found = []
-    if os.path.isdir(results):
-        for label, candidates in (("isotropic", (None, "1")), ("21", ("21",))):
-            path = next((statics.state_file(results, c) for c in candidates
-                         if os.path.exists(statics.state_file(results, c))), None)
-            if path:
-                found.append((label, validate.load_json(path, "statics_record", ResultsError)))
-    if not found:
+    found = b1_records(results) if os.path.isdir(results) else {}
+    others = [others] if isinstance(others, str) else list(others or ())
+    borrowed = [(d, b1_records(d)) for d in others] if "21" not in found else []
+    borrowed = [(d, recs) for d, recs in borrowed if recs]
+    if not found and not borrowed:
         return out + ["Not in this study (run_study.py writes the statics records; `python3 -m analysis.report "
                       "DIR --statics` solves them from the state checkpoints).", ""]
-    out += ["From this study's statics records%s. a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (Eq. 25) of each row; the "
-            "paper prints its a_i^2 to two decimals, here computed from its printed E_i." %
-            (" (%s)" % own_size if own_size else ""), "",
+    said = ["From this study's statics records%s." % (" (%s)" % own_size if own_size else "")] if found else \
+        ["Not in this study's statics records."]
+    sizes = []
+    for d, _ in borrowed:
+        size = study_size(d)
+        note = _other_size(size, own_size)
+        if size is not None and size == own_size:  # a specimen of the report's size, but not its own
+            size, note = "another specimen of %s" % size, " It is not this report's specimen."
+        sizes.append(size)
+        summary = ((read_metadata(d) or {}).get("specimen") or {}).get("summary") or {}
+        state = ": e %.4f, Zm %.3f as prepared" % (summary["void_ratio"], summary["Zm"]) \
+            if "void_ratio" in summary and "Zm" in summary else ""
+        said.append("%s `%s`%s, beside that specimen's own isotropic state%s.%s" % (
+            "This study has no record of state 21: it comes from" if len(sizes) == 1 else "State 21 also from", d,
+            " (%s%s)" % (size or "size not recorded", state), " (a ratio between states holds within one specimen "
+                                                                 "only)" if len(sizes) == 1 else "", note))
+    out += [" ".join(said) + " a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (Eq. 25) of each row; the paper prints its "
+            "a_i^2 to two decimals, here computed from its printed E_i.", "",
             "| state | | E_x (a_x^2) | E_y (a_y^2) | E_z (a_z^2) | predicted / DEM, mean E_i | largest \\|a_i^2 "
             "predicted - DEM\\| |", "|---|---|---|---|---|---|---|"]
-    have = {label for label, _ in found}
-    for label, st in found:
-        pred, dem = np.array(st["E_kinematic"]) / 1e6, np.array(st["E_blocked"]) / 1e6
-        p = paper["B1"][label]
-        name = "isotropic" if label == "isotropic" else "21 (b = 0.5, sigma_z = 140 kPa)"
-        gap = lambda a, b: float(np.max(np.abs(hyperelastic.fabric_a2(a) - hyperelastic.fabric_a2(b))))  # noqa: E731
-        out += ["| %s | paper predicted (zeta = 1) | %s | %s | %s | %.3f | %.3f |"
-                % (name, *_b1_cells(p["pred"]), np.mean(p["pred"]) / np.mean(p["dem"]), gap(p["pred"], p["dem"])),
-                "| | paper DEM | %s | %s | %s | | |" % _b1_cells(p["dem"]),
-                "| | ours predicted (zeta = 1) | %s | %s | %s | %.3f | %.3f |"
-                % (*_b1_cells(pred), pred.mean() / dem.mean(), gap(pred, dem)),
-                "| | ours static solve, rotations blocked | %s | %s | %s | | |" % _b1_cells(dem)]
-        if "sigma" in st:
-            out.append("| | ours sigma_x, sigma_y, sigma_z (kPa) | %.1f | %.1f | %.1f | | |"
-                       % tuple(x / 1e3 for x in st["sigma"]))
-    if "21" not in have:
+    shown = set(found)
+    for label, st in found.items():
+        out += _b1_rows(label, st, paper)
+    for (_, recs), size in zip(borrowed, sizes):
+        for label, st in recs.items():
+            out += _b1_rows(label, st, paper, ", %s" % size if size else "", with_paper=label not in shown)
+            shown.add(label)
+    ratios = [_b1_ratios(f, paper, s) for f, s in [(found, own_size)] + [(r, s) for (_, r), s in zip(borrowed, sizes)]
+              if len(f) == 2]
+    for line in ratios:
+        out += ["", line]
+    if "21" not in shown:
         out += ["", "State 21: no statics record in this study (no checkpoint of state 21 was kept, or the state "
                 "was not solved); docs/departures.md says why where it is known."]
     return out + [""]
@@ -845,6 +905,10 @@ def main(argv=None):
     p.add_argument("--statics", action="store_true",
                    help="solve the static stiffness of the isotropic state and of state 21 from the study's "
                         "checkpoints (states/1.npz, states/21.npz) where no record exists yet (Table B1)")
+    p.add_argument("--b1-data", metavar="DIR", action="append",
+                   help="a directory of statics records (statics_state-1.json, statics_state-21.json) and the "
+                        "metadata.json of another study, e.g. of another size: Table B1 shows its state 21, "
+                        "beside its own isotropic state, where the study has no record of state 21 (repeatable)")
     o = p.parse_args(argv)
     if o.assembly is not None and o.assembly not in chain.PAPER:
         sys.stderr.write("error: --assembly %s: the paper's assemblies are %s\n"
@@ -861,7 +925,7 @@ def main(argv=None):
     try:
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,
                         log=lambda m: sys.stderr.write(m + "\n"), fig16=o.fig16, clumps=o.clumps,
-                        statics=o.statics)
+                        statics=o.statics, b1_data=o.b1_data)
     except (ResultsError, OSError, ValueError, RuntimeError) as exc:
         sys.stderr.write("error: %s\n" % said(exc))
         sys.exit(2)

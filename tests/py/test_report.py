@@ -237,6 +237,104 @@ def test_table_b1_at_the_isotropic_state_and_state_21(specimen_100, tmp_path):
     assert "Study: 100 spheres (seed 3)" in (tmp_path / "rep2" / "report.md").read_text()  # the study line, from the table alone
 
 
+B1_OTHER = os.path.join(REPO, "docs", "data", "b1-clump2-1000-s1")
+
+
+def test_table_b1_takes_state_21_from_a_study_of_another_size(tmp_path):
+    """The 4000-clump clump2 study keeps no record of state 21: --b1-data's 1000-clump records
+    stand for it, named by their size, beside that specimen's own isotropic state, with the ratios
+    state 21 / isotropic of that specimen and of the paper. Expected values from the recipe study's
+    own statics.json (clump_recipe_variants.py --study) and from the paper's printed Table B1."""
+    study = os.path.join(REPO, "docs", "data", "clump2-4000-s1")
+    paper = chain.PAPER["clump2"]
+    with open(os.path.join(REPO, "docs", "data", "clump-recipes", "state21-recipe-s1", "statics.json")) as f:
+        measured = json.load(f)
+    text = "\n".join(report.table_b1(study, paper, "4000 clump2 clumps", B1_OTHER))
+    assert "These are 1000 clump2 clumps, not this report's 4000 clump2 clumps." in text
+    assert "(1000 clump2 clumps: e 0.6479, Zm 5.532 as prepared)" in text  # the specimen's, docs/clumps.md 5b
+    assert "| isotropic, 1000 clump2 clumps | | | | | | |" in text
+    blocked = ["| | ours static solve, rotations blocked | %s | %s | %s | | |"
+               % report._b1_cells(np.array(measured[s]["E_restrained"]) / 1e6) for s in ("1", "21")]
+    state21 = text.index("| 21 (b = 0.5, sigma_z = 140 kPa), 1000 clump2 clumps | paper predicted (zeta = 1) | "
+                         "488.5 (1.034) | 441.6 (0.983) | 442.1 (0.984) |")
+    assert text.index("| isotropic, 1000 clump2 clumps") < text.index(blocked[0]) < state21 < text.index(blocked[1])
+    assert "| 306.7 (1.034) | 235.8 (0.907) | 326.4 (1.067) |" in blocked[1]  # E_i and Eq. 25 of them
+    ratios = ", ".join("%.3f" % r for r in measured["ratio_restrained"])
+    assert ratios == "0.855, 0.657, 1.064"
+    # the paper: 399.9/405.1, 356.6/405.1, 371.2/346.2
+    assert "ours %s (1000 clump2 clumps), the paper's 0.987, 0.880, 1.072." % ratios in text
+    assert "no statics record" not in text
+    # The study's own isotropic row is still its own, once, with the paper's beside it.
+    assert text.count("| isotropic | paper predicted (zeta = 1) |") == 1
+    assert "| | ours static solve, rotations blocked | 309.3 (1.019) | 313.5 (1.026) | 272.0 (0.956) | | |" in text
+
+
+def test_table_b1_says_when_no_study_has_state_21(tmp_path):
+    """Without --b1-data the clump2 study says it has no record of state 21; a study with its own
+    state 21 shows its own, not the other study's, with its own ratios."""
+    paper = chain.PAPER["clump2"]
+    study = os.path.join(REPO, "docs", "data", "clump2-4000-s1")
+    text = "\n".join(report.table_b1(study, paper, "4000 clump2 clumps"))
+    assert "State 21: no statics record in this study" in text and "1000 clump2" not in text
+    assert "| 21 (b = 0.5" not in text and "E_i at state 21 / E_i at the isotropic state" not in text
+    own = tmp_path / "own"
+    shutil.copytree(B1_OTHER, own)
+    text = "\n".join(report.table_b1(str(own), paper, "1000 clump2 clumps", study))
+    assert "| 21 (b = 0.5, sigma_z = 140 kPa) | paper predicted" in text and "This study has no record" not in text
+    assert "ours 0.855, 0.657, 1.064 (1000 clump2 clumps)" in text and "not this report's" not in text
+    # Records of another specimen of the report's own size are named as such, not as its own.
+    text = "\n".join(report.table_b1(study, paper, "1000 clump2 clumps", B1_OTHER))
+    assert "| 21 (b = 0.5, sigma_z = 140 kPa), another specimen of 1000 clump2 clumps | paper predicted" in text
+    assert "It is not this report's specimen." in text and "| isotropic, another specimen of 1000 clump2" in text
+    # Two other studies: each named by its size with its own ratios; the paper's rows once.
+    second = tmp_path / "second"
+    shutil.copytree(B1_OTHER, second)
+    meta = json.loads((second / "metadata.json").read_text())
+    meta["specimen"]["summary"]["n"] = 2000
+    (second / "metadata.json").write_text(json.dumps(meta))
+    assert report.study_size(str(second)) == "2000 clump2 clumps"
+    text = "\n".join(report.table_b1(study, paper, "4000 clump2 clumps", [B1_OTHER, str(second)]))
+    assert text.count("| paper predicted (zeta = 1) |") == 2  # isotropic and state 21
+    for size in ("1000", "2000"):
+        assert "| 21 (b = 0.5, sigma_z = 140 kPa), %s clump2 clumps |" % size in text
+        assert "ours 0.855, 0.657, 1.064 (%s clump2 clumps)" % size in text
+
+
+def test_b1_data_is_refused_before_anything_is_written(tmp_path):
+    """--b1-data without a record of state 21, or of another assembly: one line, no report."""
+    from conftest import one_line_error
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    no21 = tmp_path / "no21"
+    no21.mkdir()
+    shutil.copy(os.path.join(B1_OTHER, "statics_state-1.json"), no21)
+    for args, words in (([os.path.join(REPO, "docs", "data", "clump2-4000-s1"), "--b1-data", str(no21)],
+                         ("no statics record of state 21",)),
+                        ([os.path.join(REPO, "docs", "data", "clump1-4000-s1"), "--b1-data", B1_OTHER],
+                         ("is of clump2, not clump1",))):
+        proc = subprocess.run([sys.executable, "-m", "analysis.report", *args, "--out", str(tmp_path / "rep")],
+                              cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
+        one_line_error(proc, *words)
+        assert not (tmp_path / "rep").exists()
+
+
+def test_b1_records_of_a_recipe_study_are_the_committed_ones(tmp_path):
+    """b1_records.py converts clump_recipe_variants.py's statics.json: its kinematic prediction
+    (the probes row's fabric at the counted density) equals a study's own static-solve record
+    (affine stiffness, zeta = 1) to round-off (rtol 1e-12; they agree to 2e-15), and the committed
+    docs/data/b1-clump2-1000-s1 is what it writes from the committed recipe study."""
+    sys.path.insert(0, os.path.join(REPO, "pyscripts", "bench"))
+    import b1_records
+    study = os.path.join(REPO, "docs", "data", "clump2-4000-s1")
+    row = next(r for r in csv.DictReader(open(os.path.join(study, "probes.csv"))) if r["state"] == "1")
+    rec = json.load(open(os.path.join(study, "statics_state-1.json")))
+    material, _ = report._material(study)
+    assert np.allclose(b1_records.kinematic_moduli(row, material), rec["E_kinematic"], rtol=1e-12, atol=0)
+    b1_records.main([os.path.join(REPO, "docs", "data", "clump-recipes", "state21-recipe-s1"), "--out",
+                     str(tmp_path / "b1")])
+    for name in ("statics_state-1.json", "statics_state-21.json", "metadata.json"):
+        assert json.load(open(tmp_path / "b1" / name)) == json.load(open(os.path.join(B1_OTHER, name)))
+
+
 def test_fig16_section_from_the_committed_cross_anisotropic_data(small_table, tmp_path):
     """The Fig. 16 section: its rows are the JSON's ratios, its largest difference computed here."""
     src = os.path.join(REPO, "docs", "data", "fig16-spheres-1000.json")
