@@ -1,5 +1,6 @@
 """Sphere specimens: the consolidated state, the exact size distribution after the similarity
-rescale, file round trip, reproducibility, and the paper's e and Zm at N = 4000."""
+rescale, file round trip, reproducibility (within a build, and against the bits and numbers this
+build's recipe is documented with), and the paper's e and Zm at N = 4000."""
 import hashlib
 import os
 import subprocess
@@ -8,15 +9,26 @@ import sys
 import numpy as np
 import pytest
 
-from trueaniso import dem, engines, psd, specimen, specimen_file
+from trueaniso import buildarch, dem, engines, psd, specimen, specimen_file
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 @pytest.fixture(scope="module")
 def small():
-    scene, log = specimen.prepare_spheres(150, seed=4)
+    # One engine thread: the packing test_recipe_keeps_its_committed_bits compares is that of one.
+    threads = engines.threads()
+    engines.set_threads(1)
+    try:
+        scene, log = specimen.prepare_spheres(150, seed=4)
+    finally:
+        engines.set_threads(threads)
     return scene, log
+
+
+def _baseline_build():
+    if engines.build_arch() != buildarch.BASELINE:
+        pytest.skip("the pinned bits are the baseline build's; a %s build makes another packing" % engines.build_arch())
 
 
 def test_consolidated_state(small):
@@ -86,6 +98,40 @@ def _prepare_in_subprocess(tmp_path, name):
 
 def test_same_seed_one_thread_is_bit_identical(tmp_path):
     assert _prepare_in_subprocess(tmp_path, "a.npz") == _prepare_in_subprocess(tmp_path, "b.npz")
+
+
+def test_recipe_keeps_its_committed_bits(small):
+    """The default recipe on 150 spheres, seed 4, one thread, makes tests/data/spheres-150-s4.npz to
+    the last bit (e 0.6040, Zm 5.919, 86,000 + 4,000 steps). The preparation is chaotic: a change of
+    the last bit anywhere in its steps (a sum's order, a time step rule, a default) ends in another
+    packing, and every documented specimen (docs/specimens.md) then stops reproducing. A change
+    meant to move the packing regenerates the file (tests/data/README.md) and the documented numbers
+    with it; one not meant to fails here."""
+    _baseline_build()
+    scene, log = small
+    committed, meta = specimen_file.load(os.path.join(REPO, "tests", "data", "spheres-150-s4.npz"))
+    for name in ("positions", "radii", "cell", "orientations"):
+        np.testing.assert_array_equal(getattr(scene, name), getattr(committed, name), err_msg=name)
+    assert (log["steps_expansion"], log["steps_consolidation"]) == (86000, 4000)
+    assert (meta["parameters"]["steps_expansion"], meta["parameters"]["steps_consolidation"]) == (86000, 4000)
+    st = specimen.state(scene)
+    assert (round(st["void_ratio"], 4), round(st["Zm"], 3)) == (0.6040, 5.919)
+
+
+@pytest.mark.long
+def test_documented_1000_sphere_specimen(tmp_path):
+    """The command docs/specimens.md gives for the 1000-sphere specimen, seed 1, one thread, makes
+    the e, Zm and step counts it gives (at the digits it gives them). Long (2-3 min on one core)."""
+    _baseline_build()
+    out = tmp_path / "s.npz"
+    proc = subprocess.run([sys.executable, os.path.join(REPO, "pyscripts", "prepare_specimen.py"), "--n", "1000",
+                           "--seed", "1", "--threads", "1", "--checkpoint-every", "0", "--quiet", "--out", str(out)],
+                          env=dict(os.environ, OMP_NUM_THREADS="1"), capture_output=True, text=True, timeout=1800)
+    assert proc.returncode == 0, proc.stderr
+    _, meta = specimen_file.load(str(out))
+    st, p = meta["summary"], meta["parameters"]
+    assert (round(st["void_ratio"], 4), round(st["Zm"], 3)) == (0.5815, 5.961)
+    assert (p["steps_expansion"], p["steps_consolidation"]) == (142000, 4000)
 
 
 @pytest.mark.long
