@@ -94,14 +94,14 @@ def walled_scene(scene, friction):
     import numpy as np
     from trueaniso import engines, specimen
     if scene.has_clumps:
-        raise SystemExit("zm_walls: the specimen has clumps; the walls take single spheres here")
+        cli.fail("--specimen: it has clumps; the walls take single spheres here")
     cell = np.asarray(scene.cell)
     # The cell servo holds the shear stresses at zero, which leaves the cell sheared by ~1e-5;
     # wrapped in reduced coordinates, the spheres fill the cell's parallelepiped, whose faces
     # lean from the box's planes by that much of the edge (~1e-8 m here), far below an overlap.
     off = cell - np.diag(np.diag(cell))
     if np.abs(off).max() > 1e-3 * np.diag(cell).min():
-        raise SystemExit("zm_walls: the specimen's cell is sheared by more than 1e-3; the walls are axis-aligned")
+        cli.fail("--specimen: its cell is sheared by more than 1e-3; the walls are axis-aligned")
     r = np.asarray(scene.radii)
     reduced = np.mod(np.linalg.solve(cell, np.asarray(scene.positions).T).T, 1.0)
     x = reduced @ cell.T
