@@ -53,13 +53,17 @@ def options(argv=None):
                    help="inertial number that caps the walls' strain rate while they first bring the specimen to 100 kPa")
     p.add_argument("--friction", type=cli.positive, default=0.5, help="friction at state 1 and along the paths")
     p.add_argument("--path-rate", type=cli.positive, default=2.0, help="Pa per reference step along a path")
-    p.add_argument("--consolidation-path-rate", type=cli.positive, default=10.0,
-                   help="Pa per reference step while the walls first bring the specimen to 100 kPa")
+    p.add_argument("--consolidation-path-rate", type=cli.positive, default=1e9,
+                   help="Pa per reference step while the walls first bring the specimen to 100 kPa (the default "
+                        "sets the goal at once: the walls close at the capped rate, then as the servo's law allows)")
     p.add_argument("--safety", type=cli.positive, default=0.35, help="factor of the smallest-inertia time step")
     p.add_argument("--damping", type=cli.non_negative, default=0.4, help="local damping of the integrator")
     p.add_argument("--tolerance", type=cli.positive, default=100.0, help="stress tolerance of a held state (Pa)")
     p.add_argument("--unbalanced", type=cli.positive, default=1e-4, help="unbalanced force of a held state")
     p.add_argument("--max-steps", type=cli.at_least(1), default=3_000_000, help="steps allowed per state")
+    p.add_argument("--probe-strain", type=cli.non_negative, default=0.0,
+                   help="probe E_x, E_y, E_z at each state with this compressive strain of one wall pair, "
+                        "the other two holding their stresses, sliding suppressed (0: no probes)")
     p.add_argument("--chunk", type=cli.at_least(1), default=5000, help="steps between progress lines")
     o = cli.parse(p, argv)
     if not os.path.isfile(o.specimen):
@@ -120,7 +124,7 @@ def walled_scene(scene, friction):
 
 
 def reach(scene, walls, b, sigma_z, o, friction, label, p=100e3, path_rate=None, max_strain=0.05,
-          inertial_number=1e-3):
+          inertial_number=1e-3, hold_steps=200_000):
     """The wall servo to (b, sigma_z, p) at `friction`, held; returns its record."""
     import numpy as np
     from trueaniso import dem, engines
@@ -129,6 +133,7 @@ def reach(scene, walls, b, sigma_z, o, friction, label, p=100e3, path_rate=None,
     servo.control_shear = False
     servo.path_rate = o.path_rate if path_rate is None else path_rate
     servo.max_strain = max_strain
+    servo.hold_steps = hold_steps
     servo.gain = o.gain
     servo.stress_tolerance = o.tolerance
     servo.unbalanced_tolerance = o.unbalanced
@@ -153,6 +158,66 @@ def reach(scene, walls, b, sigma_z, o, friction, label, p=100e3, path_rate=None,
         raise SystemExit("zm_walls: %s: %s" % (label, servo.message))
     return dict(steps=int(servo.steps), wall_time=time.time() - t0, goal=list(servo.goal_stresses),
                 wall_stress=walls.stress.tolist(), unbalanced=float(servo.unbalanced))
+
+
+def probe(scene, walls, axis, o, ramp_steps=1000, settle_steps=200, max_steps=100_000):
+    """E_axis of the held state: one wall pair compressed by o.probe_strain (log strain) over
+    ramp_steps while the other two pairs hold their stresses (the wall servo's proportional law,
+    driven from here one step at a time), sliding suppressed (engines.PROBE_FRICTION), rotations
+    free; before the ramp and after it the walls are held until the unbalanced force is below
+    1e-5 and the held stresses are within 1e-3 of the ramp's stress change for settle_steps steps.
+    E = dsigma / dstrain between the two settled states. The scene and walls are restored."""
+    import numpy as np
+    from trueaniso import dem, engines
+    snap = scene.copy()
+    saved = (walls.lower.copy(), walls.upper.copy(), walls.ref_width.copy())
+    friction = scene.friction
+    scene.friction = engines.PROBE_FRICTION
+    dem.refresh(scene)
+    walls.rate = np.zeros(3)
+    walls.add_forces(scene)
+    hold = walls.stress.copy()
+    chain = dem.Chain(scene, damping=o.damping, controllers=[walls], rule="smallest-inertia", safety=o.safety)
+    others = [j for j in range(3) if j != axis]
+    expected = 300e6 * o.probe_strain  # Pa: the stress change of a ~300 MPa modulus, the holds' scale
+
+    def settle(ramp_rate=0.0, ramp=0):
+        ok = 0
+        for step in range(max_steps):
+            m = walls.measurement(scene)
+            rate = np.zeros(3)
+            for j in others:
+                k = m["stiffness"][j]
+                rate[j] = -o.gain * (hold[j] - m["stress"][j]) / (k * scene.dt) if k > 0 else 0.0
+            rate[axis] = ramp_rate if step < ramp else 0.0
+            walls.rate = rate
+            chain.run(1)
+            if step < ramp:
+                continue
+            good = m["unbalanced"] < 1e-5 and all(abs(m["stress"][j] - hold[j]) < 1e-3 * expected for j in others)
+            ok = ok + 1 if good else 0
+            if ok >= settle_steps:
+                return step + 1
+        raise SystemExit("zm_walls: the probe on axis %d did not settle in %d steps" % (axis, max_steps))
+
+    try:
+        n0 = settle()
+        walls.rate = np.zeros(3)
+        walls.add_forces(scene)
+        s0, w0 = walls.stress.copy(), walls.width.copy()
+        # A log strain -probe_strain over ramp_steps steps: the rate is per step of the current dt.
+        n1 = settle(-o.probe_strain / (ramp_steps * scene.dt), ramp_steps)
+        walls.rate = np.zeros(3)
+        walls.add_forces(scene)
+        s1, w1 = walls.stress.copy(), walls.width.copy()
+    finally:
+        scene.assign(snap)
+        scene.friction = friction
+        walls.lower, walls.upper, walls.ref_width = saved
+        walls.rate = np.zeros(3)
+    eps = -np.log(w1 / w0)  # compression positive
+    return dict(E=float((s1[axis] - s0[axis]) / eps[axis]), strain=eps.tolist(), d_stress=(s1 - s0).tolist(),
+                nu={str(j): float(-eps[j] / eps[axis]) for j in others}, steps=int(n0 + n1))
 
 
 def measure(scene, walls, interior):
@@ -204,11 +269,15 @@ def main(argv=None):
     # The walls first close the gaps the periodic boundary left at the faces (a strain of a few
     # per cent), so the path's strain limit is raised for this step alone.
     rec1 = reach(scene, walls, 0.0, 100e3, o, o.consolidation_friction, "consolidation",
-                 path_rate=o.consolidation_path_rate, max_strain=0.3, inertial_number=o.consolidation_inertial_number)
+                 path_rate=o.consolidation_path_rate, max_strain=0.3, inertial_number=o.consolidation_inertial_number,
+                 hold_steps=2_000_000)
     rec2 = reach(scene, walls, 0.0, 100e3, o, o.friction, "state 1 at mu %g" % o.friction)
     m = measure(scene, walls, o.interior)
     m.update(consolidation=rec1, hold=rec2, b=0.0, sigma_z=100e3)
+    if o.probe_strain > 0:
+        m["probes"] = {"xyz"[a]: probe(scene, walls, a, o) for a in (2, 0, 1)}
     out["states"]["1"] = m
+    atomic.write_json(o.out, out)
     base = scene.copy()
     base_walls = (walls.lower.copy(), walls.upper.copy(), walls.ref_width.copy())
     states = {i: (b, sz) for i, b, sz in triaxial.table_c1_states()}
@@ -221,6 +290,8 @@ def main(argv=None):
         rec = reach(scene, walls, b, sz, o, o.friction, "state %d" % i)
         m = measure(scene, walls, o.interior)
         m.update(reach=rec, b=b, sigma_z=sz)
+        if o.probe_strain > 0:
+            m["probes"] = {"xyz"[a]: probe(scene, walls, a, o) for a in (2, 0, 1)}
         out["states"][str(i)] = m
         out["wall_time"] = time.time() - t0
         atomic.write_json(o.out, out)  # each state as it comes: a long run keeps what it measured
