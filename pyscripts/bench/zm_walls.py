@@ -64,6 +64,9 @@ def options(argv=None):
     p.add_argument("--probe-strain", type=cli.non_negative, default=0.0,
                    help="probe E_x, E_y, E_z at each state with this compressive strain of one wall pair, "
                         "the other two holding their stresses, sliding suppressed (0: no probes)")
+    p.add_argument("--periodic", action="store_true",
+                   help="the control instead of the walls: reach each state from the periodic specimen itself with the "
+                        "cell servo (the study's reach_state) and count its Zm and e")
     p.add_argument("--chunk", type=cli.at_least(1), default=5000, help="steps between progress lines")
     o = cli.parse(p, argv)
     if not os.path.isfile(o.specimen):
@@ -264,6 +267,20 @@ def main(argv=None):
                       unbalanced=o.unbalanced, interior_d50=o.interior),
         paper_Zm_band=list(PAPER_ZM_BAND), machine=_bench.machine(), engine_version=engines.version(),
         source_hash=engines.source_hash(), states={})
+    if o.periodic:
+        out["boundary"] = "periodic"
+        for i, b, sz in triaxial.table_c1_states():
+            if i in o.ids and i != 1:
+                s, _ = specimen_file.load(o.specimen)
+                info = triaxial.reach_state(s, b, sz)
+                zc = engines.coordination(s)
+                out["states"][str(i)] = dict(Zm=zc["Zm"], Np0=zc["Np0"], Np1=zc["Np1"], b=b, sigma_z=sz,
+                                             void_ratio=engines.void_ratio(s), steps=info["steps"])
+                print("periodic state %d: Zm %.3f" % (i, zc["Zm"]), file=sys.stderr, flush=True)
+        out["wall_time"] = time.time() - t0
+        atomic.write_json(o.out, out)
+        return
+    out["boundary"] = "walls"
     scene, walls = walled_scene(periodic, o.consolidation_friction)
     out["placed"] = dict(width=walls.width.tolist(), void_ratio=walls.volume / float(np.sum(scene.volumes)) - 1.0)
     # The walls first close the gaps the periodic boundary left at the faces (a strain of a few
