@@ -44,13 +44,15 @@ def options(argv=None):
     p.add_argument("--specimen", required=True, help="periodic specimen file (.npz) of single spheres")
     p.add_argument("--out", required=True, help="JSON file to write (atomically)")
     p.add_argument("--ids", default="5,9,21", help="Table C1 states by number, each reached from state 1")
-    p.add_argument("--interior", default="2.5,1.5,4", help="interior distances from every wall, in d50 (first: the headline)")
+    p.add_argument("--interior", default="2.5,1.5,4",
+                   help="interior distances from every wall, in d50 (first: the headline)")
     p.add_argument("--gain", type=cli.positive, default=0.1,
                    help="servo gain: fraction of the stress error closed per step through the wall contacts' stiffness")
     p.add_argument("--consolidation-friction", type=cli.positive, default=0.015,
                    help="friction while the walls first bring the specimen to 100 kPa (the preparation's)")
     p.add_argument("--consolidation-inertial-number", type=cli.positive, default=1e-3,
-                   help="inertial number that caps the walls' strain rate while they first bring the specimen to 100 kPa")
+                   help="inertial number that caps the walls' strain rate while they first bring the specimen "
+                        "to 100 kPa")
     p.add_argument("--friction", type=cli.positive, default=0.5, help="friction at state 1 and along the paths")
     p.add_argument("--path-rate", type=cli.positive, default=2.0, help="Pa per reference step along a path")
     p.add_argument("--consolidation-path-rate", type=cli.positive, default=1e9,
