@@ -104,8 +104,9 @@ def main():
     if not (o.json and o.out):
         raise cli.InputError("give --out and --json")
     import numpy as np
-    from trueaniso import clump_recipes, clump_specimen, dem, engines, specimen, specimen_file, statics
+    from trueaniso import clump_recipes, clump_specimen, dem, engines, provenance, specimen, specimen_file, statics
     engines.set_threads(1)
+    provenance.versions()  # the code version, taken now: sources edited during the run do not refuse its save
     rule = o.time_step or cli.DEFAULT_TIME_STEP
     if o.time_step:
         dem.time_step_rule = o.time_step

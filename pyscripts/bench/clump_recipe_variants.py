@@ -134,8 +134,9 @@ def main():
         return
     if not o.json:
         raise cli.InputError("give --json")
-    from trueaniso import atomic, clump_recipes, clump_specimen, engines, specimen, specimen_file, statics
+    from trueaniso import atomic, clump_recipes, clump_specimen, engines, provenance, specimen, specimen_file, statics
     engines.set_threads(1)
+    provenance.versions()  # the code version, taken now: sources edited during the run do not refuse its save
     if o.study:
         atomic.write_json(o.json, measure_states(o.study))
         return
