@@ -57,6 +57,19 @@ def rotation_matrix(q):
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
+def rotated(points, R):
+    """points (n, 3) turned by the rotation matrix R: points @ R.T, as sums of products in a fixed
+    order. A matrix product would go to BLAS, whose kernel (chosen by processor, or by
+    OPENBLAS_CORETYPE) sets the last bits, and these positions decide a packing's bits."""
+    p = np.asarray(points, dtype=float)
+    return p[:, 0:1] * R[:, 0] + p[:, 1:2] * R[:, 1] + p[:, 2:3] * R[:, 2]
+
+
+def _unit(v):
+    """v / |v| for a 3-vector without BLAS (np.linalg.norm of a vector is a BLAS dot)."""
+    return v / math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
 def quaternion_product(a, b):
     """a b for quaternions (w, x, y, z): the rotation b, then a."""
     w1, x1, y1, z1 = a
@@ -91,7 +104,7 @@ def long_axes(n, rng, weights):
     if w.shape != (3,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise ValueError("orientation weights must be three finite numbers > 0")
     g = rng.standard_normal((n, 3)) * w
-    return g / np.linalg.norm(g, axis=1)[:, None]
+    return g / np.sqrt(g[:, 0] * g[:, 0] + g[:, 1] * g[:, 1] + g[:, 2] * g[:, 2])[:, None]
 
 
 def orientations(n, rng, weights):
@@ -104,8 +117,7 @@ def orientations(n, rng, weights):
         a = u[k]
         # any unit vector normal to a, then turned by the spin about a
         helper = np.array([0.0, 0.0, 1.0]) if abs(a[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-        b = np.cross(a, helper)
-        b /= np.linalg.norm(b)
+        b = _unit(np.cross(a, helper))
         c = np.cross(a, b)
         b, c = math.cos(spin[k]) * b + math.sin(spin[k]) * c, -math.sin(spin[k]) * b + math.cos(spin[k]) * c
         out[k] = quaternion_from_matrix(np.column_stack([a, b, c]))

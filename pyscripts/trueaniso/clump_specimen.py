@@ -52,7 +52,7 @@ def random_sequential_clumps(template, scales, quats, box, rng, periodic_z=True,
         return c
 
     for k in np.argsort(-scales, kind="stable"):
-        local = scales[k] * (off @ clump_shapes.rotation_matrix(quats[k]).T)
+        local = scales[k] * clump_shapes.rotated(off, clump_shapes.rotation_matrix(quats[k]))
         r = scales[k] * rad
         lo_z, hi_z = (r - local[:, 2]).max(), (box[2] - r - local[:, 2]).min()
         if not periodic_z and hi_z <= lo_z:
@@ -68,7 +68,8 @@ def random_sequential_clumps(template, scales, quats, box, rng, periodic_z=True,
             if idx:
                 d = mpos[idx][None, :, :] - p[:, None, :]
                 d[..., wrap] -= box[wrap] * np.round(d[..., wrap] / box[wrap])
-                if np.any(np.einsum("abk,abk->ab", d, d) < (r[:, None] + mrad[idx][None, :]) ** 2):
+                squared = d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] + d[..., 2] * d[..., 2]
+                if np.any(squared < (r[:, None] + mrad[idx][None, :]) ** 2):
                     continue
             break
         else:
@@ -90,8 +91,8 @@ def _layer(n, template, size_distribution, seed, orientation_weights, phi_cell, 
     per_layer = n // layers
     d = size_distribution.sample(per_layer, rng)
     quats = clump_shapes.orientations(per_layer, rng, orientation_weights)
-    side = (layers * template.volume * np.sum(d ** 3) / phi_cell) ** (1.0 / 3.0)
-    start = (phi_start / phi_cell) ** (1.0 / 3.0)
+    side = math.cbrt(layers * template.volume * np.sum(d * d * d) / phi_cell)  # no pow: psd.sample says why
+    start = math.cbrt(phi_start / phi_cell)
     return rng, d, quats, side, start, np.array([side, side, side / layers])
 
 
@@ -104,7 +105,7 @@ def _thin_layer(n, template, d, quats, start, box, layers):
         return None
 
     def height(k):  # what random_sequential_clumps needs: lo_z < hi_z
-        z = start * d[k] * (template.offsets @ clump_shapes.rotation_matrix(quats[k]).T)[:, 2]
+        z = start * d[k] * clump_shapes.rotated(template.offsets, clump_shapes.rotation_matrix(quats[k]))[:, 2]
         r = start * d[k] * np.asarray(template.radii)
         return float((z + r).max() + (r - z).max())
 

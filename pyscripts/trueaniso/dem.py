@@ -87,7 +87,7 @@ def reference_time_step(scene, pressure=100e3, safety=None, coordination=12):
     radii = scene.radii
     mmin = float(scene.masses.min())
     force = reference_contact_force(scene, pressure)
-    kn = scene.Cn * (float(radii.max()) * force) ** (1.0 / 3.0)  # rbar <= r_max: an upper bound
+    kn = scene.Cn * math.cbrt(float(radii.max()) * force)  # rbar <= r_max: an upper bound
     return safety * math.sqrt(mmin / (coordination * kn))
 
 

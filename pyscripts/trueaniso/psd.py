@@ -48,21 +48,23 @@ class SizeDistribution:
 
         Within a segment of constant mass density the number density goes as d^-3; its CDF
         is inverted in closed form. Stratified uniforms (one per 1/n quantile, shuffled) keep
-        small specimens close to the target D50 and Cu.
+        small specimens close to the target D50 and Cu. Products, quotients and square roots only
+        (correctly rounded on every processor): numpy's power runs another implementation on
+        processors with AVX-512, and these diameters decide a packing's bits (docs/runs.md).
         """
         if n < 1:
             raise ValueError("size distribution: need at least one particle")
         seg_mass = np.diff(self.cum)
         a, b = self.d[:-1], self.d[1:]
         # number of particles per unit mass-density in each segment: integral of d^-3 / (vol)
-        w = seg_mass / (b - a) * 0.5 * (a ** -2 - b ** -2)
+        w = seg_mass / (b - a) * 0.5 * (1.0 / (a * a) - 1.0 / (b * b))
         w = w / w.sum()
         u = (rng.permutation(n) + rng.random(n)) / n
         seg = np.minimum(np.searchsorted(np.cumsum(w), u, side="right"), len(w) - 1)
         start = np.concatenate(([0.0], np.cumsum(w)))[seg]
         v = np.clip((u - start) / w[seg], 0.0, 1.0)
-        ia, ib = a[seg] ** -2, b[seg] ** -2
-        return (ia - v * (ia - ib)) ** -0.5
+        ia, ib = 1.0 / (a[seg] * a[seg]), 1.0 / (b[seg] * b[seg])
+        return 1.0 / np.sqrt(ia - v * (ia - ib))
 
 
 def mass_d50_cu(diameters):

@@ -36,9 +36,10 @@ def random_loose_packing(n, size_distribution, seed, phi_cell=0.60, phi_start=0.
         raise ValueError("solid fractions must satisfy 0.05 <= phi_start < phi_cell < 0.74")
     rng = np.random.default_rng(seed)
     radii = 0.5 * size_distribution.sample(n, rng)
-    volume = 4.0 / 3.0 * math.pi * np.sum(radii ** 3)
-    side = (volume / phi_cell) ** (1.0 / 3.0)
-    scale = (phi_start / phi_cell) ** (1.0 / 3.0)
+    # cube roots and products, not powers: the same bits on every processor (psd.sample says why)
+    volume = 4.0 / 3.0 * math.pi * np.sum(radii * radii * radii)
+    side = math.cbrt(volume / phi_cell)
+    scale = math.cbrt(phi_start / phi_cell)
     r = scale * radii
     # Random sequential addition, largest first, with a hash grid of cells >= the largest diameter.
     order = np.argsort(-r, kind="stable")
@@ -58,7 +59,8 @@ def random_loose_packing(n, size_distribution, seed, phi_cell=0.60, phi_start=0.
                         for j in grid.get(key, ()):
                             d = pos[j] - p
                             d -= side * np.round(d / side)
-                            if d @ d < (r[i] + r[j]) ** 2:
+                            reach = r[i] + r[j]  # products, not dot or **: no BLAS or libm pow here
+                            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach:
                                 ok = False
                                 break
                         if not ok:
