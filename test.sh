@@ -34,5 +34,5 @@ else
   ctest --test-dir build --output-on-failure -j"$(nproc)" -LE python
   marker="not long"
 fi
-/usr/bin/python3 -m pytest -q -p no:cacheprovider -n auto --dist loadfile --durations=15 -m "$marker" \
+/usr/bin/python3 -m pytest -q -rs -p no:cacheprovider -n auto --dist loadfile --durations=15 -m "$marker" \
   tests/py "${args[@]}"
