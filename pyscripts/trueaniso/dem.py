@@ -92,5 +92,6 @@ def reference_time_step(scene, pressure=100e3, safety=None, coordination=12):
 
 
 def strain_rate_for_inertial_number(inertial_number, d50, density, pressure):
-    """Strain rate with inertial number I = rate d sqrt(rho/p) (I < 1e-3: quasi-static)."""
-    return inertial_number / (d50 * math.sqrt(density / pressure))
+    """Strain rate with inertial number I = rate d sqrt(rho/p) (I < 1e-3: quasi-static); the engines'
+    control/InertialNumber.hpp, which the YADE plugin's TrueTriaxialServo takes too."""
+    return _e.strain_rate_for_inertial_number(float(inertial_number), float(d50), float(density), float(pressure))
