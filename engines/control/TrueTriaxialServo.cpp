@@ -16,6 +16,8 @@ void TrueTriaxialServo::validate() const {
           "nothing would servo them");
   require(pathRate > 0 && stressTolerance > 0 && followTolerance > 0 && maxStrain > 0,
           "servo tolerances and path rate must be > 0");
+  require(unbalancedTolerance > 0 && settleSteps >= 1 && maxSteps >= 1 && stallSteps >= 1 && holdSteps >= 1,
+          "servo: the unbalanced force tolerance must be > 0 and the step counts >= 1");
   require(std::isfinite(stepScale) && stepScale > 0, "servo: the step scale must be a finite number > 0");
   require(std::isfinite(loadingFriction) && loadingFriction > 0,
           "servo: the loading friction must be a finite number > 0");
