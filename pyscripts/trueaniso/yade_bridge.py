@@ -185,6 +185,21 @@ def write_to_yade(scene, O=None, ids=None):
     write_shear_history(scene, O, ids)
 
 
+def contact_law(law):
+    """(Ip2, Law2) classes of a law: "yade" (YADE's Hertz-Mindlin) or "trueaniso" (ours, from the plugin)."""
+    if law == "trueaniso":
+        try:
+            from yade import Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys as Ip2, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin as Law2
+        except ImportError:
+            raise BridgeError("law='trueaniso' needs the trueaniso YADE plugin: run yade-double with "
+                              "YADE_PREFIX=<repository>/build/yade-prefix (./setup.sh builds it)") from None
+        return Ip2, Law2
+    if law == "yade":
+        from yade import Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
+        return Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
+    raise BridgeError("law must be 'yade' (YADE's Hertz-Mindlin) or 'trueaniso' (ours, from the YADE plugin)")
+
+
 def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False, law="yade"):
     """Rebuild YADE's O from our scene, with YADE's own Hertz-Mindlin law (law="yade"): the peer we
     compare to; or, with law="trueaniso", with our law as a YADE class (the plugin of engines/yade,
@@ -197,22 +212,10 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     """
     O = O or _yade()
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
-                      InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
-                      Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator, Vector3, utils)
-    if law not in ("yade", "trueaniso"):
-        raise BridgeError("law must be 'yade' (YADE's Hertz-Mindlin) or 'trueaniso' (ours, from the YADE plugin)")
-    if law == "trueaniso":
-        try:
-            from yade import Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys as Ip2, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin as Law2
-        except ImportError:
-            raise BridgeError("law='trueaniso' needs the trueaniso YADE plugin: run yade-double with "
-                              "YADE_PREFIX=<repository>/build/yade-prefix (./setup.sh builds it)") from None
-    else:
-        Ip2, Law2 = Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
+                      InsertionSortCollider, InteractionLoop, NewtonIntegrator, Vector3, utils)
+    Ip2, Law2 = contact_law(law)
     if scene.has_clumps:
-        if law != "yade":
-            raise BridgeError("the trueaniso YADE plugin's law is for spheres; a clump scene takes law='yade'")
-        return yade_clumps.yade_clump_scene_from(scene, O, damping, import_contacts, mindlin_ratcheting)[0]
+        return yade_clumps.yade_clump_scene_from(scene, O, damping, import_contacts, mindlin_ratcheting, law)[0]
     O.reset()
     O.periodic = True
     _write_cell(O, scene.cell, scene.cell_ref)
