@@ -80,6 +80,11 @@ def parser():
     p.add_argument("--rolling-friction", type=cli.non_negative, default=0.0,
                    help="rolling resistance: eta_r of the largest rolling moment eta_r rbar N; 0 = off")
     cli.add_threads_option(p, study=True, mpi=True)
+    p.add_argument("--host", choices=study.HOSTS, default="trueaniso",
+                   help="who steps the states and probes: trueaniso (our stepper) or yade (YADE's own loop with the "
+                        "plugin's TrueTriaxialServo, StressProbe and FabricRecorder in O.engines; run under yade-double "
+                        "with YADE_PREFIX=<repository>/build/yade-prefix, docs/yade-peer.md). The same specimen, "
+                        "states, probes and CSV; a study is stepped by one host")
     p.add_argument("--out", required=True, help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
                                                        "refusing")
@@ -150,6 +155,10 @@ def validate(o):
         raise cli.InputError(str(exc)) from None
     o.probe_axes = probe_axes(o.probes, o.path)
     check_probe_options(o)
+    if o.host != "trueaniso":
+        if o.mpi:
+            raise cli.InputError("--host %s steps the states in this process's YADE: it takes no --mpi workers" % o.host)
+        study.host_named(o.host)  # not under yade-double, or without the plugin: said before any work
     try:
         arrays, meta = specimen_file.read(o.specimen)
     except specimen_file.SpecimenFileError as exc:
@@ -289,7 +298,7 @@ def main(argv=None):
                                                                 rolling_stiffness=o.rolling_stiffness,
                                                                 rolling_friction=o.rolling_friction), wait=o.wait,
                          force_new=o.force_new, progress_every=o.progress_every,
-                         log=progress.say, executor=executor)
+                         log=progress.say, executor=executor, host=o.host)
     except triaxial.StateNotReached as exc:
         cli.fail(str(exc), 1)
     finally:

@@ -56,6 +56,10 @@ def parser():
     cli.add_path_rate_option(p)
     cli.add_time_step_option(p, study=True)
     cli.add_threads_option(p, study=True)
+    p.add_argument("--host", choices=study.HOSTS, default="trueaniso",
+                   help="who steps the states and probes: trueaniso (our stepper) or yade (YADE's own loop with the "
+                        "plugin's classes in O.engines; under yade-double with YADE_PREFIX=<repository>/build/"
+                        "yade-prefix, docs/yade-peer.md); the specimen and the static solve are ours either way")
     p.add_argument("--out", default="results/default", help="results directory (one study; created if missing)")
     p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
                                                        "refusing")
@@ -98,6 +102,7 @@ def validate(o):
                             start_within=defaults["stress_tolerance"].default)
     resources.check_threads(o.threads)
     check_memory(o)
+    study.host_named(o.host)  # --host yade outside yade-double, or without the plugin: said before any work
     return states
 
 
@@ -207,7 +212,7 @@ def main(argv=None):
             study_dir.supersede(o.out, log)
         path = os.path.join(o.out, SPECIMEN)
         options = dict(state_options=dict(friction=o.mu, path_rate=o.path_rate, time_step=o.time_step),
-                       recipe=recipe(o))
+                       recipe=recipe(o), host=o.host)
         scene = check_recipe(o, log)  # a refusal changes nothing
         if scene is not None:
             study.check(path, states, o.out, **options)  # the whole fingerprint, before anything is written

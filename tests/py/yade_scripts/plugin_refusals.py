@@ -11,7 +11,7 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
 sys.path[:0] = [HERE, os.path.join(HERE, "..", "..", "..", "pyscripts")]
-from yade import O, Vector3, utils  # noqa: E402
+from yade import O, utils  # noqa: E402
 from yade.wrapper import (Bo1_Sphere_Aabb, Bo1_Wall_Aabb, FabricRecorder, ForceResetter, FrictMat,  # noqa: E402
                           Ig2_Sphere_Sphere_ScGeom, Ig2_Wall_Sphere_ScGeom,
                           InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys,
