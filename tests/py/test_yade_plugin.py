@@ -9,6 +9,7 @@ it and runs them."""
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 
@@ -335,6 +336,15 @@ def test_attributes_out_of_range_are_refused_at_construction_and_assignment(refu
     assert r["defaults"] == dict(probeFriction=1e23, iterPeriod=100, loadingFriction=0.5)
 
 
+def test_a_hold_given_in_part_takes_the_measured_stress_for_its_nan_entries(refusals):
+    r = refusals["probe_hold_partial_run"]
+    assert math.isnan(r["given"][0]) and math.isnan(r["given"][3])  # holdStress stays as given
+    assert r["held"][1:3] == [61e3, 139e3] and r["held"][4:] == [0.0, 0.0]
+    # the measured xx and yz (compression positive, the symmetric part): YADE's getStress of the step
+    assert r["held"][0] == pytest.approx(r["measured"][0], rel=1e-12)
+    assert r["held"][3] == pytest.approx(r["measured"][1], abs=1e-9 * r["measured"][0])
+
+
 def test_a_second_controller_of_the_cell_is_refused_before_anything_changes(refusals):
     for case, other in (("servo_and_probe", "StressProbe"), ("probe_and_servo", "TrueTriaxialServo"),
                         ("servo_and_peritriax", "PeriTriaxController")):
@@ -406,12 +416,15 @@ def test_a_material_out_of_range_is_a_python_exception_not_an_abort(refusals):
     assert refusals["process_alive"]
 
 
-def test_the_law_takes_a_sphere_on_a_wall_as_on_a_half_space(refusals):
+def test_the_law_takes_a_sphere_on_a_wall_and_refuses_other_shapes(refusals):
     r = refusals["wall"]
     E, nu, R = 4.14e10, 0.15, 1e-4
     Estar = E / (2 * (1 - nu ** 2))  # sphere and wall of one material; the wall a half-space: R* = r
     assert r["error"] is None and r["rbar"] == pytest.approx(2 * R, rel=1e-15)
     assert r["N"] == pytest.approx(4 / 3 * Estar * math.sqrt(R) * r["delta"] ** 1.5, rel=1e-9)
+    r = refusals["grid_node"]  # a subclass of Sphere (a grid's node), not a sphere
+    assert r["error"].startswith("RuntimeError: Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys: contact of bodies") \
+        and "GridNode" in r["error"] and r["refused"] and r["N"] == 0.0, r
 
 
 # ---------------------------------------------------------------------------------------------
@@ -588,3 +601,48 @@ def test_host_yade_refuses_outside_yade_and_with_mpi(tmp_path):
     proc = run_script("run_states.py", "--host", "yade", "--specimen", spec, "--ids", "21", "--out", tmp_path / "o")
     one_line_error(proc, "--host yade runs inside YADE", "yade-double")
     assert not os.path.exists(tmp_path / "o" / "metadata.json")
+
+
+# ---------------------------------------------------------------------------------------------
+# docs/yade-peer.md as written: its O.engines block and its commands (the examples, --host yade).
+
+PAGE = os.path.join(REPO, "docs", "yade-peer.md")
+
+
+def test_the_yade_page_s_engines_block_runs_as_written(plugin, tmp_path):
+    r = run_plugin("page_engines", os.path.join(REPO, "tests", "data", "spheres-150-s4.npz"), PAGE, cwd=tmp_path)
+    assert r["reached"], r["message"]
+    assert r["engines"][3] == "TrueTriaxialServo" and r["engines"][-1] == "NewtonIntegrator"
+    # the servo's compression-positive stress is YADE's getStress with the other sign
+    np.testing.assert_allclose(r["stress"][:3], r["getStress"], rtol=1e-3)
+    np.testing.assert_allclose(r["stress"][:3], [100e3, 60e3, 140e3], atol=500.0)
+
+
+def page_commands():
+    with open(PAGE) as f:
+        text = f.read()
+    commands = []
+    for block in re.findall(r"```sh\n(.*?)```", text, flags=re.S):
+        commands += [ln.strip() for ln in block.split("\n") if ln.strip() and not ln.strip().startswith("#")]
+    return text, commands
+
+
+def test_the_yade_page_s_commands_run_as_written(plugin, tmp_path):
+    """The page's commands from the repository's root, results/ moved to a temporary directory:
+    the two examples (each needs only the plugin's classes) and a study on --host yade write every
+    file the page names, and the examples' numbers are those of a state 21."""
+    text, commands = page_commands()
+    assert len(commands) >= 3 and any("--host yade" in c for c in commands)
+    out = str(tmp_path / "results")
+    for command in commands:
+        proc = subprocess.run(command.replace("results/", out + "/"), shell=True, cwd=REPO, capture_output=True,
+                              text=True, timeout=3600, env=dict(os.environ, OMP_NUM_THREADS="1"))
+        assert proc.returncode == 0, "%s\n%s\n%s" % (command, proc.stdout[-3000:], proc.stderr[-3000:])
+    named = sorted(set(re.findall(r"results/([\w./-]+\.(?:json|gz|csv))", text)))
+    assert named
+    for name in named:
+        assert os.path.exists(os.path.join(out, name)), "the page names results/%s" % name
+    for name in ("state21.json", "state21-clump2.json"):
+        r = json.load(open(os.path.join(out, "yade-examples", name)))
+        np.testing.assert_allclose(r["stress"][:3], [100e3, 60e3, 140e3], atol=100.0)
+        assert r["E_z"] > r["E_x"] > r["E_y"] > 0 and r["Zm"] > 3.5 and len(r["M"]) == 81
