@@ -5,7 +5,10 @@
 #include <pkg/common/PeriodicEngines.hpp>
 #include <pkg/common/Sphere.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -18,6 +21,33 @@ class FabricRecorder : public PeriodicEngine {
   // Solid volume of each particle by body id (a clump's: the union of its member balls, overlaps
   // counted once, measure/Coordination's rule), computed once: a clump is rigid.
   std::vector<Real> volumes_;
+
+  // The union volume of balls, from a cache of shapes scaled to their largest radius: CGAL's mesh
+  // takes ~0.1 s a clump, and a packing holds a few shapes (replaceByClumps scales one template
+  // to every sphere it replaces). The key, radii and centre distances over the largest radius in
+  // the clump's member order (rounded at 1e-10), is the shape up to rotation and reflection.
+  static Real unionVolume(const std::vector<trueaniso::Vec3>& centres, const std::vector<Real>& radii) {
+    static std::mutex guard;
+    static std::map<std::vector<long long>, Real> unit;
+    const Real scale = *std::max_element(radii.begin(), radii.end());
+    std::vector<long long> key;
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+      key.push_back(std::llround(1e10 * radii[i] / scale));
+      for (std::size_t j = i + 1; j < radii.size(); ++j) key.push_back(std::llround(1e10 * (centres[j] - centres[i]).norm() / scale));
+    }
+    std::lock_guard<std::mutex> lock(guard);
+    auto found = unit.find(key);
+    if (found == unit.end()) {
+      std::vector<trueaniso::Vec3> c;
+      std::vector<Real> r;
+      for (std::size_t i = 0; i < radii.size(); ++i) {
+        c.push_back((centres[i] - centres[0]) / scale);
+        r.push_back(radii[i] / scale);
+      }
+      found = unit.emplace(key, trueaniso::unionOfBallsMoments(c, r).volume).first;
+    }
+    return found->second * scale * scale * scale;
+  }
 
   Real solidVolume(const Body& b) {
     const std::size_t id = static_cast<std::size_t>(b.id);
@@ -37,7 +67,7 @@ class FabricRecorder : public PeriodicEngine {
         centres.push_back(m.second.position);
         radii.push_back(s->radius);
       }
-      v = trueaniso::unionOfBallsMoments(centres, radii).volume;
+      v = unionVolume(centres, radii);
     }
     volumes_[id] = v;
     return v;
