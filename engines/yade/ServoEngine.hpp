@@ -53,6 +53,7 @@ class TrueTriaxialServo : public GlobalEngine {
     k.stallSteps = stallSteps;
     k.holdSteps = holdSteps;
     k.stepScale = stepScale;
+    k.lostStressFraction = lostStressFraction;
     return k;
   }
   void store(const trueaniso::TrueTriaxialServo& k) {
@@ -108,6 +109,7 @@ class TrueTriaxialServo : public GlobalEngine {
       alone("maxStrainRate", tp::shown(maxStrainRate), [&](K& k) { k.law.maxStrainRate = maxStrainRate; });
     alone("loadingFriction", tp::shown(loadingFriction), [&](K& k) { k.loadingFriction = loadingFriction; });
     alone("stepScale", tp::shown(stepScale), [&](K& k) { k.stepScale = stepScale; });
+    alone("lostStressFraction", tp::shown(lostStressFraction), [&](K& k) { k.lostStressFraction = lostStressFraction; });
     try {
       trueaniso::strainRateForInertialNumber(inertialNumber, 1.0, 1.0, 1.0);
     } catch (const std::exception& e) {
@@ -125,18 +127,20 @@ class TrueTriaxialServo : public GlobalEngine {
   // so a refused assignment puts them back and the servo keeps its valid settings.
   struct Settings {
     Real b, sigmaZ, meanStress, pathRate, followTolerance, stressTolerance, unbalancedTolerance, maxStrain, gain,
-        maxStrainRate, inertialNumber, loadingFriction, stepScale;
+        maxStrainRate, inertialNumber, loadingFriction, stepScale, lostStressFraction;
     long settleSteps, maxSteps, stallSteps, holdSteps;
   };
   Settings capture() const {
     return {b, sigmaZ, meanStress, pathRate, followTolerance, stressTolerance, unbalancedTolerance, maxStrain, gain,
-            maxStrainRate, inertialNumber, loadingFriction, stepScale, settleSteps, maxSteps, stallSteps, holdSteps};
+            maxStrainRate, inertialNumber, loadingFriction, stepScale, lostStressFraction, settleSteps, maxSteps,
+            stallSteps, holdSteps};
   }
   void put(const Settings& v) {
     b = v.b; sigmaZ = v.sigmaZ; meanStress = v.meanStress; pathRate = v.pathRate; followTolerance = v.followTolerance;
     stressTolerance = v.stressTolerance; unbalancedTolerance = v.unbalancedTolerance; maxStrain = v.maxStrain;
     gain = v.gain; maxStrainRate = v.maxStrainRate; inertialNumber = v.inertialNumber;
-    loadingFriction = v.loadingFriction; stepScale = v.stepScale; settleSteps = v.settleSteps; maxSteps = v.maxSteps;
+    loadingFriction = v.loadingFriction; stepScale = v.stepScale; lostStressFraction = v.lostStressFraction;
+    settleSteps = v.settleSteps; maxSteps = v.maxSteps;
     stallSteps = v.stallSteps; holdSteps = v.holdSteps;
   }
   Settings valid_;
@@ -189,6 +193,7 @@ class TrueTriaxialServo : public GlobalEngine {
     ((Real, maxStrainRate, 0, Attr::triggerPostLoad, "largest cell strain rate [1/s]; 0: that of inertialNumber"))
     ((Real, inertialNumber, 1e-3, Attr::triggerPostLoad, "with maxStrainRate 0, the cap is the rate of this inertial number I = rate d50 sqrt(rho/p): d50 the median sphere diameter, rho the first sphere's density, p = meanStress (quasi-static below 1e-3)"))
     ((Real, loadingFriction, 0.5, Attr::triggerPostLoad, "friction coefficient set on every contact while the servo runs (the paper's 0.5)"))
+    ((Real, lostStressFraction, 0.5, Attr::triggerPostLoad, "a normal stress below this fraction of its goal (a packing that lost its stress when its friction dropped, a cloud) is loaded at the strain-rate cap, not by the stiffness of the few contacts left; 0: never"))
     ((Real, stepScale, 1.0, Attr::triggerPostLoad, "length of a step in the unit of the per-step settings (1: YADE's step; run_states.py --host yade passes O.dt over the reference rule's step)"))
     ((bool, pauseWhenDone, true, , "stop O.run after the step where the state is reached or fails"))
     ((bool, reached, false, Attr::readonly, "the state is held within tolerance"))
