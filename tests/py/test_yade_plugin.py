@@ -577,6 +577,10 @@ def test_host_yade_steps_the_study_of_our_stepper_on_spheres(plugin, tmp_path):
     meta = json.load(open(tmp_path / "yade" / "metadata.json"))
     assert meta["fingerprint"]["host"] == dict(name="yade", threads=1)
     assert "host" not in json.load(open(tmp_path / "ours" / "metadata.json"))["fingerprint"]
+    # the report reads the study as any other, and says who stepped it
+    from trueaniso.analysis import report
+    path, _ = report.build(str(tmp_path / "yade"), str(tmp_path / "report"), log=lambda *a: None)
+    assert "stepped by YADE's loop with the trueaniso plugin's classes (--host yade, 1 thread)" in open(path).read()
 
 
 def test_host_yade_steps_the_study_of_our_stepper_on_clumps(plugin, tmp_path):
