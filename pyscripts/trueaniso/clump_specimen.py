@@ -2,16 +2,18 @@
 compacted by radius expansion and consolidated isotropically (docs/specimens.md, "Clump specimens").
 
 The paper only cites its two preparation methods; our readings of them:
- - clump1, "two-stage isotropic consolidation" (after Zhao & Guo 2015): clumps generated with
-   their long axes favouring the vertical, stage 1 compacts them with particle rotation blocked
-   until the network carries 10 kPa (the orientation fabric is kept while the contact network
-   forms), stage 2 releases rotation, compacts to the isotropic 100 kPa and consolidates there with
-   the final friction;
- - clump2, "multi-layer rotational replication" (after Zhou et al. 2026b, c): one horizontal layer
-   of clumps lying near the horizontal is generated, and the specimen is built from copies of it
-   stacked along z, copy k turned by k x 90 degrees about z (which maps the square periodic cell
-   onto itself), so the two horizontal directions are equivalent by construction; stage 1 (rotation
-   blocked) goes to 100 kPa, stage 2 consolidates there with the final friction.
+
+- clump1, "two-stage isotropic consolidation" (after Zhao & Guo 2015): clumps generated with
+  their long axes favouring the vertical, stage 1 compacts them with particle rotation blocked
+  until the network carries 10 kPa (the orientation fabric is kept while the contact network
+  forms), stage 2 releases rotation, compacts to the isotropic 100 kPa and consolidates there with
+  the final friction;
+- clump2, "multi-layer rotational replication" (after Zhou et al. 2026b, c): one horizontal layer
+  of clumps lying near the horizontal is generated, and the specimen is built from copies of it
+  stacked along z, copy k turned by k x 90 degrees about z (which maps the square periodic cell
+  onto itself), so the two horizontal directions are equivalent by construction; stage 1 (rotation
+  blocked) goes to 100 kPa, stage 2 consolidates there with the final friction.
+
 Recipe parameters live in RECIPES (clump_recipes); every one can be overridden by a keyword of prepare_clumps.
 """
 import math

@@ -77,7 +77,7 @@ def _material(shear_modulus, poisson):
 
 
 def fabric_row(scene, zeta=1.0, density="eq36"):
-    """Flat dict of CSV columns: counts, R_/H_/B_ (6 independent components each), the M
+    """Flat dict of CSV columns: counts, ``R_``, ``H_``, ``B_`` (6 independent components each), the M
     components of Appendix A, NcV_eq36, NcV_count, e, mean_N, and the micromechanical moduli
     mic_E_i, mic_nu_ij, mic_G_ij for the given zeta (prefixed so they cannot be mistaken for
     the probe's measured E_i, nu_ij)."""
@@ -158,7 +158,7 @@ def history_rows(rec, shear_modulus, poisson, zeta=1.0, density="eq36"):
 def fabric_from_interactions(O, material=None):
     """Zm, R, H, B, M, Nc/V (Eq. 36 and count), e and mean_N in plain Python over YADE's
     O.interactions, for a periodic scene of spheres: branch L = pos2 + hSize cellDist - pos1,
-    n = geom.normal, N = |phys.normalForce|, rbar from the two radii (Eq. 7); e from the sphere
+    n = geom.normal, N = norm(phys.normalForce), rbar from the two radii (Eq. 7); e from the sphere
     volumes. The definitions are those of fabric(scene); only the code differs."""
     from yade import Sphere  # noqa: F401 - fails clearly outside yade-double
     h = np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)])

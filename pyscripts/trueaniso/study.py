@@ -1,6 +1,7 @@
 """Runs true-triaxial states and their probes on a specimen, with results written as they come.
 
-Layout of a results directory (one study: trueaniso/study_dir.py, docs/runs.md):
+Layout of a results directory (one study: trueaniso/study_dir.py, docs/runs.md)::
+
   metadata.json    the study's fingerprint (the loading path included), its states (id -> b,
                    sigma_z), the runs that wrote it
   probes.csv       one row per state and probe direction, appended as each probe ends

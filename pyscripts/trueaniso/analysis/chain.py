@@ -4,6 +4,7 @@ Per state: the DEM E_i (three axial probes) and nu_ij, K and G of the hyperelast
 21-22 inverted, hyperelastic.scalar_moduli), the DEM a_i^2 (Eq. 25) and the micromechanical a_i^2
 from the state's fabric (B, M, Nc/V of the row; Eqs. 37-40 with zeta in the directional form
 sqrt(zeta_i zeta_k), trueaniso.zeta). Over the states:
+
 - Table 2: K(Zm) and G(Zm) as quadratics, with R^2 (Fig. 11);
 - Fig. 13: micromechanical against DEM a_i^2 at zeta = 1, at the paper's 0.552 and at the value
   fitted on the contrast (trueaniso.analysis.zeta_contrast);
@@ -12,6 +13,7 @@ sqrt(zeta_i zeta_k), trueaniso.zeta). Over the states:
   0.003; E: relative);
 - Fig. 4a: E_i/E_j against sigma_i/sigma_j, the power-law exponent m of E_i/E_j = (sigma_i/sigma_j)^m
   (a least-squares line through the origin in log-log, all six ordered pairs of every state).
+
 Everything here reads numbers already in the table; nothing is simulated.
 """
 import numpy as np
@@ -210,7 +212,7 @@ def nu_floor(tab):
     """The nu_ij RMSE that no zeta can beat: Eq. (22) fed with each state's own DEM a_i^2 (Eq. 25)
     and nu0 (hyperelastic.scalar_moduli), against the DEM nu_ij. Any prediction through Eq. (22)
     has nu_ij a_j^2 / a_i^2 equal in all six pairs, which the DEM values are not; this is how far
-    they are from it. Returns dict(rmse, mean_abs (mean |nu_ij|), relative (rmse / mean_abs))."""
+    they are from it. Returns dict(rmse, mean_abs (the mean of abs(nu_ij)), relative (rmse / mean_abs))."""
     off = ~np.eye(3, dtype=bool)
     err, vals = [], []
     for E, nu in zip(tab["E"], tab["nu"]):
@@ -224,7 +226,7 @@ def nu_floor(tab):
 
 
 def relative_nu_rmse(tab, rmse):
-    """An RMSE of nu_ij relative to the values: rmse / mean |nu_ij| over the states' six nu_ij."""
+    """An RMSE of nu_ij relative to the values: rmse over the mean of abs(nu_ij) over the states' six nu_ij."""
     off = ~np.eye(3, dtype=bool)
     return float(rmse / np.mean(np.abs(tab["nu"][:, off])))
 
