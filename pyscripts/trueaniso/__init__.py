@@ -11,7 +11,7 @@ import sys
 # tests/py/test_api_examples.py runs. The other modules serve the scripts and these; the manual
 # lists them after, as internal.
 PUBLIC_MODULES = ("specimen", "clump_specimen", "specimen_file", "triaxial", "fabric", "statics", "zeta",
-                  "study", "results_csv", "dem", "psd", "validate", "yade_bridge", "yade_adapter",
+                  "study", "dem", "psd", "validate", "yade_bridge", "yade_adapter",
                   "analysis", "analysis.results", "analysis.hyperelastic", "analysis.chain", "analysis.report",
                   "analysis.figures")
 

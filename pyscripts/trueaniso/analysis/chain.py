@@ -21,6 +21,8 @@ import numpy as np
 from . import hyperelastic, zeta_contrast
 from trueaniso import zeta as _zeta
 
+__all__ = ["state_table", "table2", "stress_ratio_exponent"]
+
 AXES = "xyz"
 PAPER_VOID_RATIO = dict(spheres=0.584, clump1=0.445, clump2=0.636)  # section 2.1, at isotropic 100 kPa
 PAPER_ZETA = _zeta.PAPER_ZETA  # section 4.2, zeta_h = zeta_v = 0.552 for spheres
@@ -41,9 +43,25 @@ PAPER = dict(
 
 
 def state_table(rows):
-    """The complete states of one rotations setting: dict of arrays over states, in file order:
-    state ids, Zm, sigma (n, 3), E (n, 3), nu (n, 3, 3), K, G (Pa), a2_dem (n, 3). States without
-    all three axial probes or all six nu_ij are left out (a study still running)."""
+    """A probe table's complete states as arrays over states, in file order, for the fits of the chain.
+
+    Give the rows of one rotations setting (the ``rotations`` column). States without all three axial
+    probes or all six nu_ij are left out (a study still running).
+
+    Args:
+        rows: rows of probes.csv (`results.read_probes`).
+
+    Returns:
+        dict: ``state`` (ids), ``Zm``, ``sigma`` (n, 3), ``E`` (n, 3), ``nu`` (n, 3, 3), ``K`` and
+        ``G`` (Pa, `hyperelastic.scalar_moduli`), ``a2_dem`` (n, 3, Eq. 25).
+
+    Example:
+        >>> from trueaniso.analysis import chain, results
+        >>> rows = [r for r in results.read_probes("docs/data/spheres-53004-s1") if r["rotations"] == "free"]
+        >>> tab = chain.state_table(rows)
+        >>> print("%d states, Zm from %.2f to %.2f" % (len(tab["state"]), min(tab["Zm"]), max(tab["Zm"])))
+        39 states, Zm from 5.63 to 5.97
+    """
     per_state = hyperelastic.states_from_rows(rows)
     off = ~np.eye(3, dtype=bool)
     out = dict(state=[], Zm=[], sigma=[], E=[], nu=[], K=[], G=[])
@@ -61,7 +79,21 @@ def state_table(rows):
 
 
 def table2(tab):
-    """Quadratic fits of K and G (MPa) against Zm: {K: (c1, c2, c3, R^2), G: ...}; None below 3 states."""
+    """Table 2: K and G (MPa) against Zm as quadratics, c1 Zm^2 + c2 Zm + c3, with R^2.
+
+    Args:
+        tab: a `state_table`.
+
+    Returns:
+        dict or None: ``{"K": (c1, c2, c3, R^2), "G": (...)}``; None below three states.
+
+    Example:
+        >>> from trueaniso.analysis import chain, results
+        >>> tab = chain.state_table(results.read_probes("docs/data/spheres-53004-s1"))
+        >>> K = chain.table2(tab)["K"]
+        >>> print("K = %.2f Zm^2 %+.2f Zm %+.2f MPa, R^2 = %.3f" % K)
+        K = -3.33 Zm^2 +69.21 Zm -157.88 MPa, R^2 = 0.999
+    """
     if len(tab["state"]) < 3:
         return None
     out = {}
@@ -128,9 +160,25 @@ MIN_LOG_STRESS_RATIO = 0.01
 
 
 def stress_ratio_exponent(tab, pairs=ALL_PAIRS):
-    """Fig. 4: m in E_i/E_j = (sigma_i/sigma_j)^m over the ordered pairs (i, j) of every state
-    (all six for spheres, Fig. 4a; the horizontal pair for clumps, Fig. 4b-c), least squares
-    through the origin in log-log; with R^2 of that line and the points."""
+    """Fig. 4: the exponent m of E_i/E_j = (sigma_i/sigma_j)^m, the stress-induced anisotropy.
+
+    A least-squares line through the origin in log-log over the ordered pairs (i, j) of every state:
+    all six for spheres (Fig. 4a), the horizontal pair for clumps (Fig. 4b-c).
+
+    Args:
+        tab: a `state_table`.
+        pairs: the ordered pairs of axes (0, 1, 2 for x, y, z).
+
+    Returns:
+        dict: ``m``, ``r2`` (of the line), ``log_sigma_ratio`` and ``log_E_ratio`` (the points).
+
+    Example:
+        >>> from trueaniso.analysis import chain, results
+        >>> tab = chain.state_table(results.read_probes("docs/data/spheres-53004-s1"))
+        >>> fit = chain.stress_ratio_exponent(tab)
+        >>> print("m = %.3f, R^2 = %.3f" % (fit["m"], fit["r2"]))
+        m = 0.424, R^2 = 0.962
+    """
     x, y = [], []
     for s, E in zip(tab["sigma"], tab["E"]):
         for i, j in pairs:
