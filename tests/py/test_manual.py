@@ -1,6 +1,6 @@
 """The manual (docs/, Sphinx with myst-parser): it builds with no warning, its reference covers every
-script, module and input schema, the benchmark tables are where the scripts write them, and the
-tutorial's commands, run as written, give what the tutorial says."""
+script, module and input schema, the benchmark tables are where the scripts write them, no table
+is clipped in a browser, and the tutorial's commands, run as written, give what the tutorial says."""
 import glob
 import html as html_text
 import json
@@ -252,3 +252,96 @@ def test_the_tutorial_s_commands_give_what_it_says(tmp_path):
         rows = f.read().strip().split("\n")[1:]
     assert len(rows) == 12  # four states, three probes each, as the tutorial says
     assert "no state to run" in said  # its rerun, as the tutorial says
+
+
+# --- the built manual in a browser: no table is clipped ------------------------------------------
+
+CHROMIUM = ("chromium", "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync",
+            "--allow-file-access-from-files", "--window-size=1400,1000")
+
+# Loads each page in turn in an iframe of the width of a laptop's browser (1280 px), waits for the
+# theme's script (it wraps every table in its scrolling box) and MathJax (a formula widens its
+# cell), and writes what it measures into the page, which chromium --dump-dom prints: a table
+# wider than its box (the theme lets it scroll, which hides the right-hand columns) or a cell
+# whose content overflows it.
+MEASURE = """<!DOCTYPE html><html><body><pre id="result">running</pre>
+<iframe id="f" style="width:1280px;height:900px;border:0"></iframe>
+<script>
+const pages = %s, out = [], f = document.getElementById("f");
+function measure(doc, page) {
+  const found = [];
+  doc.querySelectorAll("table").forEach((t, k) => {
+    const box = t.closest(".wy-table-responsive") || t.parentElement;
+    if (box.scrollWidth > box.clientWidth + 1)
+      found.push("table " + k + " is " + box.scrollWidth + " px wide in a box of " + box.clientWidth);
+    t.querySelectorAll("td, th").forEach(c => {
+      if (c.scrollWidth > c.clientWidth + 1)
+        found.push("table " + k + ": a cell overflows (" + c.scrollWidth + " px in " + c.clientWidth + "): "
+                   + c.textContent.trim().slice(0, 60));
+    });
+  });
+  const wrapped = doc.querySelectorAll(".wy-table-responsive table").length;
+  return {page: page, tables: doc.querySelectorAll("table").length, wrapped: wrapped, found: found};
+}
+function when_ready(win, then, waited) {
+  const doc = win.document, tables = doc.querySelectorAll("table.docutils").length;
+  if (tables && !doc.querySelector(".wy-table-responsive") && waited < 3000)
+    return setTimeout(() => when_ready(win, then, waited + 50), 50);
+  if (win.MathJax && win.MathJax.Hub) return win.MathJax.Hub.Queue(then);
+  then();
+}
+let i = 0;
+function next() {
+  if (i >= pages.length) { document.getElementById("result").textContent = JSON.stringify(out); return; }
+  const page = pages[i++];
+  f.onload = () => when_ready(f.contentWindow, () => {
+    try { out.push(measure(f.contentDocument, page)); } catch (e) { out.push({page: page, error: String(e)}); }
+    next();
+  }, 0);
+  f.src = page;
+}
+next();
+</script></body></html>
+"""
+
+
+def _pages_with_tables(out):
+    pages = []
+    for path in sorted(glob.glob(os.path.join(str(out), "**", "*.html"), recursive=True)):
+        rel = os.path.relpath(path, str(out))
+        if rel.startswith("_") or rel in ("genindex.html", "search.html", "py-modindex.html"):
+            continue
+        with open(path) as f:
+            if "<table" in f.read():
+                pages.append(rel)
+    return pages
+
+
+def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
+    """Every table of every built page fits its column at a laptop's width (1280 px) in chromium:
+    the theme keeps each cell on one line and lets a wide table scroll in its box, which hid the
+    equation map's code and tests and the schemas' descriptions; docs/_static/trueaniso.css makes
+    cells wrap. A table wider than its box, or a cell whose content overflows, fails here."""
+    proc, out = manual
+    assert proc.returncode == 0
+    pages = _pages_with_tables(out)
+    assert len(pages) >= 20 and "equations.html" in pages
+    harness = os.path.join(str(out), "_measure_tables.html")
+    with open(harness, "w") as f:
+        f.write(MEASURE % json.dumps(pages))
+    done = subprocess.run(list(CHROMIUM) + ["--user-data-dir=%s" % (tmp_path / "profile"),
+                                            "--virtual-time-budget=120000", "--dump-dom", "file://" + harness],
+                          capture_output=True, text=True, timeout=300)
+    found = re.search(r'<pre id="result">(.*?)</pre>', done.stdout, flags=re.S)
+    assert found and found.group(1) != "running", "chromium measured nothing:\n%s\n%s" % (
+        done.stdout[-2000:], done.stderr[-2000:])
+    results = json.loads(html_text.unescape(found.group(1)))
+    assert [r["page"] for r in results] == pages
+    errors = [r for r in results if "error" in r]
+    assert not errors, errors
+    # the theme's script ran (it wraps the tables whose overflow it would hide), so what was
+    # measured is what a reader sees
+    assert all(r["wrapped"] == r["tables"] or r["wrapped"] > 0 for r in results), results
+    clipped = ["%s: %s" % (r["page"], line) for r in results for line in r["found"]]
+    assert not clipped, "tables clipped at 1280 px:\n" + "\n".join(clipped)
