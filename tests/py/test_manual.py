@@ -345,3 +345,64 @@ def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
     assert all(r["wrapped"] == r["tables"] or r["wrapped"] > 0 for r in results), results
     clipped = ["%s: %s" % (r["page"], line) for r in results for line in r["found"]]
     assert not clipped, "tables clipped at 1280 px:\n" + "\n".join(clipped)
+
+
+# --- the YADE classes' reference, generated from the plugin --------------------------------------
+
+def _yade_classes():
+    import sys
+    sys.path.insert(0, os.path.join(DOCS, "_ext"))
+    import yade_classes
+    return yade_classes
+
+
+def _source_docs():
+    """{class: its docstring's first 60 characters} read from the plugin's YADE_CLASS_BASE_DOC*
+    macros in engines/yade/*.cpp (the string literals after the class and base names, joined):
+    the page, made from the loaded classes, must say what the source says."""
+    docs = {}
+    for path in glob.glob(os.path.join(REPO, "engines", "yade", "*.cpp")):
+        with open(path) as f:
+            text = f.read()
+        for name, literals in re.findall(r'YADE_CLASS_BASE_DOC\w*\(\s*(\w+)\s*,\s*\w+\s*,\s*((?:"(?:[^"\\]|\\.)*"\s*)+)',
+                                         text):
+            docs[name] = "".join(re.findall(r'"((?:[^"\\]|\\.)*)"', literals))[:60]
+    return docs
+
+
+def test_the_yade_class_reference_is_the_plugin_s_own_documentation(manual):
+    """reference/yade-classes lists every class of the plugin's YADE_PLUGIN macro; where the plugin
+    is built (build/yade-plugin.status: installed), each with the docstring its source gives it and
+    a table of its attributes, read from yade-double when the manual is built; elsewhere the page
+    says why they are not there."""
+    proc, out = manual
+    assert proc.returncode == 0
+    yc = _yade_classes()
+    names = yc.plugin_classes(REPO)
+    assert {"TrueTriaxialServo", "StressProbe", "FabricRecorder", "Law2_ScGeom_SimplifiedMindlinPhys_Mindlin"} <= set(names)
+    text = _words(_text(out, os.path.join("reference", "yade-classes.html"))).replace("\u2019", "'")
+    for name in names:
+        assert name in text, name
+    installed, line = yc.plugin_state(REPO)
+    if not installed:
+        assert "The YADE plugin was not built where this manual was built" in text
+        return
+    docs = _source_docs()
+    assert set(names) <= set(docs), "classes without a YADE_CLASS_BASE_DOC macro: %s" % (set(names) - set(docs))
+    for name in names:
+        assert _words(docs[name].replace(":yref:", "").replace("`", "")[:40]) in text, name
+    for attribute in ("sigmaZ", "stressTolerance", "gammaTarget", "restrainRotations", "NcOverV"):
+        assert attribute in text
+
+
+def test_the_yade_class_reference_says_why_it_is_empty_where_the_plugin_is_not_built(tmp_path):
+    yc = _yade_classes()
+    os.makedirs(tmp_path / "engines" / "yade")
+    for path in glob.glob(os.path.join(REPO, "engines", "yade", "*.cpp")):
+        os.symlink(path, tmp_path / "engines" / "yade" / os.path.basename(path))
+    note = yc.markdown(str(tmp_path))
+    assert "was not built" in note and "build/yade-plugin.status is missing" in note
+    os.makedirs(tmp_path / "build")
+    (tmp_path / "build" / "yade-plugin.status").write_text("no-source: no YADE source (set TRUEANISO_YADE_SOURCE)\n")
+    note = yc.markdown(str(tmp_path))
+    assert "no-source: no YADE source" in note and "`StressProbe`" in note
