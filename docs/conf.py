@@ -38,3 +38,6 @@ autodoc_preserve_defaults = True  # defaults as written (REPO_ROOT), not this ch
 if os.path.exists("/usr/share/javascript/mathjax/MathJax.js"):
     trueaniso_mathjax_dir = "/usr/share/javascript/mathjax"
     mathjax_path = "mathjax/MathJax.js?config=TeX-AMS_CHTML"
+    # MathJax 2 reads only the formulas (myst marks the page's text to be ignored, so that a $ in
+    # prose is a dollar); myst sets this for MathJax 3 only.
+    mathjax2_config = {"tex2jax": {"processClass": "tex2jax_process|mathjax_process|math|output_area"}}

@@ -282,7 +282,8 @@ function measure(doc, page) {
     });
   });
   const wrapped = doc.querySelectorAll(".wy-table-responsive table").length;
-  return {page: page, tables: doc.querySelectorAll("table").length, wrapped: wrapped, found: found};
+  return {page: page, tables: doc.querySelectorAll("table").length, wrapped: wrapped, found: found,
+          formulas: doc.querySelectorAll(".math").length, typeset: doc.querySelectorAll(".MathJax_CHTML").length};
 }
 function when_ready(win, then, waited) {
   const doc = win.document, tables = doc.querySelectorAll("table.docutils").length;
@@ -322,7 +323,8 @@ def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
     """Every table of every built page fits its column at a laptop's width (1280 px) in chromium:
     the theme keeps each cell on one line and lets a wide table scroll in its box, which hid the
     equation map's code and tests and the schemas' descriptions; docs/_static/trueaniso.css makes
-    cells wrap. A table wider than its box, or a cell whose content overflows, fails here."""
+    cells wrap. A table wider than its box, or a cell whose content overflows, fails here; so does a
+    formula of these pages that MathJax (Debian's, copied into the manual) did not typeset."""
     proc, out = manual
     assert proc.returncode == 0
     pages = _pages_with_tables(out)
@@ -345,6 +347,11 @@ def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
     assert all(r["wrapped"] == r["tables"] or r["wrapped"] > 0 for r in results), results
     clipped = ["%s: %s" % (r["page"], line) for r in results for line in r["found"]]
     assert not clipped, "tables clipped at 1280 px:\n" + "\n".join(clipped)
+    # the formulas are typeset by the MathJax copied into the manual (no network here)
+    equations = results[pages.index("equations.html")]
+    assert equations["formulas"] >= 30, equations
+    assert [r["page"] for r in results if r["typeset"] < r["formulas"]] == [], \
+        [(r["page"], r["formulas"], r["typeset"]) for r in results if r["typeset"] < r["formulas"]]
 
 
 # --- the YADE classes' reference, generated from the plugin --------------------------------------
