@@ -413,3 +413,19 @@ def test_the_yade_class_reference_says_why_it_is_empty_where_the_plugin_is_not_b
     (tmp_path / "build" / "yade-plugin.status").write_text("no-source: no YADE source (set TRUEANISO_YADE_SOURCE)\n")
     note = yc.markdown(str(tmp_path))
     assert "no-source: no YADE source" in note and "`StressProbe`" in note
+
+
+def test_the_index_opens_with_an_example_that_prints_what_it_shows():
+    """docs/index.md opens with a Python example (within its first lines, before anything else in
+    a code block) and the output it shows; run from the repository's root, the example prints
+    exactly that."""
+    with open(os.path.join(DOCS, "index.md")) as f:
+        text = f.read()
+    blocks = re.findall(r"```(\w*)\n(.*?)```", text, flags=re.S)
+    assert blocks[0][0] == "python" and blocks[1][0] == "text", blocks[:2]
+    assert text.index("```python") < 600, "the index does not open with its example"
+    code, shown = blocks[0][1], blocks[1][1]
+    done = subprocess.run([PYTHON, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout == shown
