@@ -483,6 +483,10 @@ def test_fabric_recorder_counts_clumps_as_our_fabric_does(clump_runs, template):
     for k in ("Nc", "Np", "Np0", "Np1"):
         assert rec[k] == ours[k], k
     assert rec["Np"] == clump_runs[template]["clumps"] and rec["message"] == ""
+    # and YADE's own count, utils.avgNumInteractions(skipFree=True): Thornton's Zm with a clump's
+    # members' interactions summed onto the clump (the same integers, so the same quotient)
+    print(json.dumps(dict(template=template, Zm=rec["Zm"], yade_Zm=clump_runs[template]["fabric"]["yade_Zm"])))
+    assert rec["Zm"] == pytest.approx(clump_runs[template]["fabric"]["yade_Zm"], rel=1e-15)
     for k in ("Zm", "e", "NcV", "NcV36"):
         assert rec[k] == pytest.approx(ours[k], rel=1e-12), k
     for key in ("R", "H", "B", "M"):
@@ -498,6 +502,12 @@ def test_clump_probe_matches_our_stepper_on_the_same_scene(clump_runs, template)
     r = clump_runs[template]
     assert r["probe"]["stage"] == 4, r["probe"]
     assert r["probe"]["E"] == pytest.approx(r["ours"]["E"], rel=1e-3)
+    # and YADE's reading of the same probe: getStress's increment (branches between clump centres)
+    # over the strain of YADE's cell, from the step the ramp starts to the step the probe ends.
+    # The stresses agree to round-off (1e-12 of 100 kPa against an increment of ~100 Pa); the
+    # probe's strain measure and the cell's small strain differ by ~gamma/2 = 5e-7 of the strain.
+    print(json.dumps(dict(template=template, probe_E=r["probe"]["E"], yade=r["probe"]["yade"], ours=r["ours"]["E"])))
+    assert r["probe"]["yade"]["E"] == pytest.approx(r["probe"]["E"], rel=2e-6)
     assert r["probe"]["nu"][0] == pytest.approx(r["ours"]["nu_zx"], abs=5e-3)
     assert r["probe"]["nu"][1] == pytest.approx(r["ours"]["nu_zy"], abs=5e-3)
 

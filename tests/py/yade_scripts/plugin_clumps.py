@@ -13,7 +13,7 @@ HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
 sys.path[:0] = [HERE, os.path.join(HERE, "..", "..", "..", "pyscripts")]
 import numpy as np  # noqa: E402
 from yade import O, utils  # noqa: E402
-from yade.wrapper import FabricRecorder, StressProbe, TrueTriaxialServo  # noqa: E402
+from yade.wrapper import FabricRecorder, PyRunner, StressProbe, TrueTriaxialServo  # noqa: E402
 
 from trueaniso import engines, specimen_file, triaxial, yade_bridge  # noqa: E402
 
@@ -83,6 +83,9 @@ result["fabric"] = dict(
     recorder=dict(Zm=rec.Zm, Nc=rec.contacts, Np=rec.particles, Np0=rec.rattlers, Np1=rec.oneContact, e=rec.voidRatio,
                   NcV=rec.NcOverV, NcV36=rec.NcOverVEq36, R=matrix(rec.R).tolist(), H=matrix(rec.H).tolist(),
                   B=matrix(rec.B).tolist(), M=list(rec.M), message=rec.message),
+    # YADE's own count: Thornton's Zm over its histogram of interactions per body, a clump's
+    # members' interactions summed onto the clump
+    yade_Zm=utils.avgNumInteractions(skipFree=True),
     ours=dict(Zm=f["Zm"], Nc=int(f["Nc"]), Np=int(f["Np"]), Np0=int(f["Np0"]), Np1=int(f["Np1"]), e=f["e"],
               NcV=f["NcV_count"], NcV36=f["NcV_eq36"], R=f["R"].tolist(), H=f["H"].tolist(), B=f["B"].tolist(),
               M=np.asarray(f["M"]).ravel().tolist()))
@@ -98,12 +101,30 @@ if probing:
     result["ours"] = dict(E=ours["E"], nu_zx=ours["nu_zx"], nu_zy=ours["nu_zy"], steps=ours["steps"])
     scene, _ = specimen_file.load(path)
     yade_bridge.yade_scene_from(scene, damping=DAMPING, law="trueaniso")
-    p = StressProbe(axis="z", holdStress=list(hold), label="probe")
+    p = StressProbe(axis="z", holdStress=list(hold), restoreState=False, label="probe")  # YADE reads its end
     insert(p)
+    # YADE's stress and cell where the probe takes its reference (the step its ramp begins) and its
+    # increments (the step it ends), read after the probe within the same step (the forces and
+    # positions it read): E from YADE's getStress over the strain of YADE's cell.
+    seen = {}
+
+    def watch():
+        if p.stage in (2, 4) and p.stage not in seen:
+            seen[p.stage] = dict(stress=-matrix(utils.getStress()), h=matrix(O.cell.hSize))
+
+    globals()["watch"] = watch
+    insert(PyRunner(iterPeriod=1, command="watch()"))
     while not p.finished:
         O.run(1000, True)
     result["probe"] = dict(E=p.E, nu=list(p.nu), stage=p.stage, steps=p.steps, message=p.message,
-                           lost=p.lostContacts)
+                           lost=p.lostContacts, dStress=list(p.dStress), dStrain=list(p.dStrain))
+    if 2 in seen and 4 in seen:
+        # small strain of the cell from the ramp's start, compression positive: -(sym(F) - I), F = h h0^-1
+        F = seen[4]["h"] @ np.linalg.inv(seen[2]["h"])
+        eps = -(0.5 * (F + F.T) - np.eye(3))
+        d_sigma = seen[4]["stress"] - seen[2]["stress"]
+        result["probe"]["yade"] = dict(d_sigma_z=d_sigma[2, 2], eps_z=eps[2, 2],
+                                       E=d_sigma[2, 2] / eps[2, 2])
 
 with open(out, "w") as fh:
     json.dump(result, fh)
