@@ -666,3 +666,41 @@ def test_the_yade_page_s_commands_run_as_written(plugin, tmp_path):
         r = json.load(open(os.path.join(out, "yade-examples", name)))
         np.testing.assert_allclose(r["stress"][:3], [100e3, 60e3, 140e3], atol=100.0)
         assert r["E_z"] > r["E_x"] > r["E_y"] > 0 and r["Zm"] > 3.5 and len(r["M"]) == 81
+
+
+def test_the_servo_s_loading_friction_reaches_contacts_made_while_it_runs(plugin, tmp_path):
+    """The material's friction 0.3, the servo's 0.5: on the way to state 21 YADE makes new contacts
+    (7 of 372 on the 150-sphere specimen); each carries 0.5 when the state is reached, not the
+    material's 0.3 (a servo that set it once, on the contacts of its first step, leaves them so)."""
+    f = run_plugin("plugin_loading_friction", os.path.join(REPO, "tests", "data", "spheres-150-s4.npz"), cwd=tmp_path)
+    assert f["reached"] and f["made_later"] > 0
+    assert f["frictions"] == [0.5]
+    assert f["material"] == pytest.approx(math.atan(0.3), rel=1e-15)
+
+
+@pytest.fixture(scope="module")
+def user_packing(plugin, tmp_path_factory):
+    return run_plugin("plugin_user_packing", USER_PACKING_N, cwd=tmp_path_factory.mktemp("user_packing"))
+
+
+USER_PACKING_N = 300
+
+
+def test_the_servo_reaches_a_state_from_a_yade_user_s_packing(user_packing):
+    """makeCloud, consolidated to 100 kPa at infinite friction (a loose packing), then our servo at
+    friction 0.5 to b = 0.3, sigma_z = 125 kPa (not in Table C1): the packing loses its stress when
+    its friction drops and the servo must bring it back (plugin_user_packing.py). Measured: e 0.80,
+    the mean stress down to 13.9 kPa, the state reached after 178,819 steps within 152 Pa."""
+    r = user_packing
+    print(json.dumps(r))
+    c, s = r["consolidation"], r["servo"]
+    assert c["done"] and c["e"] > 0.65  # a loose packing
+    np.testing.assert_allclose(c["stress"], [100e3] * 3, atol=1000.0)  # its servo's stressTolerance
+    assert s["lowest_mean"] < 0.5 * 100e3  # its stress lost on the way (friction 0.5 against infinite)
+    assert s["reached"], s["message"]
+    # b = 0.3 at p = 100 kPa: sigma_3 = (300 - 1.3 x 125)/1.7 kPa, sigma_2 = sigma_3 + 0.3 (125 kPa - sigma_3)
+    s3 = (300e3 - 1.3 * 125e3) / 1.7
+    np.testing.assert_allclose(sorted(s["stress"][:3]), [s3, s3 + 0.3 * (125e3 - s3), 125e3], atol=500.0)
+    assert s["stress"][2] == max(s["stress"][:3])  # sigma_z the largest
+    np.testing.assert_allclose(s["getStress"], s["stress"][:3], rtol=1e-9)
+    assert s["frictions"] == [0.5]
