@@ -18,10 +18,6 @@
 namespace yade {
 
 class FabricRecorder : public PeriodicEngine {
-  // Solid volume of each particle by body id (a clump's: the union of its member balls, overlaps
-  // counted once, measure/Coordination's rule), computed once: a clump is rigid.
-  std::vector<Real> volumes_;
-
   // The union volume of balls, from a cache of shapes scaled to their largest radius: CGAL's mesh
   // takes ~0.1 s a clump, and a packing holds a few shapes (replaceByClumps scales one template
   // to every sphere it replaces). The key, radii and centre distances over the largest radius in
@@ -49,10 +45,10 @@ class FabricRecorder : public PeriodicEngine {
     return found->second * scale * scale * scale;
   }
 
-  Real solidVolume(const Body& b) {
-    const std::size_t id = static_cast<std::size_t>(b.id);
-    if (volumes_.size() <= id) volumes_.resize(scene->bodies->size(), -1.0);
-    if (volumes_[id] >= 0) return volumes_[id];
+  // Solid volume of a particle (a clump's: the union of its member balls, overlaps counted once,
+  // measure/Coordination's rule), from its radii as they are now: a YADE script may grow them
+  // (utils.growParticles) or replace bodies between records; a clump's shape is cached by its key.
+  static Real solidVolume(const Body& b, Scene* scene) {
     Real v = 0;
     if (const auto* s = dynamic_cast<const Sphere*>(b.shape.get())) {
       v = 4.0 / 3.0 * M_PI * s->radius * s->radius * s->radius;
@@ -69,7 +65,6 @@ class FabricRecorder : public PeriodicEngine {
       }
       v = unionVolume(centres, radii);
     }
-    volumes_[id] = v;
     return v;
   }
 
@@ -92,7 +87,7 @@ class FabricRecorder : public PeriodicEngine {
         throw std::runtime_error("FabricRecorder counts spheres and clumps of spheres; body #" + tp::shown(b->id) +
                                  " is a " + (b->shape ? b->shape->getClassName() : std::string("body without shape")));
       ++nb;
-      solid += solidVolume(*b);
+      solid += solidVolume(*b, scene);
     }
     trueaniso::FabricSums sum;
     for (const auto& I : *scene->interactions) {

@@ -388,6 +388,9 @@ def test_engines_refuse_a_scene_that_is_not_periodic(refusals):
 def test_fabric_recorder_records_by_default_and_says_when_there_are_no_contacts(refusals):
     r = refusals["fabric_default_period"]
     assert r["records"] == 2 and 4 < r["Zm"] < 8 and r["message"] == ""  # every 100 steps: at 100 and 200
+    # radii changed between records (utils.growParticles, a script's own): the void ratio follows
+    r = refusals["fabric_radii_changed"]
+    assert r["after"] == pytest.approx(r["expected"], rel=1e-12) and r["after"] > r["before"] * 1.02
     r = refusals["fabric_no_contacts"]
     assert r["contacts"] == 0 and r["Zm"] == 0 and r["message"].startswith("no contacts")
     assert np.all(np.array(r["B"]) == 0) and math.isfinite(r["voidRatio"])

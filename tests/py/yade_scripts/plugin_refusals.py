@@ -156,6 +156,13 @@ fab = FabricRecorder()
 insert(fab)
 O.run(250, True)
 result["fabric_default_period"] = dict(error=None, records=fab.records, Zm=fab.Zm, message=fab.message)
+# the void ratio from the radii as they are at each record (a script may grow its particles)
+e_before = fab.voidRatio
+for b in O.bodies:
+    b.shape.radius *= 0.99
+fab()
+vs = sum(4.0 / 3.0 * math.pi * b.shape.radius ** 3 for b in O.bodies)
+result["fabric_radii_changed"] = dict(before=e_before, after=fab.voidRatio, expected=(O.cell.volume - vs) / vs)
 for I in list(O.interactions):
     O.interactions.erase(I.id1, I.id2)
 O.engines = [e for e in O.engines if type(e).__name__ != "InsertionSortCollider"]  # nothing comes back
