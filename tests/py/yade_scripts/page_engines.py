@@ -22,7 +22,8 @@ yade_bridge.yade_scene_from(scene, damping=0.4, law="trueaniso")
 # the names a script run by yade-double has: YADE's classes (the plugin's too), O, utils
 namespace = dict(globals(), **{k: getattr(yade.wrapper, k) for k in dir(yade.wrapper) if not k.startswith("_")})
 exec(blocks[0], namespace)  # noqa: S102 - the page's own code
-servo = namespace["servo"]
+# label="servo" names it as YADE names labelled objects (a builtin), or the block assigns it
+servo = namespace.get("servo") or getattr(__import__("builtins"), "servo")
 with open(out, "w") as f:
     json.dump(dict(blocks=len(blocks), reached=servo.reached, message=servo.message, steps=servo.steps,
                    stress=list(servo.stress), getStress=[-utils.getStress()[i][i] for i in range(3)],
