@@ -23,7 +23,7 @@ from . import engines, yade_clumps
 from .yade_convert import (MATERIAL_FIELDS, BridgeError, _cell, _check_homo_deform, _contact_rows,  # noqa: F401
                            _current_velocity_gradient, _interaction_images, _keep_interaction_images,
                            _reference_cell, _scheduled_velocity_gradient, _shared_material, _write_cell, _yade,
-                           _yade_matrix, contacts_made_at_rest, nearest_image_shifts, write_shear_history)
+                           _yade_matrix, contact_law, contacts_made_at_rest, nearest_image_shifts, write_shear_history)
 
 __all__ = ["yade_scene_from", "scene_from_yade", "write_to_yade"]
 
@@ -226,21 +226,6 @@ def write_to_yade(scene, O=None, ids=None):
         b.shape.radius = float(rad[k])
     _keep_interaction_images(O, before)
     write_shear_history(scene, O, ids)
-
-
-def contact_law(law):
-    """(Ip2, Law2) classes of a law: "yade" (YADE's Hertz-Mindlin) or "trueaniso" (ours, from the plugin)."""
-    if law == "trueaniso":
-        try:
-            from yade import Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys as Ip2, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin as Law2
-        except ImportError:
-            raise BridgeError("law='trueaniso' needs the trueaniso YADE plugin: run yade-double with "
-                              "YADE_PREFIX=<repository>/build/yade-prefix (./setup.sh builds it)") from None
-        return Ip2, Law2
-    if law == "yade":
-        from yade import Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
-        return Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
-    raise BridgeError("law must be 'yade' (YADE's Hertz-Mindlin) or 'trueaniso' (ours, from the YADE plugin)")
 
 
 def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False, law="yade"):

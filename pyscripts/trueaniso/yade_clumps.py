@@ -24,7 +24,7 @@ from . import clump_shapes, engines
 from .yade_convert import (BridgeError, _cell, _check_homo_deform, _contact_rows, _current_velocity_gradient,
                            _interaction_images, _keep_interaction_images, _reference_cell,
                            _scheduled_velocity_gradient, _shared_material, _write_cell, _yade_matrix,
-                           contacts_made_at_rest, nearest_image_shifts, write_shear_history)
+                           contact_law, contacts_made_at_rest, nearest_image_shifts, write_shear_history)
 
 
 def _quat_wxyz(q):
@@ -133,7 +133,6 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
     (0 when YADE's clump frame is ours)."""
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
                       InteractionLoop, NewtonIntegrator, Vector3, utils)
-    from .yade_bridge import contact_law
     Ip2, Law2 = contact_law(law)
     O.reset()
     O.periodic = True
