@@ -42,8 +42,8 @@ targets="${*:-}"
 # (a stale module from an earlier build must never pass for a fresh one).
 mkdir -p build
 log=build/build.log
-# TRUEANISO_ARCH=x86-64-v3 ./setup.sh (or ./main.sh, ./test.sh) builds for that x86-64 level, about
-# 1.2-1.3x faster and different in the last bits (CMakeLists.txt); unset, the build keeps the level it
+# TRUEANISO_ARCH=x86-64-v3 ./setup.sh (or ./main.sh, ./test.sh) builds for that x86-64 level, faster
+# (docs/benchmarks.md) and different in the last bits (CMakeLists.txt); unset, the build keeps the level it
 # was configured with (the portable baseline unless asked), TRUEANISO_ARCH= returns to the baseline.
 # A new build directory uses Ninja (a fresh build is faster than with make); one configured before
 # keeps its generator, as CMake requires.
