@@ -15,35 +15,9 @@ import numpy as np
 from . import dem, engines
 from .refusal import InputError
 
-# Table C1: (ID, sigma_x, sigma_y, sigma_z, q) in kPa, as printed (rounded to 0.1 kPa).
-TABLE_C1 = [
-    (1, 100, 100, 100, 0), (2, 95, 95, 110, 15), (3, 90, 90, 120, 30), (4, 85, 85, 130, 45),
-    (5, 80, 80, 140, 60), (6, 105, 105, 90, -15), (7, 110, 110, 80, -30), (8, 115, 115, 70, -45),
-    (9, 120, 120, 60, -60), (10, 97.1, 92.9, 110, 15.5), (11, 94.3, 85.7, 120, 30.9),
-    (12, 91.4, 78.6, 130, 46.4), (13, 88.6, 71.4, 140, 61.8), (14, 102.9, 107.1, 90, -15.5),
-    (15, 105.7, 114.3, 80, -30.9), (16, 108.6, 121.4, 70, -46.4), (17, 111.4, 128.6, 60, -61.8),
-    (18, 100, 90, 110, 17.3), (19, 100, 80, 120, 34.6), (20, 100, 70, 130, 52.0),
-    (21, 100, 60, 140, 69.3), (22, 100, 110, 90, -17.3), (23, 100, 120, 80, -34.6),
-    (24, 100, 130, 70, -52.0), (25, 100, 140, 60, -69.3), (26, 104, 86, 110, 21.6),
-    (27, 108, 72, 120, 43.3), (28, 112, 58, 130, 64.9), (29, 96, 114, 90, -21.6),
-    (30, 92, 128, 80, -43.3), (31, 88, 142, 70, -64.9), (32, 105, 90, 105, 15),
-    (33, 110, 80, 110, 30), (34, 115, 70, 115, 45), (35, 120, 60, 120, 60),
-    (36, 95, 110, 95, -15), (37, 90, 120, 90, -30), (38, 85, 130, 85, -45), (39, 80, 140, 80, -60),
-]
-
-
-def b_of(sx, sy, sz):
-    """Eq. (8); the isotropic state has no b (0 is used: every b passes through it)."""
-    return 0.0 if abs(sz - sy) < 1e-12 else (sx - sy) / (sz - sy)
-
-
-def table_c1_states():
-    """[(id, b, sigma_z in Pa)] with b rounded to the paper's five values."""
-    out = []
-    for i, sx, sy, sz, _ in TABLE_C1:
-        b = min((0.0, 0.25, 0.5, 0.75, 1.0), key=lambda v: abs(v - b_of(sx, sy, sz)))
-        out.append((i, b, sz * 1e3))
-    return out
+# Table C1, Eqs. 8-9 and the loading paths' mean stress live in stress_states (no engines: the
+# readers of result files check rows against them); their names stay importable here.
+from .stress_states import PATHS, SIGMA_H, TABLE_C1, b_of, path_mean_stress, table_c1_states  # noqa: F401
 
 
 def paths(states):
@@ -332,27 +306,10 @@ def probe_state(scene, hold, axes=(2, 0, 1), **kw):
     return [probe(scene, hold, a, **kw) for a in axes]
 
 
-# Loading paths a study can follow (run_states.py --path). "true-triaxial": the paper's Table C1
-# paths, constant b and p = 100 kPa (Eqs. 8-9). "cross-anisotropic": its Fig. 16 (after Zhou et
-# al. 2026c), sigma_h = sigma_x = sigma_y held at SIGMA_H while sigma_v = sigma_z varies.
-PATHS = ("true-triaxial", "cross-anisotropic")
-SIGMA_H = 100e3
 # The sigma_v of a cross-anisotropic study when none are given (Pa): stress ratios sigma_v/sigma_h
 # from 0.5 to 2.5 on both sides of the isotropic state. The paper does not list the states of
 # Fig. 16's source; this choice spans the ratios of Table C1's extreme states (sigma_1/sigma_3 up to 3).
 CROSS_ANISOTROPIC_SIGMA_V = (50e3, 60e3, 70e3, 80e3, 90e3, 100e3, 120e3, 140e3, 160e3, 180e3, 200e3, 250e3)
-
-
-def path_mean_stress(path, b, sigma_z):
-    """The mean stress p of the state (b, sigma_z) on a path: 100 kPa on the true-triaxial paths;
-    on the cross-anisotropic path (b = 0 there) (2 sigma_h + sigma_v) / 3, which makes Eq. (9)
-    give sigma_x = sigma_y = sigma_h for any sigma_v, so the servo's straight stress path from the
-    isotropic state keeps sigma_h at 100 kPa all the way."""
-    if path == "true-triaxial":
-        return 100e3
-    if path == "cross-anisotropic":
-        return (2.0 * SIGMA_H + sigma_z) / 3.0
-    raise ValueError("unknown path %r: the paths are %s" % (path, ", ".join(PATHS)))
 
 
 def validate_path_state(path, b, sigma_z):
