@@ -15,21 +15,15 @@ The output directory is one study (docs/runs.md): a rerun continues it where it 
 after a kill, and may add states (--ids 1,5 then --ids 1,5,9); a rerun that asks for another
 specimen or other settings refuses in one line.
 """
-import os
-import signal
-import sys
-
-# Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
-# and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
-# crash; cli.guarded gives both signals their meaning for the work when it starts.
-for _signal in (signal.SIGINT, signal.SIGTERM):
-    signal.signal(_signal, lambda number, _: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
-                                              os._exit(128 + number)))
 import inspect
+import os
+import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path.insert(0, HERE)  # this checkout's trueaniso, under yade-double too (it does not put the script's folder first)
+from trueaniso import start_guard  # noqa: E402  (first: Ctrl-C while numpy and the engines load is one line)
+start_guard.install()
 try:
     from trueaniso.analysis import figures, report, zeta_contrast
     from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, resources,
@@ -233,16 +227,18 @@ def main(argv=None):
         # The isotropic state, and state 21 (Table B1's second state) when asked: each solve's
         # result line after its own "solving" line, state 21's too.
         sres = None
+        spec_meta = specimen_file.read(path)[1]  # what the records are of (statics.identity)
         for what, state in (("isotropic state", None), ("state 21", "21")):
             if state is not None and state not in {str(sid) for sid, _, _ in states}:
                 continue
-            rec = statics.cached_record(o.out, state, scene=scene if state is None else None, log=log)
+            rec = statics.cached_record(o.out, state, scene=scene if state is None else None, log=log,
+                                        meta=spec_meta if state is None else None)
             sres = sres or rec
             log("statics (%s): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %s, zeta_v = %s"
                 % (what, [round(e / 1e6, 1) for e in rec["E_free"]], [round(e / 1e6, 1) for e in rec["E_blocked"]],
                    statics.said_zeta(rec["zeta_h"]), statics.said_zeta(rec["zeta_v"])))
         csv_path = os.path.join(o.out, study.CSV_NAME)
-        material = specimen_file.read(path)[1]["material"]
+        material = spec_meta["material"]
         contrast = zeta_contrast.fit(csv_path, material["shear_modulus"], material["poisson"])
         if contrast:
             log("%s; the magnitude zeta above answers another question (docs/statics.md 7.1)"

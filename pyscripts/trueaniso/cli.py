@@ -17,7 +17,7 @@ import threading
 from . import param_table
 from .refusal import InputError, Refusal
 
-__all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "release_start_guard", "in_yade",
+__all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "tool", "release_start_guard", "in_yade",
            "description"]
 
 
@@ -224,6 +224,14 @@ def positive_or_inf(text):
         raise argparse.ArgumentTypeError("%r is not a number" % text) from None
     if not x > 0:  # nan and -inf fail too
         raise argparse.ArgumentTypeError("%r is not > 0 (or inf)" % text)
+    return x
+
+
+def poisson_ratio(text):
+    """A particle's Poisson's ratio: a number in (-1, 0.5), the range of an isotropic elastic solid."""
+    x = finite(text)
+    if not -1 < x < 0.5:
+        raise argparse.ArgumentTypeError("%r is not in (-1, 0.5)" % text)
     return x
 
 
@@ -555,6 +563,22 @@ def guarded(main, resumable=False):
         fail(_interrupted_line(what) if resumable else what, 128 + signal.SIGPIPE)
     except OSError as exc:  # a full disk, a file system turned read-only, a permission taken away
         fail(io_error_line(exc, resumable), 1)
+
+
+def tool(main):
+    """Run an analysis tool's main() (python3 -m trueaniso.analysis.X), which returns its exit
+    status (None: 0) and prints its own refusals, under guarded: Ctrl-C, SIGTERM, a closed pipe or
+    an error of the library are one line and their status, as in every script, never a traceback."""
+    def run():
+        status = main()
+        if status:
+            try:
+                sys.stdout.flush()
+            except OSError:
+                pass
+            os._exit(status)
+        work_done()
+    guarded(run)
 
 
 def io_error_line(exc, resumable=False):

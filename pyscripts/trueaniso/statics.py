@@ -66,10 +66,30 @@ def summary(result):
     return "\n".join(lines)
 
 
-def state_record(scene):
+def identity(meta, n, state=None):
+    """What a record is of, which a reader checks against the study it sits in or is borrowed from
+    (analysis.b1_checks): the study's specimen (its checksum), the particles' material, the number
+    of particles, and the state (id, b, sigma_z, path; the isotropic state of the specimen itself
+    when `state` is None). `meta`: the specimen file's metadata of the scene solved (a checkpoint's
+    names its study's specimen in its parameters)."""
+    p = meta.get("parameters") or {}
+    m = meta["material"]
+    out = dict(specimen=p["specimen"] if state is not None else meta["sha256"], n=int(n),
+               material=dict(shear_modulus=float(m["shear_modulus"]), poisson=float(m["poisson"]),
+                             density=float(m["density"])))
+    if state is None:
+        out["state"] = dict(id="isotropic")
+    else:
+        out["state"] = dict(id=str(state), b=float(p["b"]), sigma_z=float(p["sigma_z"]),
+                            path=p.get("path", "true-triaxial"))
+    return out
+
+
+def state_record(scene, identity=None):
     """What a study keeps of a state's static solve (Appendix B / Table B1): E with rotations free
     and blocked, the kinematic (zeta = 1) prediction, nu, the magnitude zeta, the state's normal
-    stresses, residual, rattlers and time; plain lists and numbers (JSON)."""
+    stresses, residual, rattlers and time; plain lists and numbers (JSON). `identity` (the
+    function above) goes in as `study`."""
     free = static_stiffness(scene, rotations=True)
     blocked = static_stiffness(scene, rotations=False)
     zeta = rotation_factor(scene, free=free, blocked=blocked)
@@ -79,7 +99,8 @@ def state_record(scene):
                 nu_free=[[None if x != x else float(x) for x in row] for row in free["nu"]],
                 zeta_h=float(zeta["zeta_h"]), zeta_v=float(zeta["zeta_v"]), residual=float(free["residual"]),
                 sigma=[float(s[i, i]) for i in range(3)], rattlers=len(free["rattlers"]),
-                time=free["time"]["total"] + blocked["time"]["total"])
+                time=free["time"]["total"] + blocked["time"]["total"],
+                **({} if identity is None else dict(study=identity)))
 
 
 def said_zeta(z):
@@ -96,20 +117,21 @@ def state_file(out, state):
     return os.path.join(out, "statics_isotropic.json" if state is None else "statics_state-%s.json" % state)
 
 
-def cached_record(out, state=None, scene=None, log=print):
-    """The record of `state` (None: the specimen, given as `scene`) from its file in `out`, or
-    solved from the scene (for a state: its checkpoint states/ID.npz) and written atomically."""
+def cached_record(out, state=None, scene=None, log=print, meta=None):
+    """The record of `state` (None: the specimen, given as `scene` with its file's metadata `meta`)
+    from its file in `out`, or solved from the scene (for a state: its checkpoint states/ID.npz)
+    and written atomically, with its identity."""
     from . import atomic, specimen_file, study_dir
     path = state_file(out, state)
     if not os.path.exists(path):
         if scene is None:
             try:
-                scene, _ = specimen_file.load(study_dir.checkpoint_path(out, state))
+                scene, meta = specimen_file.load(study_dir.checkpoint_path(out, state))
             except specimen_file.SpecimenFileError as exc:
                 # A study's checkpoint, not a specimen: run_study reaches a missing one again.
                 raise specimen_file.SpecimenFileError(study_dir.checkpoint_problem(exc, state)) from None
         log("statics (%s): solving the contact network's stiffness, rotations free and blocked ..."
             % ("isotropic state" if state is None else "state %s" % state))
-        atomic.write_json(path, state_record(scene))
+        atomic.write_json(path, state_record(scene, None if meta is None else identity(meta, scene.num_bodies, state)))
     from . import validate
     return validate.load_json(path, "statics_record")

@@ -9,6 +9,12 @@ import os
 
 from trueaniso import results_csv, study_checks, validate
 
+from . import row_checks
+
+# The paper's particles (section 2.1): the material a table's moduli are bounded with when no
+# metadata.json says its own.
+PAPER_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)
+
 
 class ResultsError(ValueError):
     """A results file that cannot be analysed; the message is one line for the user."""
@@ -43,23 +49,13 @@ def table_path(path):
     return path
 
 
-def _state_key(text):
-    """A state's text as one key: a Table C1 number written '1.0' or ' 1' (a table edited by hand or
-    by a spreadsheet) is state 1, so its second row is found as a repeat."""
-    try:
-        value = float(text)
-    except (TypeError, ValueError):
-        return text
-    return str(int(value)) if value.is_integer() else text
-
-
 def _check_rows(path, rows, columns):
     """One row a probe, and its modulus a positive number: a table appended twice was analysed as
     it came, and a NaN or negative E changed the fits and the reversals without a word (an outside
     try); the report alone refused them, and named no row."""
     seen = {}
     for line, r in enumerate(rows, start=2):  # line 1 is the header
-        key = (r.get("rotations"), _state_key(r.get("state")), r.get("probe"), r.get("sign"))
+        key = (r.get("rotations"), r.get("state"), r.get("probe"), r.get("sign"))
         if key in seen:
             raise ResultsError("%s: state %s probe %s (rotations %s) is in lines %d and %d: one row a probe "
                                "(a table appended twice?)" % (path, r.get("state"), r.get("probe"),
@@ -86,9 +82,11 @@ def _check_rows(path, rows, columns):
                                        % (path, r.get("state"), r.get("probe"), ratio, r[ratio], line))
 
 
-def read_probes(path, need=("state", "probe", "E")):
+def read_probes(path, need=("state", "probe", "E"), material=None):
     """Rows of a probe table as dicts of strings, with the columns in `need` present; `path` is the
-    table or a study directory holding probes.csv."""
+    table or a study directory holding probes.csv. Every row is checked against what it says of
+    itself (row_checks), its moduli against the bounds of `material` (shear_modulus, poisson:
+    default the study's metadata.json's, else the paper's particles)."""
     path = table_path(path)
     try:
         table = results_csv.read(path)
@@ -100,6 +98,7 @@ def read_probes(path, need=("state", "probe", "E")):
     if missing:
         raise ResultsError("%s lacks the columns %s" % (path, ", ".join(missing[:6]) + (" ..." if len(missing) > 6 else "")))
     _check_rows(path, table.rows, table.columns)
+    meta = None
     if os.path.basename(path) == "probes.csv":  # a study's table: its rows are the study's states
         meta = read_metadata(os.path.dirname(os.path.abspath(path)))
         problem = meta and study_checks.rows_problem(meta, table.rows)
@@ -109,6 +108,11 @@ def read_probes(path, need=("state", "probe", "E")):
     mixed = study_checks.mixed_specimens_problem(table.rows)
     if mixed:
         raise ResultsError("%s: %s" % (path, mixed))
+    if material is None:
+        material = ((meta or {}).get("specimen") or {}).get("material") or PAPER_MATERIAL
+    problem = row_checks.table_problem(table.rows, material)
+    if problem:
+        raise ResultsError("%s: %s" % (path, problem))
     kept, notes = _fitting_rows(path, table.rows)
     out = Probes(kept)
     if table.torn is not None:
@@ -153,16 +157,23 @@ def _fitting_rows(path, rows):
 
 def read_metadata(results, required=False):
     """The metadata.json of a study directory (its fingerprint, specimen, runs), or None for a bare
-    table or a directory without one; with `required`, a ResultsError instead of None."""
+    table or a directory without one; with `required`, a ResultsError instead of None. One that is
+    there but cannot be read (empty, truncated, not JSON) is a ResultsError always: it holds what
+    the study is (its assembly, material, states), and read as absent, a clump1 study was reported
+    as spheres against the paper's spheres, where run_states.py refuses the same directory."""
     import json
     path = os.path.join(results, "metadata.json")
+    if not os.path.exists(path):
+        if required:
+            raise ResultsError("%s: no metadata.json (a study's, written by run_states.py or run_study.py)" % results)
+        return None
     try:
         with open(path) as f:
             meta = json.load(f)
     except (OSError, ValueError) as exc:
-        if required:
-            raise ResultsError("%s: no readable metadata.json (%s)" % (results, exc)) from None
-        return None
+        raise ResultsError("%s is unreadable (%s): what the study is (its assembly, material and states) cannot be "
+                           "read; restore it from the run that wrote it, or analyse probes.csv copied elsewhere as a "
+                           "bare table" % (path, exc)) from None
     # A metadata.json that parses but does not fit its schema is refused, not taken for a bare
     # table: its states and specimen are what the rows are checked against. Each field is taken
     # as optional here: the analysis uses what is there.
