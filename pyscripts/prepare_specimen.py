@@ -14,18 +14,12 @@ Inside yade-double the result is also written into O (cell and spheres) for view
 import json
 import math
 import os
-import signal
 import sys
-
-# Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
-# and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
-# crash; cli.guarded gives both signals their meaning for the work when it starts.
-for _signal in (signal.SIGINT, signal.SIGTERM):
-    signal.signal(_signal, lambda number, _: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
-                                              os._exit(128 + number)))
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+from trueaniso import start_guard  # noqa: E402  (first: Ctrl-C while numpy and the engines load is one line)
+start_guard.install()
 try:
     from trueaniso import (clump_recipes, clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance,
                            psd, resources, specimen, specimen_file, study_dir, triaxial)

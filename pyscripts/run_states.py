@@ -16,23 +16,16 @@ and a checkpoint per state. The output directory is one study: a rerun continues
 states is fine), or refuses in one line if it asks for something else (docs/runs.md).
 """
 import os
-import signal
 import sys
 import time
 
-# Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
-# and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
-# crash; cli.guarded gives both signals their meaning for the work when it starts. An MPI worker
-# (a rank other than 0: mpi4py.futures' master is rank 0) ends silently, as it does once loaded
-# (cli.release_start_guard): a Ctrl-C on mpiexec within its first second would print this line once
-# a worker beside the master's.
-_WORKER = next((os.environ[v] for v in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK") if v in os.environ), "0") != "0"
-for _signal in (signal.SIGINT, signal.SIGTERM):
-    signal.signal(_signal, lambda number, _: ((_WORKER or sys.stderr.write("error: interrupted while starting; nothing "
-                                                                           "was done\n")),
-                                              os._exit(128 + number)))
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+from trueaniso import start_guard  # noqa: E402  (first: Ctrl-C while numpy and the engines load is one line)
+# An MPI worker (a rank other than 0: mpi4py.futures' master is rank 0) ends silently, as it does
+# once loaded (cli.release_start_guard): a Ctrl-C on mpiexec within its first second would print
+# the line once a worker beside the master's.
+start_guard.install(quiet=next((os.environ[v] for v in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK")
+                                if v in os.environ), "0") != "0")
 try:
     from trueaniso import cli, progress, resources, specimen_file, study, study_dir, triaxial
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback

@@ -6,6 +6,10 @@ this package composes them: specimens, protocols, the YADE bridge, file formats.
 import os
 import sys
 
+if sys.argv[:1] == ["-m"]:  # Python is locating a module of this package to run it as a tool
+    from . import start_guard as _start_guard
+    _start_guard.install()  # cli.guarded takes over when the tool's work starts
+
 _HERE = os.path.dirname(os.path.abspath(__file__))
 REPO_ROOT = os.path.dirname(os.path.dirname(_HERE))
 
