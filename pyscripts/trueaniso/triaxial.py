@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from . import dem, engines
+from .options import ProbeOptions, ServoOptions
 from .refusal import InputError
 
 # Table C1, Eqs. 8-9 and the loading paths' mean stress live in stress_states (no engines: the
@@ -90,53 +91,53 @@ def set_rolling(scene, stiffness, friction):
         raise InputError(str(exc)) from None
 
 
-def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0,
-                unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
-                stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
-                control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0,
-                gain=None, feed_forward=False, time_step="smallest-inertia"):
-    """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
+def reach_state(scene, b, sigma_z, p=100e3, servo=None, chunk=5000, progress=None, **settings):
+    """Drive the scene to the state (b, sigma_z) at mean stress p and hold it, with the settings of
+    `servo` (options.ServoOptions; its fields may be given as keywords instead, or on top of it),
+    each checked before any work.
 
     Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
     within `tolerance` of `shear` (sigma_yz, sigma_xz, sigma_xy; zero: the cell's axes are the
-    principal axes) and the unbalanced force is below `unbalanced`. control_shear=False holds the
-    cell's shear strains instead (the orthorhombic servo, whose shear stresses nothing holds; a
-    non-zero `shear` is then refused). rolling_stiffness, rolling_friction: the optional rolling
-    resistance of the contact law (beta, eta_r; docs/rolling.md), set on the scene for the loading
-    and kept in its checkpoint, so its probes run with it too; 0, 0 (the paper) turns it off.
-    gain: the servo's (the fraction of the stress error closed a step; None: the engine's 0.01, every
-    study's; bench_state_split.py compares others). feed_forward: feed the path's rate forward through
-    the cell's measured tangent stiffness, so that the stresses keep pace with the goal instead of
-    lagging it (docs/triaxial.md; off, every study's default; bench_state_speed.py and
-    bench_state_split.py compare the two). time_step: the time step rule of the loading
-    (dem.TIME_STEP_RULES; docs/time-step.md). The path rate, the gain and the step counts are per
-    step of the reference rule (smallest-inertia, every committed study's), so a rule with a longer
-    step reaches the state at the same rate in time, in fewer steps.
-    Raises StateNotReached if the specimen cannot get there: it
-    stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
-    strains beyond `max_strain`, or runs `max_steps`.
+    principal axes) and the unbalanced force is below `unbalanced`, with mu = `friction` (the
+    paper's 0.5 while loading). control_shear=False holds the cell's shear strains instead (the
+    orthorhombic servo, whose shear stresses nothing holds; a non-zero `shear` is then refused).
+    rolling_stiffness, rolling_friction: the optional rolling resistance of the contact law (beta,
+    eta_r; docs/rolling.md), set on the scene for the loading and kept in its checkpoint, so its
+    probes run with it too; 0, 0 (the paper) turns it off. gain: the servo's (the fraction of the
+    stress error closed a step; None: the engine's 0.01, every study's). feed_forward: feed the
+    path's rate forward through the cell's measured tangent stiffness, so that the stresses keep
+    pace with the goal instead of lagging it (docs/triaxial.md; off, every study's default).
+    time_step: the time step rule of the loading (dem.TIME_STEP_RULES; docs/time-step.md). The path
+    rate, the gain and the step counts are per step of the reference rule (smallest-inertia), so a
+    rule with a longer step reaches the state at the same rate in time, in fewer steps. chunk: steps
+    between progress calls (changes no result); progress: called with the servo after each chunk.
+    Raises StateNotReached if the specimen cannot get there: it stops following the path for
+    `stall_steps`, or is held `hold_steps` without settling, or strains beyond `max_strain`, or
+    runs `max_steps`.
     """
+    o = ServoOptions.of(servo, settings, "reach_state")
+    chunk = _chunk(chunk, "reach_state")
     validate_state(b, sigma_z, p)
-    set_rolling(scene, rolling_stiffness, rolling_friction)
+    set_rolling(scene, o.rolling_stiffness, o.rolling_friction)
     servo = engines.TrueTriaxialServo()
     servo.set_goal(b, sigma_z, p)
-    servo.control_shear = bool(control_shear)
-    servo.shear_goal = np.asarray(shear, dtype=float)
+    servo.control_shear = o.control_shear
+    servo.shear_goal = np.asarray(o.shear, dtype=float)
     servo.validate()  # shear goals on a path that holds the shear strains: refused before any work
-    servo.path_rate = path_rate
-    if gain is not None:
-        servo.gain = gain
-    servo.feed_forward = bool(feed_forward)
-    servo.stress_tolerance = tolerance
-    servo.unbalanced_tolerance = unbalanced
-    servo.max_strain = max_strain
-    servo.max_steps = max_steps
-    servo.stall_steps = stall_steps
-    servo.hold_steps = hold_steps
-    servo.loading_friction = friction  # the servo sets it on the scene (a scene may carry 1e23)
+    servo.path_rate = o.path_rate
+    if o.gain is not None:
+        servo.gain = o.gain
+    servo.feed_forward = o.feed_forward
+    servo.stress_tolerance = o.tolerance
+    servo.unbalanced_tolerance = o.unbalanced
+    servo.max_strain = o.max_strain
+    servo.max_steps = o.max_steps
+    servo.stall_steps = o.stall_steps
+    servo.hold_steps = o.hold_steps
+    servo.loading_friction = o.friction  # the servo sets it on the scene (a scene may carry 1e23)
     d50 = 2.0 * float(np.median(scene.radii))
-    servo.max_strain_rate = dem.strain_rate_for_inertial_number(inertial_number, d50, scene.density, p)
-    chain = dem.Chain(scene, damping=damping, controllers=[servo], rule=time_step)
+    servo.max_strain_rate = dem.strain_rate_for_inertial_number(o.inertial_number, d50, scene.density, p)
+    chain = dem.Chain(scene, damping=o.damping, controllers=[servo], rule=o.time_step)
     servo.start(scene)
     t0 = time.time()
     while servo.status not in ("reached", "failed"):
@@ -150,12 +151,18 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     info = dict(status=servo.status, steps=int(servo.steps), wall_time=time.time() - t0,
                 stress=servo.stress.tolist(), unbalanced=float(servo.unbalanced), message=servo.message,
                 overshoot=servo.overshoot.tolist(), goal=servo.final_stress.tolist(),
-                friction=float(scene.friction), hold_steps=int(servo.holding), control_shear=bool(control_shear),
+                friction=float(scene.friction), hold_steps=int(servo.holding), control_shear=o.control_shear,
                 waited_steps=int(servo.waited))
     info.update(stress_record(scene, servo.final_stress))
     if servo.status == "failed":
         raise StateNotReached(servo.message)
     return info
+
+
+def _chunk(chunk, owner):
+    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise InputError("%s: chunk must be an integer >= 1 (steps between progress calls), not %r" % (owner, chunk))
+    return int(chunk)
 
 
 def stress_as_held(scene):
@@ -234,11 +241,10 @@ def check_held_state(scene, hold):
                             100 * HOLD_MISMATCH))
 
 
-def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
-          skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
-          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True,
-          hold_other_strains=False, progress=None):
-    """One directional probe at a held state; the scene is restored afterwards.
+def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **settings):
+    """One directional probe at a held state, with the settings of `options` (options.ProbeOptions;
+    its fields may be given as keywords instead, or on top of it), each checked before any work;
+    the scene is restored afterwards.
 
     axis: x, y, z (a normal stress: E_i, nu_ij) or yz, xz, xy (a shear stress: G_ij).
     hold: the state's stresses (Pa) held during the probe on the other components: three normal
@@ -251,16 +257,23 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     Returns a dict with the Voigt increments, E_i (Eq. 10) and nu_ij (Eq. 11) or G_ij, gamma
     (Eq. 12, or the engineering shear strain of a shear probe), steps, time.
     """
-    axis = validate_probe(axis, gamma)
+    gamma = settings.get("gamma", options.gamma if isinstance(options, ProbeOptions) else ProbeOptions.gamma)
+    axis = validate_probe(axis, gamma)  # its own message for an axis or a gamma that is none
+    if sign not in (1, -1) or isinstance(sign, bool):
+        raise InputError("probe: sign must be 1 or -1, not %r" % (sign,))
+    o = ProbeOptions.of(options, settings, "probe")
+    chunk = _chunk(chunk, "probe")
+    gamma, increment, restrain_rotations, skip_detection = o.gamma, o.increment, o.restrain_rotations, o.skip_detection
+    damping, control_shear, hold_other_strains = o.damping, o.control_shear, o.hold_other_strains
     if scene.num_bodies == 0:
         raise ValueError("probe: the scene has no bodies (a stress probe needs a loaded packing)")
     p = engines.StressProbe()
     p.axis, p.sign, p.gamma_target, p.increment = axis, sign, gamma, increment
-    p.control_shear = bool(control_shear)
-    p.hold_other_strains = bool(hold_other_strains)
+    p.control_shear = control_shear
+    p.hold_other_strains = hold_other_strains
     p.restrain_rotations = restrain_rotations
-    p.gain, p.relative_tolerance, p.unbalanced_tolerance = gain, relative_tolerance, unbalanced
-    p.settle_steps, p.ramp_steps, p.max_steps = settle_steps, ramp_steps, max_steps
+    p.gain, p.relative_tolerance, p.unbalanced_tolerance = o.gain, o.relative_tolerance, o.unbalanced
+    p.settle_steps, p.ramp_steps, p.max_steps = o.settle_steps, o.ramp_steps, o.max_steps
     # The cap only matters in the relax stage; probes move strains of ~1e-6.
     p.max_strain_rate = 10.0
     chain = dem.Chain(scene, damping=damping, controllers=[p])
