@@ -26,7 +26,8 @@ def _refuse(owner, name, value, what):
     raise InputError("%s: %s must be %s, not %r" % (owner, name, what, value))
 
 
-def _flag(owner, name, value):
+def flag(owner, name, value):
+    """`value` as a flag: True or False (or numpy's bool_), else InputError naming owner and name."""
     # numpy's bool_ too (a value read from an array); 0 and 1 and 'no' are not flags
     if not (isinstance(value, bool) or type(value).__name__ == "bool_"):
         _refuse(owner, name, value, "True or False")
@@ -124,7 +125,7 @@ class ServoOptions(_Options):
         for name in ("max_steps", "stall_steps", "hold_steps"):
             put(self, name, _integer(o, name, getattr(self, name), 1))
         put(self, "friction", _real(o, "friction", self.friction, 0.0, low_open=True))
-        put(self, "control_shear", _flag(o, "control_shear", self.control_shear))
+        put(self, "control_shear", flag(o, "control_shear", self.control_shear))
         shear = self.shear
         try:
             shear = tuple(shear)
@@ -137,7 +138,7 @@ class ServoOptions(_Options):
             put(self, name, _real(o, name, getattr(self, name), 0.0))
         if self.gain is not None:
             put(self, "gain", _real(o, "gain", self.gain, 0.0, 1.0, low_open=True))
-        put(self, "feed_forward", _flag(o, "feed_forward", self.feed_forward))
+        put(self, "feed_forward", flag(o, "feed_forward", self.feed_forward))
         if self.time_step not in TIME_STEP_RULES:
             _refuse(o, "time_step", self.time_step, "one of %s" % ", ".join(TIME_STEP_RULES))
 
@@ -185,7 +186,7 @@ class ProbeOptions(_Options):
         put(self, "gamma", _real(o, "gamma", self.gamma, 0.0, low_open=True))
         put(self, "increment", _real(o, "increment", self.increment, 0.0))
         for name in ("restrain_rotations", "skip_detection", "control_shear", "hold_other_strains"):
-            put(self, name, _flag(o, name, getattr(self, name)))
+            put(self, name, flag(o, name, getattr(self, name)))
         put(self, "damping", _real(o, "damping", self.damping, 0.0, 1.0, high_open=True))
         put(self, "gain", _real(o, "gain", self.gain, 0.0, 1.0, low_open=True))
         for name in ("relative_tolerance", "unbalanced"):

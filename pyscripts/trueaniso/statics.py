@@ -31,9 +31,11 @@ def static_stiffness(scene, rotations=True, max_unbalanced=1e-2, max_residual=1e
     Raises ValueError for a state out of balance beyond `max_unbalanced` (the engine's check) and
     RuntimeError when the solver's residual exceeds `max_residual`.
     """
+    from .options import flag
     if not 0 < max_unbalanced:
         raise ValueError("max_unbalanced must be > 0")
-    r = _e.static_stiffness(scene, rotations=bool(rotations), max_unbalanced=float(max_unbalanced), **solver)
+    r = _e.static_stiffness(scene, rotations=flag("static_stiffness", "rotations", rotations),
+                            max_unbalanced=float(max_unbalanced), **solver)
     if not r["residual"] <= max_residual:
         raise RuntimeError("static stiffness: residual %.3g > %.3g; pinned DOFs %s"
                            % (r["residual"], max_residual, [(p["body"], p["reason"]) for p in r["pinned"]]))

@@ -23,7 +23,7 @@ import numpy as np
 
 from . import (dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_checks, study_dir,
                triaxial, validate)
-from .options import PathOptions, ProbeOptions, ServoOptions
+from .options import PathOptions, ProbeOptions, ServoOptions, flag
 from .progress import EVERY, Progress, chunk_for, say
 from .refusal import InputError
 
@@ -330,6 +330,7 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
     the study's thread count), so the values equal a serial run's; rows arrive in path-completion
     order."""
     path_o, servo, probe = options_of(path, servo, probe, **settings)
+    wait, force_new = flag("run_states", "wait", wait), flag("run_states", "force_new", force_new)
     path = path_o.path
     ids, axes, spec_meta, fp = _study(specimen_path, states, path_o, servo, probe, recipe)
     record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),

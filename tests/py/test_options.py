@@ -95,3 +95,13 @@ def test_a_committed_study_s_fingerprint_is_made_again():
     # the whole load at once is recorded as text (metadata.json stays standard JSON)
     assert study.fingerprint(meta, "sphere", 1e-6, False, False, 0.4, dict(path_rate=math.inf))["state"]["path_rate"] \
         == "inf"
+
+
+def test_other_flags_of_the_api_are_flags(scene, tmp_path):
+    """static_stiffness(rotations='no') solved with rotations free; run_states(wait='no') waited."""
+    from trueaniso import statics
+    with pytest.raises(InputError, match="static_stiffness: rotations must be True or False, not 'no'"):
+        statics.static_stiffness(scene.copy(), rotations="no")
+    with pytest.raises(InputError, match="run_states: wait must be True or False"):
+        study.run_states(SPECIMEN, [(1, 0.0, 100e3)], str(tmp_path / "out"), wait="no")
+    assert not (tmp_path / "out").exists()
