@@ -113,9 +113,9 @@ def time_step_problem(scene, meta):
     """Why the time steps a specimen file stores are not those its time step rules derive from its
     material, radii and masses (dem.Chain: the cap reference_time_step at the rule's factor, and
     the rule's stiffness bound on the contacts), or None: reference_dt (dt where the file stores
-    none) the reference rule's, dt between the shortest and the longest step of the rules. The stored step starts the next run: the
-    servos scale their per-step settings by dt / reference_dt on its first step, and a
-    reference_dt 1000 times too large changed state 21's E_z from 183.2 to 174.1 MPa. Checked
+    none) the reference rule's, dt between the shortest and the longest step of the rules. The
+    stored step starts the next run: the servos scale their per-step settings by dt / reference_dt
+    on its first step, so an edited one moves the whole path that follows. Checked
     where a file records that trueaniso made it (a preparation's or a study's parameters); a scene
     saved from YADE keeps YADE's dt, which the first step replaces, and a preparation's checkpoint
     is mid-way (its cap is of the radii it grows to), so neither is held to a rule."""

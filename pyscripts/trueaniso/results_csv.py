@@ -17,7 +17,7 @@ def state_id(text):
     """A state's id as every reader of a table takes it: a Table C1 number written '21.0' or ' 21'
     (a table edited by hand or by a spreadsheet) is '21'; any other id is its text without the
     spaces around it. Applied once, where a table is read (``read``), so that no later step meets
-    two spellings of one state (the report counted a row of '21.0' and said state 21 had none)."""
+    two spellings of one state (a row counted for state '21.0' while the report looks for '21')."""
     text = str(text).strip()
     try:
         value = float(text)

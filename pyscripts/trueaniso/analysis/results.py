@@ -158,9 +158,9 @@ def _fitting_rows(path, rows):
 def read_metadata(results, required=False):
     """The metadata.json of a study directory (its fingerprint, specimen, runs), or None for a bare
     table or a directory without one; with `required`, a ResultsError instead of None. One that is
-    there but cannot be read (empty, truncated, not JSON) is a ResultsError always: it holds what
-    the study is (its assembly, material, states), and read as absent, a clump1 study was reported
-    as spheres against the paper's spheres, where run_states.py refuses the same directory."""
+    there but cannot be read (empty, truncated, not JSON) is a ResultsError always, as run_states.py
+    refuses it: it holds what the study is (its assembly, material, states), and taken as absent it
+    would make a clump1 study a bare table of spheres, compared with the paper's spheres."""
     import json
     path = os.path.join(results, "metadata.json")
     if not os.path.exists(path):
