@@ -17,6 +17,8 @@ import numbers
 
 from .refusal import InputError
 
+__all__ = ["ServoOptions", "ProbeOptions", "PathOptions"]
+
 TIME_STEP_RULES = ("smallest-inertia", "per-axis")  # dem.TIME_STEP_RULES's keys (dem loads the engines)
 PATHS = ("true-triaxial", "cross-anisotropic")  # stress_states.PATHS
 AXES = ("x", "y", "z", "yz", "xz", "xy")  # triaxial.AXES
@@ -82,18 +84,45 @@ class _Options:
 
 @dataclasses.dataclass(frozen=True)
 class ServoOptions(_Options):
-    """How triaxial.reach_state reaches and holds a state. The rates and step counts are per step of
-    the reference time step rule (smallest-inertia), so that a rule with a longer step loads at the
-    same rate in time (docs/time-step.md).
+    """How `triaxial.reach_state` reaches and holds a state (the TrueTriaxialServo's settings).
 
-    damping: local non-viscous damping; inertial_number: cap of the cell's strain rate as an
-    inertial number; tolerance: Pa within which each stress is held; unbalanced: the unbalanced
-    force of a settled state; path_rate: Pa per step along the path (inf: the whole load at once);
-    max_strain, max_steps, stall_steps, hold_steps: when the servo gives up (StateNotReached);
-    friction: mu while loading (the paper's 0.5); control_shear: hold the shear stresses at `shear`
-    (else the cell's shear strains); rolling_stiffness, rolling_friction: beta and eta_r of the
-    rolling resistance (0, 0: the paper's law); gain: the servo's (None: the engine's 0.01);
-    feed_forward: the path's rate fed forward through the measured tangent; time_step: the rule."""
+    Every value is checked for its type and range when the object is made; the defaults are the
+    paper's protocol, every study's. The rates and step counts are per step of the reference time
+    step rule (smallest-inertia), so that a rule with a longer step loads at the same rate in time
+    (docs/time-step.md). Frozen: ``dataclasses.replace(servo, path_rate=4.0)`` makes another.
+
+    Attributes:
+        damping: YADE's local non-viscous damping, in [0, 1).
+        inertial_number: caps the cell's strain rate (quasi-static below 1e-3).
+        tolerance: Pa within which each stress is held at the state.
+        unbalanced: the unbalanced force of a settled state.
+        path_rate: Pa per step along the path (inf: the whole load at once; docs/state-speed.md).
+        max_strain: the specimen fails beyond this cell strain (StateNotReached).
+        max_steps: the servo gives up after this many steps.
+        stall_steps: ... or after this many steps in a row without following the path.
+        hold_steps: ... or after this many steps held at the state without settling.
+        friction: mu while loading (the paper's 0.5).
+        control_shear: True holds the shear stresses at `shear`; False the cell's shear strains.
+        shear: the shear stresses held (sigma_yz, sigma_xz, sigma_xy), Pa.
+        rolling_stiffness: beta of the rolling resistance (docs/rolling.md; 0 with
+            `rolling_friction` 0: the paper's law).
+        rolling_friction: eta_r of the rolling resistance.
+        gain: the fraction of the stress error closed a step (None: the engine's 0.01).
+        feed_forward: True feeds the path's rate forward through the measured tangent stiffness.
+        time_step: the time step rule, "smallest-inertia" or "per-axis".
+
+    Raises:
+        trueaniso.refusal.InputError: a value of the wrong type or out of range, in one line.
+
+    Example:
+        >>> from trueaniso.options import ServoOptions
+        >>> ServoOptions(path_rate=20.0).path_rate
+        20.0
+        >>> ServoOptions(feed_forward="no")
+        Traceback (most recent call last):
+        ...
+        trueaniso.refusal.InputError: reach_state: feed_forward must be True or False, not 'no'
+    """
     OWNER = "reach_state"
     NOT_FINGERPRINTED = ("damping", "gain")  # damping: named beside it; gain: only when set (fingerprint)
 
@@ -156,13 +185,36 @@ class ServoOptions(_Options):
 
 @dataclasses.dataclass(frozen=True)
 class ProbeOptions(_Options):
-    """How triaxial.probe probes a state. gamma: the probe's size (Eq. 12); increment: > 0 probes by
-    a fixed stress increment (Pa) instead; restrain_rotations: particle rotations blocked during
-    the probe; skip_detection: no contact detection (nothing slides); damping; gain: the probe
-    servo's; relative_tolerance: the stress error allowed, of the increment; unbalanced: the
-    unbalanced force of a settled probe; settle_steps, ramp_steps, max_steps: its stages' steps;
-    control_shear: hold the shear stresses (else the cell's shear strains); hold_other_strains: hold
-    the five other strains at zero (the stiffness C_kk instead of 1/S_kk)."""
+    """How `triaxial.probe` probes a state (the StressProbe's settings), checked when made.
+
+    The defaults are the paper's probe, every study's.
+
+    Attributes:
+        gamma: the strain invariant of Eq. (12) the probe stops at.
+        increment: > 0 probes by this fixed stress increment (Pa) instead of by `gamma`.
+        restrain_rotations: True blocks particle rotations during the probe.
+        skip_detection: True keeps the contact list of the start (nothing slides).
+        damping: YADE's local non-viscous damping, in [0, 1).
+        gain: gain of the probe's servo.
+        relative_tolerance: stress error allowed on the held components, relative to the increment.
+        unbalanced: unbalanced force at which the relaxation ends.
+        settle_steps: steps in a row within tolerance that end a stage.
+        ramp_steps: steps of the ramp of the stress increment.
+        max_steps: the probe gives up after this many steps.
+        control_shear: True holds the shear stresses; False the cell's shear strains (normal axes
+            only).
+        hold_other_strains: True holds the five other strains at zero: the modulus is then the
+            stiffness C_kk, not 1/S_kk (docs/cell.md).
+
+    Raises:
+        trueaniso.refusal.InputError: a value of the wrong type or out of range, in one line.
+
+    Example:
+        >>> from trueaniso.options import ProbeOptions
+        >>> o = ProbeOptions(restrain_rotations=True)
+        >>> o.gamma, o.restrain_rotations
+        (1e-06, True)
+    """
     OWNER = "probe"
     NOT_FINGERPRINTED = ("gamma", "restrain_rotations", "skip_detection", "damping", "gain")
 
@@ -206,8 +258,22 @@ class ProbeOptions(_Options):
 
 @dataclasses.dataclass(frozen=True)
 class PathOptions(_Options):
-    """What study.run_states walks: the loading path (stress_states.PATHS) and the probe axes of
-    each state (names of triaxial.AXES, each at most once)."""
+    """What `study.run_states` walks: the loading path and the probe axes of each state.
+
+    Attributes:
+        path: "true-triaxial" (Table C1's paths, p = 100 kPa) or "cross-anisotropic" (Fig. 16:
+            sigma_x = sigma_y = 100 kPa).
+        probes: the probe axes, each at most once: "x", "y", "z", "yz", "xz", "xy" (or 0-5, or
+            "zy", "zx", "yx"), kept as their names.
+
+    Raises:
+        trueaniso.refusal.InputError: an unknown path or axis, an axis given twice, no axis.
+
+    Example:
+        >>> from trueaniso.options import PathOptions
+        >>> PathOptions(probes=(2, "yz")).probes
+        ('z', 'yz')
+    """
     OWNER = "run_states"
 
     path: str = "true-triaxial"

@@ -25,12 +25,29 @@ TABLE_C1 = [
 
 
 def b_of(sx, sy, sz):
-    """Eq. (8); the isotropic state has no b (0 is used: every b passes through it)."""
+    """b of Eq. (8) from the three principal stresses, (sigma_x - sigma_y) / (sigma_z - sigma_y).
+
+    The isotropic state has no b: 0 is returned (every path of Table C1 passes through it).
+
+    Example:
+        >>> from trueaniso import triaxial
+        >>> triaxial.b_of(100e3, 60e3, 140e3)
+        0.5
+    """
     return 0.0 if abs(sz - sy) < 1e-12 else (sx - sy) / (sz - sy)
 
 
 def table_c1_states():
-    """[(id, b, sigma_z in Pa)] with b rounded to the paper's five values."""
+    """The 39 states of the paper's Table C1, b rounded to the paper's five values (0, 0.25, 0.5, 0.75, 1).
+
+    Returns:
+        list: (id, b, sigma_z in Pa) per state, by id.
+
+    Example:
+        >>> from trueaniso import triaxial
+        >>> triaxial.table_c1_states()[20]
+        (21, 0.5, 140000.0)
+    """
     out = []
     for i, sx, sy, sz, _ in TABLE_C1:
         b = min((0.0, 0.25, 0.5, 0.75, 1.0), key=lambda v: abs(v - b_of(sx, sy, sz)))

@@ -20,6 +20,9 @@ from .refusal import InputError
 # readers of result files check rows against them); their names stay importable here.
 from .stress_states import PATHS, SIGMA_H, TABLE_C1, b_of, path_mean_stress, table_c1_states  # noqa: F401
 
+__all__ = ["table_c1_states", "b_of", "path_stresses", "reach_state", "stress_as_held", "probe", "probe_state",
+           "cross_anisotropic_states", "StateNotReached"]
+
 
 def paths(states):
     """Group states into paths from the isotropic state: {(b, +1 or -1): [states by distance]}.
@@ -36,7 +39,7 @@ def paths(states):
 
 
 class StateNotReached(RuntimeError):
-    pass
+    """The servo or the probe could not bring the specimen to its state; the message says why."""
 
 
 def validate_state(b, sigma_z, p=100e3):
@@ -92,28 +95,51 @@ def set_rolling(scene, stiffness, friction):
 
 
 def reach_state(scene, b, sigma_z, p=100e3, servo=None, chunk=5000, progress=None, **settings):
-    """Drive the scene to the state (b, sigma_z) at mean stress p and hold it, with the settings of
-    `servo` (options.ServoOptions; its fields may be given as keywords instead, or on top of it),
-    each checked before any work.
+    """Drive the scene to a true-triaxial state at constant mean stress and hold it there (Eqs. 8-9).
 
-    Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
-    within `tolerance` of `shear` (sigma_yz, sigma_xz, sigma_xy; zero: the cell's axes are the
-    principal axes) and the unbalanced force is below `unbalanced`, with mu = `friction` (the
-    paper's 0.5 while loading). control_shear=False holds the cell's shear strains instead (the
-    orthorhombic servo, whose shear stresses nothing holds; a non-zero `shear` is then refused).
-    rolling_stiffness, rolling_friction: the optional rolling resistance of the contact law (beta,
-    eta_r; docs/rolling.md), set on the scene for the loading and kept in its checkpoint, so its
-    probes run with it too; 0, 0 (the paper) turns it off. gain: the servo's (the fraction of the
-    stress error closed a step; None: the engine's 0.01, every study's). feed_forward: feed the
-    path's rate forward through the cell's measured tangent stiffness, so that the stresses keep
-    pace with the goal instead of lagging it (docs/triaxial.md; off, every study's default).
-    time_step: the time step rule of the loading (dem.TIME_STEP_RULES; docs/time-step.md). The path
-    rate, the gain and the step counts are per step of the reference rule (smallest-inertia), so a
-    rule with a longer step reaches the state at the same rate in time, in fewer steps. chunk: steps
-    between progress calls (changes no result); progress: called with the servo after each chunk.
-    Raises StateNotReached if the specimen cannot get there: it stops following the path for
-    `stall_steps`, or is held `hold_steps` without settling, or strains beyond `max_strain`, or
-    runs `max_steps`.
+    The servo moves its goal along the straight stress path from where the scene is to the state,
+    as fast as the specimen follows, and holds until every principal stress is within the servo's
+    `tolerance` of Eq. (9), every shear stress within it of `shear` and the unbalanced force is
+    below `unbalanced`. The scene is left at rest at the state, its forces evaluated there.
+
+    Args:
+        scene: the engines' Scene (a specimen, or a state reached before).
+        b: intermediate principal stress coefficient of Eq. (8), in [0, 1].
+        sigma_z: the vertical stress of the state, Pa.
+        p: the mean stress held along the path, Pa (the paper's 100 kPa).
+        servo: `options.ServoOptions`, how the state is reached and held: damping, inertial number,
+            tolerances, path rate, when the servo gives up, the loading friction, the shear held,
+            rolling resistance, gain, feed-forward and time step rule (each field's meaning and
+            default: its class). None: the defaults, the paper's protocol.
+        chunk: steps between calls of `progress` (changes no result), an integer >= 1.
+        progress: called with the engines' TrueTriaxialServo after every chunk, or None.
+        **settings: fields of ServoOptions given as keywords instead, or on top of `servo`
+            (``reach_state(scene, b, sz, path_rate=4.0)``).
+
+    Returns:
+        dict: ``status`` ("reached"), ``steps``, ``wall_time``, ``stress`` (the six Voigt stresses
+        measured last, Pa), ``goal`` (Eq. 9's), ``unbalanced``, ``overshoot``, ``friction`` and the
+        stress record (principal values, the largest shear stress).
+
+    Raises:
+        trueaniso.refusal.InputError: a setting of the wrong type or out of range
+            (``feed_forward="no"``), before any step.
+        TypeError: a keyword that is no field of ServoOptions.
+        ValueError: b outside [0, 1] or a principal stress <= 0, or bad rolling parameters, before
+            any step.
+        StateNotReached: the specimen cannot get there: it stops following the path for
+            `stall_steps`, is held `hold_steps` without settling, strains beyond `max_strain`, or
+            runs `max_steps`.
+
+    Example:
+        State 2 of Table C1 (b = 0, sigma_z = 110 kPa) from the 150-sphere specimen:
+
+        >>> from trueaniso import specimen_file, triaxial
+        >>> from trueaniso.options import ServoOptions
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> info = triaxial.reach_state(scene, b=0.0, sigma_z=110e3, servo=ServoOptions(tolerance=100.0))
+        >>> info["status"], ["%.1f kPa" % (s / 1e3) for s in info["goal"][:3]]
+        ('reached', ['95.0 kPa', '95.0 kPa', '110.0 kPa'])
     """
     o = ServoOptions.of(servo, settings, "reach_state")
     chunk = _chunk(chunk, "reach_state")
@@ -166,11 +192,19 @@ def _chunk(chunk, owner):
 
 
 def stress_as_held(scene):
-    """The scene's stress as the six Voigt components a probe holds (sigma_xx, sigma_yy, sigma_zz,
-    sigma_yz, sigma_xz, sigma_xy; Pa, compression positive, the symmetric part): to probe a state
-    as it is, shear stresses included. Holding zero shear instead at a state that carries some
-    first moves it to another state (54 Pa of shear changed E_z of a clump packing by 5.4e-4,
-    docs/clumps.md)."""
+    """The scene's stress as the six Voigt components a probe holds, to probe a state as it is.
+
+    sigma_xx, sigma_yy, sigma_zz, sigma_yz, sigma_xz, sigma_xy in Pa, compression positive, the
+    symmetric part. Holding zero shear instead at a state that carries some first moves it to
+    another state (54 Pa of shear changed E_z of a clump packing by 5.4e-4, docs/clumps.md).
+
+    Example:
+        >>> from trueaniso import specimen_file, triaxial
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> hold = triaxial.stress_as_held(scene)
+        >>> print("%.1f %.1f %.1f kPa, shear below 100 Pa: %s" % (*(hold[:3] / 1e3), max(abs(hold[3:])) < 100))
+        100.0 100.0 100.0 kPa, shear below 100 Pa: True
+    """
     sig = np.asarray(engines.stress(scene))
     sym = 0.5 * (sig + sig.T)
     return np.array([sym[0, 0], sym[1, 1], sym[2, 2], sym[1, 2], sym[0, 2], sym[0, 1]])
@@ -242,20 +276,49 @@ def check_held_state(scene, hold):
 
 
 def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **settings):
-    """One directional probe at a held state, with the settings of `options` (options.ProbeOptions;
-    its fields may be given as keywords instead, or on top of it), each checked before any work;
-    the scene is restored afterwards.
+    """One directional stress probe at a held state (Eqs. 10-12); the scene is restored afterwards.
 
-    axis: x, y, z (a normal stress: E_i, nu_ij) or yz, xz, xy (a shear stress: G_ij).
-    hold: the state's stresses (Pa) held during the probe on the other components: three normal
-    stresses (the shear stresses then held at zero) or six Voigt components.
-    control_shear=False holds the cell's shear strains instead of the shear stresses (the
-    orthorhombic probe; normal axes only).
-    hold_other_strains=True holds the five other strains at zero instead of their stresses: the
-    modulus is then the stiffness C_kk (static solve's C), not 1/S_kk (docs/cell.md).
-    progress: called with the StressProbe after every chunk of steps (the chunk changes no result).
-    Returns a dict with the Voigt increments, E_i (Eq. 10) and nu_ij (Eq. 11) or G_ij, gamma
-    (Eq. 12, or the engineering shear strain of a shear probe), steps, time.
+    From the held state, sliding is suppressed (friction 1e23), the scene relaxes, and the stress on
+    `axis` rises until the strain invariant gamma reaches the options' `gamma` while the other stresses are
+    held.
+
+    Args:
+        scene: the engines' Scene at a held state (`reach_state`, or a specimen).
+        hold: the state's stresses held on the other components, Pa: three normal stresses (the shear
+            stresses then held at zero), or six Voigt components (`stress_as_held`).
+        axis: "x", "y", "z" (a normal stress: E_i, nu_ij) or "yz", "xz", "xy" (a shear stress: G_ij);
+            or 0-5.
+        sign: +1 loads, -1 unloads.
+        options: `options.ProbeOptions`, how the state is probed: gamma (the strain invariant of
+            Eq. 12 the probe stops at), a fixed stress increment instead, restrained rotations,
+            contact detection, damping, the probe servo's gain and tolerances, its stages' steps,
+            held shear stresses or strains, held other strains (each field's meaning and default:
+            its class). None: the defaults, the paper's probe.
+        chunk: steps between calls of `progress` (changes no result), an integer >= 1.
+        progress: called with the engines' StressProbe after every chunk, or None.
+        **settings: fields of ProbeOptions given as keywords instead, or on top of `options`
+            (``probe(scene, hold, "z", gamma=1e-6)``).
+
+    Returns:
+        dict: ``modulus`` and ``E`` (Eq. 10) with ``nu_ij`` (Eq. 11) of a normal probe, or ``G`` of a
+        shear probe, in Pa; ``d_stress`` and ``d_strain`` (Voigt increments), ``gamma``, ``steps``,
+        ``wall_time`` and how it ran (``rotations``, ``detection``, ``damping``).
+
+    Raises:
+        ValueError: an unknown axis, a gamma <= 0, a scene without bodies, or held stresses that are
+            not the scene's, before any step.
+        trueaniso.refusal.InputError: a setting of the wrong type or out of range
+            (``restrain_rotations="no"``), before any step.
+        TypeError: a keyword that is no field of ProbeOptions.
+        StateNotReached: the probe did not converge within the options' `max_steps`.
+
+    Example:
+        >>> from trueaniso import specimen_file, triaxial
+        >>> from trueaniso.options import ProbeOptions
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> r = triaxial.probe(scene, [100e3, 100e3, 100e3], "z", options=ProbeOptions(gamma=1e-6))
+        >>> print("E_z = %.0f MPa, nu_zx = %.3f" % (r["E"] / 1e6, r["nu_zx"]))
+        E_z = 278 MPa, nu_zx = 0.150
     """
     gamma = settings.get("gamma", options.gamma if isinstance(options, ProbeOptions) else ProbeOptions.gamma)
     axis = validate_probe(axis, gamma)  # its own message for an axis or a gamma that is none
@@ -315,7 +378,23 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
 
 
 def probe_state(scene, hold, axes=(2, 0, 1), **kw):
-    """Probes from the same state (the probe restores it after each): z, x, y by default."""
+    """Probes of one state on several axes, each from the same state (`probe` restores it after each).
+
+    Args:
+        scene: the engines' Scene at a held state.
+        hold: the state's stresses, as `probe` takes them.
+        axes: the axes, z, x, y by default (as the study probes).
+        **kw: the other arguments of `probe` (``options``, a ProbeOptions, or its fields).
+
+    Returns:
+        list: one `probe` result per axis, in their order.
+
+    Example:
+        >>> from trueaniso import specimen_file, triaxial
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> [r["axis"] for r in triaxial.probe_state(scene, [100e3] * 3, axes="xyz")]
+        ['x', 'y', 'z']
+    """
     return [probe(scene, hold, a, **kw) for a in axes]
 
 
@@ -338,13 +417,39 @@ def validate_path_state(path, b, sigma_z):
 
 
 def path_stresses(path, b, sigma_z):
-    """sigma_x, sigma_y, sigma_z (Pa) of the state on its path."""
+    """sigma_x, sigma_y, sigma_z (Pa) of the state (b, sigma_z) on a loading path (Eq. 9).
+
+    Args:
+        path: one of `PATHS`: "true-triaxial" (Table C1: p = 100 kPa) or "cross-anisotropic"
+            (Fig. 16: sigma_x = sigma_y = 100 kPa).
+        b: b of Eq. (8) (0 on the cross-anisotropic path).
+        sigma_z: the vertical stress, Pa.
+
+    Example:
+        >>> from trueaniso import triaxial
+        >>> [round(s) for s in triaxial.path_stresses("true-triaxial", 0.5, 140e3)]
+        [100000, 60000, 140000]
+    """
     return engines.true_triaxial_stresses(b, sigma_z, path_mean_stress(path, b, sigma_z))
 
 
 def cross_anisotropic_states(sigma_v=CROSS_ANISOTROPIC_SIGMA_V):
-    """[(id, 0, sigma_v)]: ids 'sv<sigma_v in kPa>' (e.g. sv60, sv112.5), exact for any Pa value
-    that is a multiple of 0.1 Pa."""
+    """The states of a cross-anisotropic study (Fig. 16): sigma_x = sigma_y = 100 kPa, sigma_z = sigma_v.
+
+    Args:
+        sigma_v: the vertical stresses, Pa (by default from 50 to 250 kPa).
+
+    Returns:
+        list: (id, 0, sigma_v) per state, ids 'sv<sigma_v in kPa>' (exact for any multiple of 0.1 Pa).
+
+    Raises:
+        ValueError: a stress off the path, or one given twice.
+
+    Example:
+        >>> from trueaniso import triaxial
+        >>> triaxial.cross_anisotropic_states([60e3, 112.5e3])
+        [('sv60', 0.0, 60000.0), ('sv112.5', 0.0, 112500.0)]
+    """
     out = []
     for sv in sigma_v:
         sv = float(sv)

@@ -11,6 +11,8 @@ from trueaniso import results_csv, study_checks, validate
 
 from . import row_checks
 
+__all__ = ["read_probes", "read_metadata", "ResultsError"]
+
 # The paper's particles (section 2.1): the material a table's moduli are bounded with when no
 # metadata.json says its own.
 PAPER_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)
@@ -83,10 +85,35 @@ def _check_rows(path, rows, columns):
 
 
 def read_probes(path, need=("state", "probe", "E"), material=None):
-    """Rows of a probe table as dicts of strings, with the columns in `need` present; `path` is the
-    table or a study directory holding probes.csv. Every row is checked against what it says of
-    itself (row_checks), its moduli against the bounds of `material` (shear_modulus, poisson:
-    default the study's metadata.json's, else the paper's particles)."""
+    """The rows of a study's probe table, checked, for analysis (module doc).
+
+    Each row is checked against what it says of itself (`row_checks`: its stresses against its
+    state's definition by Eq. 9, its moduli against the material's bounds, each state's
+    reciprocity), not only against the table's schema.
+
+    Args:
+        path: the table (probes.csv) or a study directory holding it.
+        need: columns the table must have.
+        material: dict with ``shear_modulus`` (Pa) and ``poisson`` of the particles, whose bounds the
+            moduli are held to (None: the study's metadata.json's, else the paper's particles).
+
+    Returns:
+        Probes: a list of rows, each a dict of text by column (reference/formats/probes-csv), state
+        ids normalised (``21.0`` is ``21``); its ``note`` says what was left out (a row cut short,
+        rows with a NaN cell), or is None.
+
+    Raises:
+        ResultsError: a missing or unreadable table, a missing column, a probe in two rows, a modulus
+            that is not a positive number, rows of another specimen than the study's, a row that
+            disagrees with its state or the material; in one line naming file, line and field.
+
+    Example:
+        >>> from trueaniso.analysis import results
+        >>> rows = results.read_probes("docs/data/spheres-53004-s1")
+        >>> r = next(r for r in rows if r["state"] == "21" and r["probe"] == "z")
+        >>> print("%d rows; state 21: E_z = %.0f MPa" % (len(rows), float(r["E"]) / 1e6))
+        117 rows; state 21: E_z = 316 MPa
+    """
     path = table_path(path)
     try:
         table = results_csv.read(path)
@@ -156,11 +183,28 @@ def _fitting_rows(path, rows):
 
 
 def read_metadata(results, required=False):
-    """The metadata.json of a study directory (its fingerprint, specimen, runs), or None for a bare
-    table or a directory without one; with `required`, a ResultsError instead of None. One that is
-    there but cannot be read (empty, truncated, not JSON) is a ResultsError always, as run_states.py
-    refuses it: it holds what the study is (its assembly, material, states), and taken as absent it
-    would make a clump1 study a bare table of spheres, compared with the paper's spheres."""
+    """The metadata.json of a study directory (its fingerprint, states, specimen, runs), checked.
+
+    One that is there but cannot be read (empty, truncated, not JSON) is refused always, as
+    run_states.py refuses it: it holds what the study is (its assembly, material, states), and taken
+    as absent it would make a clump1 study a bare table of spheres.
+
+    Args:
+        results: the study directory.
+        required: raise `ResultsError` instead of returning None when there is none.
+
+    Returns:
+        dict or None: None for a directory without one.
+
+    Raises:
+        ResultsError: a metadata.json that cannot be read, or none with `required`.
+
+    Example:
+        >>> from trueaniso.analysis import results
+        >>> meta = results.read_metadata("docs/data/spheres-53004-s1")
+        >>> meta["fingerprint"]["assembly"], len(meta["states"])
+        ('sphere', 39)
+    """
     import json
     path = os.path.join(results, "metadata.json")
     if not os.path.exists(path):
