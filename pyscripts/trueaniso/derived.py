@@ -109,6 +109,25 @@ def _said(v):
 TIME_STEP_RTOL = 1e-3
 
 
+# A packing whose contacts carry this many times the stress its summary records is not the packing
+# its steps were derived on (an edited or exploded one): its contacts' stiffness bound says nothing
+# of its stored step, and the study refuses it for its stress (study.EXPLODED) with that reason.
+NOT_AS_RECORDED = 10.0
+
+
+def _packing_not_as_recorded(scene, meta):
+    summary = meta.get("summary") or {}
+    recorded = [abs(summary[k]) for k in ("sigma_x", "sigma_y", "sigma_z") if isinstance(summary.get(k), (int, float))]
+    if not recorded or max(recorded) <= 0:
+        return False
+    from . import engines
+    try:
+        largest = float(np.max(np.abs(np.linalg.eigvalsh(np.asarray(engines.stress(scene))))))
+    except (ValueError, RuntimeError):
+        return False
+    return not math.isfinite(largest) or largest > NOT_AS_RECORDED * max(recorded)
+
+
 def time_step_problem(scene, meta):
     """Why the time steps a specimen file stores are not those its time step rules derive from its
     material, radii and masses (dem.Chain: the cap reference_time_step at the rule's factor, and
@@ -124,6 +143,8 @@ def time_step_problem(scene, meta):
     if "checkpoint" in params or not (made_here or "reference_dt" in meta):
         return None
     from . import dem, engines
+    if _packing_not_as_recorded(scene, meta):
+        return None
     derived = {}
     for rule, (per_axis, safety) in dem.TIME_STEP_RULES.items():
         bound = (engines.TimeStepper.per_axis_bound if per_axis else engines.TimeStepper.stiffness_bound)(scene)

@@ -91,7 +91,7 @@ class ServoOptions(_Options):
     step rule (smallest-inertia), so that a rule with a longer step loads at the same rate in time
     (docs/time-step.md). Frozen: ``dataclasses.replace(servo, path_rate=4.0)`` makes another.
 
-    Attributes:
+    Args:
         damping: YADE's local non-viscous damping, in [0, 1).
         inertial_number: caps the cell's strain rate (quasi-static below 1e-3).
         tolerance: Pa within which each stress is held at the state.
@@ -189,7 +189,7 @@ class ProbeOptions(_Options):
 
     The defaults are the paper's probe, every study's.
 
-    Attributes:
+    Args:
         gamma: the strain invariant of Eq. (12) the probe stops at.
         increment: > 0 probes by this fixed stress increment (Pa) instead of by `gamma`.
         restrain_rotations: True blocks particle rotations during the probe.
@@ -260,7 +260,7 @@ class ProbeOptions(_Options):
 class PathOptions(_Options):
     """What `study.run_states` walks: the loading path and the probe axes of each state.
 
-    Attributes:
+    Args:
         path: "true-triaxial" (Table C1's paths, p = 100 kPa) or "cross-anisotropic" (Fig. 16:
             sigma_x = sigma_y = 100 kPa).
         probes: the probe axes, each at most once: "x", "y", "z", "yz", "xz", "xy" (or 0-5, or

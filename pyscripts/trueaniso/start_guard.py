@@ -1,7 +1,7 @@
 """Ctrl-C (or a kill, SIGTERM) in an entry point's first second, while Python still loads numpy,
 matplotlib and the engines: one line and the signal's status, nothing written, where a
 KeyboardInterrupt would be a traceback, numpy's ImportError or a crash. Installed first thing
-by every script (pyscripts/*.py) and, for the tools run as ``python3 -m trueaniso...``, by the
+by every script (``pyscripts/*.py``) and, for the tools run as ``python3 -m trueaniso...``, by the
 package itself while Python locates the module (trueaniso/__init__.py); cli.guarded then gives
 both signals their meaning for the work when it starts, so this handler never outlives the start.
 """

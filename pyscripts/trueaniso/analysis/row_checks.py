@@ -4,14 +4,16 @@ A table that fits its schema (schemas/probes.schema.json) can still be wrong: tw
 swapped (sigma_x and sigma_z, E and gamma), a column scaled, a row of one state under another's
 id. Every reader of a table (results.read_probes) refuses such a table in one line naming the
 file, the line, the state and probe, and the field. Each row is checked against:
-- its state's definition: a state's id that defines it (a Table C1 number, b<b>_sz<sigma_z>,
-  sv<sigma_v>: stress_states.defined_by_id) must be the row's b and sigma_z goal;
+
+- its state's definition: a state's id that defines it (a Table C1 number, ``b<b>_sz<sigma_z>``,
+  ``sv<sigma_v>``: stress_states.defined_by_id) must be the row's b and sigma_z goal;
 - Eq. (9): its measured normal stresses must be those of its b and sigma_z goal at its path's
   mean stress, within triaxial's HOLD_MISMATCH (2 % of the largest): a probe holds the state it
   was told to, and refuses to start farther from it than that, so no row written is farther;
 - its probe's size gamma (Eq. 12): a strain, so a number far below 1 (MAX_GAMMA);
 - its modulus (E, or G of a shear probe) within the physical bounds of a packing of its material
   (elastic_bounds.modulus_problem);
+
 and each state probed on x, y and z: its compliance symmetric (reciprocity nu_ij/E_i = nu_ji/E_j)
 and positive definite (elastic_bounds.compliance_problem).
 Columns a table does not have (older tables) are not checked.
