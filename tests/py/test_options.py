@@ -105,3 +105,19 @@ def test_other_flags_of_the_api_are_flags(scene, tmp_path):
     with pytest.raises(InputError, match="run_states: wait must be True or False"):
         study.run_states(SPECIMEN, [(1, 0.0, 100e3)], str(tmp_path / "out"), wait="no")
     assert not (tmp_path / "out").exists()
+
+
+def test_the_analysis_flags_are_flags(tmp_path):
+    """report.build(statics='no') would solve Table B1's statics; read_metadata(required='no') and
+    validate.problem(required='no') would require."""
+    from trueaniso import validate
+    from trueaniso.analysis import report, results
+    study_dir = os.path.join(REPO, "docs", "data", "spheres-4000-s1")
+    for flagged in ("statics", "b1_other_material"):
+        with pytest.raises(InputError, match="report.build: %s must be True or False, not 'no'" % flagged):
+            report.build(study_dir, out=str(tmp_path / "r"), log=lambda line: None, **{flagged: "no"})
+    assert not (tmp_path / "r").exists()
+    with pytest.raises(InputError, match="read_metadata: required must be True or False, not 0"):
+        results.read_metadata(study_dir, required=0)
+    with pytest.raises(InputError, match="validate.problem: required must be True or False"):
+        validate.problem({}, "statics_record", required="no")

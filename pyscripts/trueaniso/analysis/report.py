@@ -23,6 +23,7 @@ import numpy as np
 from . import b1_checks, chain, figures, hyperelastic, zeta_contrast
 from .results import ResultsError, read_metadata, read_probes, said, table_path
 from trueaniso import validate  # noqa: E402 (results put pyscripts/ on the path)
+from trueaniso.options import flag  # noqa: E402
 
 __all__ = ["build"]
 
@@ -542,6 +543,8 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         >>> print(open(path).readline().strip())
         # Report: spheres
     """
+    statics = flag("report.build", "statics", statics)  # bool('no') would solve the statics
+    b1_other_material = flag("report.build", "b1_other_material", b1_other_material)
     csv_path = table_path(results)
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     # A study's probes.csv given as the file: its directory's metadata (assembly, material, the

@@ -206,6 +206,8 @@ def read_metadata(results, required=False):
         ('sphere', 39)
     """
     import json
+    from trueaniso.options import flag
+    required = flag("read_metadata", "required", required)
     path = os.path.join(results, "metadata.json")
     if not os.path.exists(path):
         if required:
