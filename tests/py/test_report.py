@@ -674,7 +674,7 @@ def test_an_os_error_is_said_by_its_file_and_reason(tmp_path):
 def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
     """`python3 -m trueaniso.analysis.zeta_contrast DIR` ran nothing and exited 0, --help included (an outside
     check). It prints run_study.py's line, the material from the study's metadata; the committed
-    4000-sphere study gives the values docs/path-fidelity.md quotes (zeta 0.116 and 0.111)."""
+    4000-sphere study gives the values its report quotes (docs/report-spheres: zeta 0.116 and 0.111)."""
     def tool(*args):
         return subprocess.run([sys.executable, "-m", "trueaniso.analysis.zeta_contrast", *args], capture_output=True,
                               text=True, cwd=REPO, timeout=120)
