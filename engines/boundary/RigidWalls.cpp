@@ -74,6 +74,7 @@ void RigidWalls::addForces(Scene& s) {
   stiffness.setZero();
   contacts.setZero();
   maxOverlap = 0;
+  s.measured.clear();  // the bodies' resultants change: the force loop's sums no longer hold them
   const Members& M = s.members;
   Bodies& B = s.bodies;
   const bool clumps = s.hasClumps();
