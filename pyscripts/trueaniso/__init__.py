@@ -6,6 +6,15 @@ this package composes them: specimens, protocols, the YADE bridge, file formats.
 import os
 import sys
 
+# The modules a user's script calls, in the order of a study: the manual's Python API lists them
+# first, each with the functions of its __all__, every one of them with an example that
+# tests/py/test_api_examples.py runs. The other modules serve the scripts and these; the manual
+# lists them after, as internal.
+PUBLIC_MODULES = ("specimen", "clump_specimen", "specimen_file", "triaxial", "fabric", "statics", "zeta",
+                  "study", "dem", "psd", "validate", "yade_bridge", "yade_adapter",
+                  "analysis", "analysis.results", "analysis.hyperelastic", "analysis.chain", "analysis.report",
+                  "analysis.figures")
+
 _HERE = os.path.dirname(os.path.abspath(__file__))
 REPO_ROOT = os.path.dirname(os.path.dirname(_HERE))
 
@@ -44,7 +53,7 @@ def _find_extension():
 
 def __getattr__(name):
     """`engines` (the compiled module) is loaded on first use, not with the package: reading and
-    analysing results (trueaniso.results_csv, analysis/) needs none of it, and on a machine without
+    analysing results (trueaniso.results_csv, trueaniso.analysis) needs none of it, and on a machine without
     the build those tools run, rather than end in a 20-line ImportError traceback."""
     if name == "engines":
         global engines
