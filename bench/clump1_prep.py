@@ -107,7 +107,7 @@ def main():
     from trueaniso import clump_recipes, clump_specimen, dem, engines, provenance, specimen, specimen_file, statics
     engines.set_threads(1)
     provenance.versions()  # the code version, taken now: sources edited during the run do not refuse its save
-    rule = o.time_step or cli.DEFAULT_TIME_STEP
+    rule = o.time_step or cli.PREPARATION_TIME_STEP
     if o.time_step:
         dem.time_step_rule = o.time_step
     trace = []

@@ -27,7 +27,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
 try:
-    from trueaniso import (clump_recipes, clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance,
+    from trueaniso import (clump_recipes, clump_specimen, cli, dem, engines, lock, prep_checkpoint, progress, provenance,
                            psd, resources, specimen, specimen_file, study_dir, triaxial)
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
     sys.stderr.write("error: %s\n" % exc)
@@ -211,13 +211,14 @@ def main():
 
 def settings(o):
     """Every option that makes the specimen (what its preparation checkpoint is bound to). The time
-    step rule only when it is not the one every earlier file was made with (which records none)."""
+    step rule only when it is not the one every file made before it was recorded was made with
+    (dem.LEGACY_TIME_STEP, which such files and checkpoints record by recording none)."""
     made = dict(assembly=o.assembly, n=o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu,
                 mu_prep=o.mu_prep, mu=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
                 unbalanced=o.unbalanced)
     if o.recipe is not None:  # the default recipe's files record none
         made["recipe"] = o.recipe
-    if o.time_step != cli.DEFAULT_TIME_STEP:
+    if o.time_step != dem.LEGACY_TIME_STEP:
         made["time_step"] = o.time_step
     if switched_below(o):
         made["switch_pressure"] = o.switch_pressure
@@ -236,7 +237,7 @@ def differences(o, meta):
     settings a file does not record (older files) are not compared."""
     p = meta.get("parameters", {})
     have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"),
-                time_step=p.get("time_step", cli.DEFAULT_TIME_STEP),
+                time_step=p.get("time_step", dem.LEGACY_TIME_STEP),
                 switch_pressure=p.get("switch_pressure", p.get("pressure")))
     want = dict(settings(o), time_step=o.time_step,
                 switch_pressure=o.switch_pressure if switched_below(o) else o.pressure)
@@ -357,8 +358,6 @@ def prepare(o, dist):
     log.setdefault("assembly", o.assembly)
     if o.recipe is not None:
         log["recipe"] = o.recipe
-    if o.time_step != cli.DEFAULT_TIME_STEP:  # the default's files record none
-        log["time_step"] = o.time_step
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)
     specimen_file.write_summary(o.out, meta)  # derived from the .npz; rewritten from it if lost

@@ -14,7 +14,7 @@ import signal
 import sys
 import threading
 
-from . import param_table
+from . import param_table, time_step_rules
 from .refusal import InputError, Refusal
 
 __all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "release_start_guard", "in_yade",
@@ -129,23 +129,25 @@ def add_path_rate_option(parser):
                              "but not at 1000; inf: the whole load at once; docs/state-speed.md)")
 
 
-DEFAULT_TIME_STEP = "smallest-inertia"  # the rule of every committed result (dem.TIME_STEP_RULES)
+DEFAULT_TIME_STEP = time_step_rules.DEFAULT  # the states' and probes'
+PREPARATION_TIME_STEP = time_step_rules.PREPARATION
 
 
 def add_time_step_option(parser, study=False):
     if not study:
-        parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=DEFAULT_TIME_STEP,
-                            help="time step rule (docs/time-step.md): smallest-inertia, every committed result's, or "
-                                 "per-axis, steps 1.6 (spheres) to 3 (clumps) times longer at 100 kPa, measured "
-                                 "stable on undamped packings; the preparation's rates are per unit time, so it "
-                                 "takes fewer steps, and makes another packing")
+        parser.add_argument("--time-step", choices=sorted(time_step_rules.RULES), default=PREPARATION_TIME_STEP,
+                            help="time step rule of the preparation (docs/time-step.md): smallest-inertia, or "
+                                 "per-axis, steps 1.6 (spheres) to 3 (clumps) times longer at 100 kPa; the "
+                                 "preparation's rates and gains are per unit time, but per-axis moved a sphere "
+                                 "packing's e by 20-25 times the scatter between seeds, so it is not the "
+                                 "preparation's default")
         return
-    parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=None,
-                        help="time step rule while states are reached (docs/time-step.md; when not given: the rule "
-                             "of the study --out holds, else smallest-inertia, every committed study's). The path "
-                             "rate, servo gain and step counts are per step of smallest-inertia, so per-axis "
-                             "reaches each state at the same rate in time in 1.6 (spheres) to 3 (clumps) times "
-                             "fewer steps; probes and the static solve take smallest-inertia")
+    parser.add_argument("--time-step", choices=sorted(time_step_rules.RULES, reverse=True), default=None,
+                        help="time step rule while states are reached and probed (docs/time-step.md; when not "
+                             "given: the rule of the study --out holds, else per-axis). The path rate, the servo's "
+                             "and probe's gains and step counts are per step of smallest-inertia, so per-axis "
+                             "reaches and probes each state at the same rate in time in 1.6 (spheres) to 3 "
+                             "(clumps) times fewer steps; smallest-inertia: the rule of studies made before")
 
 
 def resolve_time_step(o):
@@ -173,7 +175,7 @@ def resolve_study_time_step(o):
     if o.time_step is not None:
         return o.time_step
     held = None if getattr(o, "force_new", False) else study_dir.state_option_of(o.out, "time_step")
-    held = held if held in ("smallest-inertia", "per-axis") else None
+    held = held if held in time_step_rules.RULES else None
     return _continue_held(o, "time_step", held, DEFAULT_TIME_STEP,
                           "its study reached its states with the %s rule")
 

@@ -119,6 +119,14 @@ def fingerprint(specimen_meta, assembly, gamma, restrain_rotations, skip_detecti
     return fp
 
 
+def probes_as_states(state_options, probe_options):
+    """The probe options with the states' time step rule, unless they name their own: one
+    --time-step for a study, which its fingerprint records for both (state.time_step, probe.time_step)."""
+    out = dict(probe_options or {})
+    out.setdefault("time_step", (state_options or {}).get("time_step", dem.DEFAULT_TIME_STEP))
+    return out
+
+
 def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping, state_options,
            probe_options, recipe, path="true-triaxial"):
     """Every check that needs no work, then (ids, axes, specimen metadata, fingerprint)."""
@@ -154,9 +162,9 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
     summary = _summary(specimen_path, spec_meta)
-    prepared_with = (spec_meta.get("parameters") or {}).get("time_step", dem.REFERENCE_TIME_STEP)
-    states_with = (state_options or {}).get("time_step", dem.REFERENCE_TIME_STEP)
-    if prepared_with not in (states_with, dem.REFERENCE_TIME_STEP):
+    prepared_with = (spec_meta.get("parameters") or {}).get("time_step", dem.LEGACY_TIME_STEP)
+    states_with = (state_options or {}).get("time_step", dem.DEFAULT_TIME_STEP)
+    if prepared_with not in (states_with, dem.PREPARATION_TIME_STEP):
         # The rule is in the study's fingerprint (state.time_step), the specimen's in its file: two
         # choices. A specimen prepared with the longer step is another packing, not the same one
         # made faster, and a study that does not take that rule may be a surprise: said.
@@ -310,6 +318,7 @@ def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rot
     """What run_states checks before any work, alone (run_study.py asks before it writes anything):
     the metadata of the study in `out` (None for a new one), or a refusal. The caller holds the lock."""
     assert lock.is_held(out)
+    probe_options = probes_as_states(state_options, probe_options)
     _, _, _, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping,
                          state_options, probe_options, recipe, path)
     return study_dir.check(out, fp, states)
@@ -368,6 +377,7 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         >>> [(r["state"], r["probe"], "%.0f MPa" % (float(r["E"]) / 1e6)) for r in rows]
         [('1', 'z', '278 MPa'), ('1', 'x', '278 MPa'), ('1', 'y', '288 MPa')]
     """
+    probe_options = probes_as_states(state_options, probe_options)
     ids, axes, spec_meta, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection,
                                       damping, state_options, probe_options, recipe, path)
     record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),

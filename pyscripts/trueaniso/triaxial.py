@@ -140,7 +140,7 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
                 unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
                 stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
                 control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0,
-                gain=None, feed_forward=False, time_step="smallest-inertia"):
+                gain=None, feed_forward=False, time_step=dem.DEFAULT_TIME_STEP):
     """Drive the scene to a true-triaxial state at constant mean stress and hold it there (Eqs. 8-9).
 
     The servo moves its goal along the straight stress path from where the scene is to the state,
@@ -176,7 +176,8 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
         gain: fraction of the stress error the servo closes a step (None: the engine's 0.01).
         feed_forward: feed the path's rate forward through the cell's measured tangent stiffness, so
             that the stresses keep pace with the goal (docs/triaxial.md).
-        time_step: the time step rule (`dem.TIME_STEP_RULES`, docs/time-step.md). Path rate, gain and
+        time_step: the time step rule (`dem.TIME_STEP_RULES`, docs/time-step.md; per-axis by default,
+            smallest-inertia the rule of studies made before it was). Path rate, gain and
             step counts are per step of the reference rule, so a rule with a longer step reaches the
             state at the same rate in time, in fewer steps.
 
@@ -330,7 +331,7 @@ def check_held_state(scene, hold):
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
           settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True,
-          hold_other_strains=False, progress=None):
+          hold_other_strains=False, progress=None, time_step=dem.DEFAULT_TIME_STEP):
     """One directional stress probe at a held state (Eqs. 10-12); the scene is restored afterwards.
 
     From the held state, sliding is suppressed (friction 1e23), the scene relaxes, and the stress on
@@ -360,11 +361,15 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
         hold_other_strains: True holds the five other strains at zero instead of their stresses: the
             modulus is then the stiffness C_kk (the static solve's C), not 1/S_kk (docs/cell.md).
         progress: called with the engines' StressProbe after every chunk, or None.
+        time_step: the time step rule (`dem.TIME_STEP_RULES`; per-axis by default). The gain and the
+            step counts (ramp, settle, maximum) are per step of the reference rule, as the servo's,
+            so the probe takes the same time and measures the same modulus, in fewer steps under a
+            longer step (docs/time-step.md).
 
     Returns:
         dict: ``modulus`` and ``E`` (Eq. 10) with ``nu_ij`` (Eq. 11) of a normal probe, or ``G`` of a
         shear probe, in Pa; ``d_stress`` and ``d_strain`` (Voigt increments), ``gamma``, ``steps``,
-        ``wall_time`` and how it ran (``rotations``, ``detection``, ``damping``).
+        ``wall_time`` and how it ran (``time_step``, ``rotations``, ``detection``, ``damping``).
 
     Raises:
         ValueError: an unknown axis, a gamma <= 0, a scene without bodies, or held stresses that are
@@ -390,7 +395,7 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     p.settle_steps, p.ramp_steps, p.max_steps = settle_steps, ramp_steps, max_steps
     # The cap only matters in the relax stage; probes move strains of ~1e-6.
     p.max_strain_rate = 10.0
-    chain = dem.Chain(scene, damping=damping, controllers=[p])
+    chain = dem.Chain(scene, damping=damping, controllers=[p], rule=time_step)
     dem.refresh(scene)
     check_held_state(scene, hold)
     t0 = time.time()
@@ -412,7 +417,7 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     out = dict(axis=AXES[axis], sign=sign, modulus=float(p.modulus),
                d_stress=p.d_stress.tolist(), d_strain=p.d_strain.tolist(), gamma=float(p.gamma),
                steps=int(p.steps), relax_steps=int(p.relax_steps), ramp_steps=int(p.ramp_steps_done),
-               hold_steps=int(p.hold_steps), wall_time=time.time() - t0,
+               hold_steps=int(p.hold_steps), wall_time=time.time() - t0, time_step=time_step,
                # a scene that blocks rotations is restrained whatever was asked
                rotations="restrained" if restrain_rotations or scene.block_rotations else "free",
                detection="off" if skip_detection else "on", damping=damping,
