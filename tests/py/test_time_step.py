@@ -95,27 +95,33 @@ def test_a_packing_stepped_by_the_per_axis_rule_keeps_its_energy(path, request):
     assert np.isfinite(e1) and -5 * k0 < e1 - e0 < k0
 
 
-def test_a_study_on_a_specimen_of_the_other_rule_says_its_states_take_the_default_rule(specimen_150, tmp_path):
+def test_a_study_takes_the_default_rule_and_names_a_specimen_of_another(specimen_150, tmp_path):
     """A specimen's rule and a study's are two choices (docs/time-step.md): a study run without
-    --time-step takes the default rule, and a specimen prepared with the other one is named in a
-    note, not taken silently; the probes take the states' rule, and the study's metadata says both."""
+    --time-step takes per-axis for its states and probes, and says nothing of a specimen prepared
+    by the preparation's default; a specimen prepared per-axis, taken to states under
+    smallest-inertia, is named in a note, not taken silently. The study's metadata says both rules."""
     from conftest import run_script
     from trueaniso import study_dir
-    scene, meta = specimen_file.load(str(specimen_150))
-    other = tmp_path / "smallest-inertia.npz"
-    specimen_file.save(str(other), scene, seed=meta.get("seed"),
-                       parameters=dict(meta.get("parameters") or {}, time_step="smallest-inertia"),
-                       summary=meta.get("summary"))
-    proc = run_script("run_states.py", "--specimen", other, "--ids", "1", "--probes", "z", "--threads", "1",
+    proc = run_script("run_states.py", "--specimen", specimen_150, "--ids", "1", "--probes", "z", "--threads", "1",
                       "--out", tmp_path / "study")
     assert proc.returncode == 0, proc.stderr[-2000:]
-    notes = [x for x in proc.stdout.splitlines() if x.startswith("note:")]
-    assert len(notes) == 1 and "per-axis" in notes[0] and "smallest-inertia" in notes[0], proc.stdout
+    assert not [x for x in proc.stdout.splitlines() if x.startswith("note:")], proc.stdout
     fingerprint = study_dir.read_metadata(str(tmp_path / "study"))["fingerprint"]
     assert fingerprint["state"]["time_step"] == fingerprint["probe"]["time_step"] == "per-axis"
     state, _ = specimen_file.load(str(tmp_path / "study" / "states" / "1.npz"))
-    cap = dem.reference_time_step(state)  # the default rule's cap, which binds for spheres at 100 kPa
+    cap = dem.reference_time_step(state, safety=dem.TIME_STEP_RULES["per-axis"][1])  # binds for spheres at 100 kPa
     assert state.dt <= cap * (1 + 1e-12)
+    scene, meta = specimen_file.load(str(specimen_150))
+    other = tmp_path / "per-axis.npz"
+    specimen_file.save(str(other), scene, seed=meta.get("seed"),
+                       parameters=dict(meta.get("parameters") or {}, time_step="per-axis"), summary=meta.get("summary"))
+    proc = run_script("run_states.py", "--specimen", other, "--ids", "1", "--probes", "z", "--threads", "1",
+                      "--time-step", "smallest-inertia", "--out", tmp_path / "other")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    notes = [x for x in proc.stdout.splitlines() if x.startswith("note:")]
+    assert len(notes) == 1 and "per-axis" in notes[0] and "smallest-inertia" in notes[0], proc.stdout
+    fingerprint = study_dir.read_metadata(str(tmp_path / "other"))["fingerprint"]
+    assert fingerprint["state"]["time_step"] == fingerprint["probe"]["time_step"] == "smallest-inertia"
 
 
 def _reach(path, monkeypatch, factor, b=0.5, sigma_z=120e3):
