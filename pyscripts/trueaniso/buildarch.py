@@ -2,7 +2,7 @@
 the module is loaded.
 
 A default build (CMake's TRUEANISO_ARCH empty) makes two modules, the portable baseline's and one
-whose hot loops are built for x86-64-v3, 1.2-1.45x faster (docs/benchmarks.md), in the folder
+whose hot loops are built for x86-64-v3, faster (by how much: docs/benchmarks.md), in the folder
 LEVELS_DIR beside the first; `choose` picks the fastest one the processor runs, or the level that
 TRUEANISO_LEVEL names (TRUEANISO_LEVEL=x86-64: the baseline, whose bits every x86-64 processor
 reproduces; docs/runs.md, "Across machines"). A module for a level the processor lacks would die of

@@ -400,7 +400,6 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
                steps_expansion=sum(st.steps(k) for k in expanding), steps_consolidation=st.steps("consolidation"),
                generation_time=st.place["generation_time"], wall_time=st.elapsed(),
                aspect_ratio=clump_shapes.aspect_ratio(tmpl), template_volume_error=tmpl.volume_error_estimate,
-               time_step=dem.time_step_rule,  # the rule every chain of the preparation took
                **{k: (list(v) if isinstance(v, tuple) else v) for k, v in r.items()})
     if hold_deviator is not None:  # the default's log records none
         log["hold_deviator"] = hold_deviator

@@ -2,19 +2,20 @@
 import math
 
 from . import engines as _e
-from . import time_step_rules as _rules
 
 __all__ = ["Chain", "refresh", "strain_rate_for_inertial_number"]
 
-# The time step rules (time_step_rules.py, docs/time-step.md): name -> (per_axis, safety).
-TIME_STEP_RULES = _rules.RULES
-DEFAULT_TIME_STEP = _rules.DEFAULT  # the states' and the probes' (triaxial.reach_state, triaxial.probe)
-PREPARATION_TIME_STEP = _rules.PREPARATION
-LEGACY_TIME_STEP = _rules.LEGACY
-REFERENCE_TIME_STEP = _rules.REFERENCE
-# The rule a Chain takes when not told: the preparation's, whose chains are not told (scripts set it
-# from prepare_specimen.py --time-step, cli.resolve_time_step); the states and probes name theirs.
-time_step_rule = PREPARATION_TIME_STEP
+
+# Time step rules of TimeStepper: name -> (per_axis, safety). "smallest-inertia" is the rule every
+# committed result was made with; "per-axis" is the per-axis bound at the largest factor at which
+# undamped packings of spheres, clump1 and clump2 keep their energy over 100,000 steps
+# (docs/time-step.md; the runs' local damping is the margin).
+TIME_STEP_RULES = {"smallest-inertia": (False, 0.5), "per-axis": (True, 0.8)}
+# The rule whose step is the unit of time of the servos' per-step settings (path rate, gain, step
+# counts; scene.reference_dt): under any other rule they load at the same rate in time.
+REFERENCE_TIME_STEP = "smallest-inertia"
+# The rule a Chain takes when not told (scripts set it from --time-step, cli.resolve_time_step).
+time_step_rule = "smallest-inertia"
 
 
 class Chain:

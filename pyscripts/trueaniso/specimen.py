@@ -247,8 +247,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
                stress_tolerance=stress_tolerance, gain=gain,
                radius_scale=st.place["start_scale"] * st.place["grown_scale"],
                steps_expansion=st.steps("expansion"), steps_consolidation=st.steps("consolidation"),
-               wall_time=st.elapsed(), d50=size_distribution.d50, cu=size_distribution.cu,
-               time_step=dem.time_step_rule)  # the rule every chain of the preparation took
+               wall_time=st.elapsed(), d50=size_distribution.d50, cu=size_distribution.cu)
     if switch_pressure != pressure:  # absent: the switch at the final pressure, every earlier file's recipe
         log["switch_pressure"] = switch_pressure
     if checkpoints is not None:

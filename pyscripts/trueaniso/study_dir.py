@@ -40,7 +40,6 @@ LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code
           "state.friction": "the loading friction (--mu; state.friction)",
           "state.path_rate": "the path rate (--path-rate; state.path_rate)",
           "state.time_step": "the time step rule of the states (--time-step; state.time_step)",
-          "probe.time_step": "the time step rule of the probes (--time-step; probe.time_step)",
           "state.rolling_stiffness": "the rolling stiffness (--rolling-stiffness; state.rolling_stiffness)",
           "state.rolling_friction": "the rolling friction (--rolling-friction; state.rolling_friction)",
           "probe.damping": "the damping (--damping; probe.damping)",

@@ -83,8 +83,7 @@ def save_clump1_200_s4(path):
 def save_loose_150_at_state_21(path):
     seed, scene, log = loose_150_at_state_21()
     specimen_file.save(path, scene, seed=seed, parameters=dict(log, loaded_to="state 21 (b 0.5, sigma_z 140 kPa, "
-                                                                               "loading friction 1.0)",
-                                                               state_time_step=triaxial.dem.DEFAULT_TIME_STEP))
+                                                                               "loading friction 1.0)"))
 
 
 MAKERS = {"spheres-300-s3.npz": save_spheres(300, 3), "spheres-150-s4.npz": save_spheres(150, 4),

@@ -12,30 +12,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DIMERS = os.path.join(os.path.dirname(os.path.dirname(HERE)), "tests", "data", "clump1-200-s4.npz")
 
 
-def test_per_axis_is_the_default_of_states_and_probes_and_smallest_inertia_a_named_option():
-    """The default of the states and the probes (docs/time-step.md, "Which rule is the default"), one
-    home for the scripts and the engine chains; the preparation keeps smallest-inertia (per-axis
-    moves its packing), which stays by name for the states too, and is what a file or study that
-    records no rule was made with."""
-    import inspect
-    from trueaniso import cli, time_step_rules, triaxial
-    assert dem.DEFAULT_TIME_STEP == cli.DEFAULT_TIME_STEP == time_step_rules.DEFAULT == "per-axis"
-    assert dem.PREPARATION_TIME_STEP == cli.PREPARATION_TIME_STEP == dem.time_step_rule == "smallest-inertia"
-    assert dem.LEGACY_TIME_STEP == dem.REFERENCE_TIME_STEP == "smallest-inertia" in dem.TIME_STEP_RULES
-    for protocol in (triaxial.reach_state, triaxial.probe):
-        assert inspect.signature(protocol).parameters["time_step"].default == "per-axis"
-    study_opts = cli.Parser()
-    cli.add_time_step_option(study_opts, study=True)
-    prep_opts = cli.Parser()
-    cli.add_time_step_option(prep_opts)
-    assert study_opts.parse_args([]).time_step is None  # resolved: the study's rule, else per-axis
-    assert prep_opts.parse_args([]).time_step == "smallest-inertia"
-    assert study_opts.parse_args(["--time-step", "smallest-inertia"]).time_step == "smallest-inertia"
-
-
 def test_a_chain_takes_the_rule_and_its_cap(specimen_150):
     s, _ = specimen_file.load(str(specimen_150))
-    plain = dem.Chain(s, rule="smallest-inertia")
+    plain = dem.Chain(s)
     assert (plain.timestep.per_axis, plain.timestep.safety) == (False, 0.5)
     assert plain.timestep.max_dt == dem.reference_time_step(s, safety=0.5)
     fast = dem.Chain(s, rule="per-axis")
@@ -49,8 +28,6 @@ def test_a_chain_takes_the_rule_and_its_cap(specimen_150):
 
 def test_the_module_rule_is_what_a_chain_takes_when_not_told(specimen_150, monkeypatch):
     s, _ = specimen_file.load(str(specimen_150))
-    assert not dem.Chain(s).timestep.per_axis  # the preparation's rule, whose chains are not told
-    assert dem.reference_time_step(s) == dem.reference_time_step(s, safety=0.5)
     monkeypatch.setattr(dem, "time_step_rule", "per-axis")
     assert dem.Chain(s).timestep.per_axis
     assert dem.reference_time_step(s) == dem.reference_time_step(s, safety=dem.TIME_STEP_RULES["per-axis"][1])
@@ -95,33 +72,23 @@ def test_a_packing_stepped_by_the_per_axis_rule_keeps_its_energy(path, request):
     assert np.isfinite(e1) and -5 * k0 < e1 - e0 < k0
 
 
-def test_a_study_takes_the_default_rule_and_names_a_specimen_of_another(specimen_150, tmp_path):
+def test_a_study_on_a_per_axis_specimen_says_its_states_take_the_default_rule(specimen_150, tmp_path):
     """A specimen's rule and a study's are two choices (docs/time-step.md): a study run without
-    --time-step takes per-axis for its states and probes, and says nothing of a specimen prepared
-    by the preparation's default; a specimen prepared per-axis, taken to states under
-    smallest-inertia, is named in a note, not taken silently. The study's metadata says both rules."""
+    --time-step takes the default rule, and a specimen prepared with the other one is named in a
+    note, not taken silently."""
     from conftest import run_script
-    from trueaniso import study_dir
-    proc = run_script("run_states.py", "--specimen", specimen_150, "--ids", "1", "--probes", "z", "--threads", "1",
-                      "--out", tmp_path / "study")
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    assert not [x for x in proc.stdout.splitlines() if x.startswith("note:")], proc.stdout
-    fingerprint = study_dir.read_metadata(str(tmp_path / "study"))["fingerprint"]
-    assert fingerprint["state"]["time_step"] == fingerprint["probe"]["time_step"] == "per-axis"
-    state, _ = specimen_file.load(str(tmp_path / "study" / "states" / "1.npz"))
-    cap = dem.reference_time_step(state, safety=dem.TIME_STEP_RULES["per-axis"][1])  # binds for spheres at 100 kPa
-    assert state.dt <= cap * (1 + 1e-12)
     scene, meta = specimen_file.load(str(specimen_150))
-    other = tmp_path / "per-axis.npz"
-    specimen_file.save(str(other), scene, seed=meta.get("seed"),
+    per_axis = tmp_path / "per-axis.npz"
+    specimen_file.save(str(per_axis), scene, seed=meta.get("seed"),
                        parameters=dict(meta.get("parameters") or {}, time_step="per-axis"), summary=meta.get("summary"))
-    proc = run_script("run_states.py", "--specimen", other, "--ids", "1", "--probes", "z", "--threads", "1",
-                      "--time-step", "smallest-inertia", "--out", tmp_path / "other")
+    proc = run_script("run_states.py", "--specimen", per_axis, "--ids", "1", "--probes", "z", "--threads", "1",
+                      "--out", tmp_path / "study")
     assert proc.returncode == 0, proc.stderr[-2000:]
     notes = [x for x in proc.stdout.splitlines() if x.startswith("note:")]
     assert len(notes) == 1 and "per-axis" in notes[0] and "smallest-inertia" in notes[0], proc.stdout
-    fingerprint = study_dir.read_metadata(str(tmp_path / "other"))["fingerprint"]
-    assert fingerprint["state"]["time_step"] == fingerprint["probe"]["time_step"] == "smallest-inertia"
+    state, _ = specimen_file.load(str(tmp_path / "study" / "states" / "1.npz"))
+    cap = dem.reference_time_step(state)  # the default rule's cap, which binds for spheres at 100 kPa
+    assert state.dt <= cap * (1 + 1e-12)
 
 
 def _reach(path, monkeypatch, factor, b=0.5, sigma_z=120e3):
@@ -149,42 +116,35 @@ def test_a_longer_step_reaches_the_same_state_in_fewer_steps(specimen_150, monke
 
 def test_a_study_keeps_its_time_step_rule(specimen_150, tmp_path):
     """--time-step is part of a study's fingerprint: a rerun without it continues with the study's
-    rule (and says so), one with the other rule is refused naming the option. Under the old rule,
-    the named option, the checkpoint holds a step that is its reference step; under the default, the
-    per-axis step and the reference step it was loaded with."""
+    rule (and says so), one with the other rule is refused naming the option; the checkpoint holds
+    the per-axis step and the reference step it was loaded with."""
     from conftest import run_script
     from trueaniso import study_dir
     out = tmp_path / "study"
     common = ("--specimen", specimen_150, "--probes", "z", "--threads", "1", "--out", out)
-    proc = run_script("run_states.py", "--ids", "1", "--time-step", "smallest-inertia", *common)
+    proc = run_script("run_states.py", "--ids", "1", "--time-step", "per-axis", *common)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    prepared = (specimen_file.read(str(specimen_150))[1]["parameters"]).get("time_step", dem.LEGACY_TIME_STEP)
-    notes = [x for x in proc.stdout.splitlines() if x.startswith("note:")]
-    assert len(notes) == (prepared != "smallest-inertia"), proc.stdout  # a specimen of the other rule is named
-    fingerprint = study_dir.read_metadata(str(out))["fingerprint"]
-    assert fingerprint["state"]["time_step"] == fingerprint["probe"]["time_step"] == "smallest-inertia"
+    assert not [x for x in proc.stdout.splitlines() if x.startswith("note:")], proc.stdout
+    assert study_dir.read_metadata(str(out))["fingerprint"]["state"]["time_step"] == "per-axis"
     state, meta = specimen_file.load(str(out / "states" / "1.npz"))
-    assert "reference_dt" not in meta and state.step_scale == 1.0
-    again = run_script("run_states.py", "--ids", "1,2", *common)
-    assert again.returncode == 0, again.stderr[-2000:]
-    assert "--time-step not given" in again.stdout and "smallest-inertia" in again.stdout
-    other = run_script("run_states.py", "--ids", "1,2", "--time-step", "per-axis", *common)
-    assert other.returncode != 0 and "--time-step" in other.stderr, other.stderr[-2000:]
-    default = run_script("run_states.py", "--ids", "1", "--specimen", specimen_150, "--probes", "z", "--threads", "1",
-                         "--out", tmp_path / "default")
-    assert default.returncode == 0, default.stderr[-2000:]
-    state, meta = specimen_file.load(str(tmp_path / "default" / "states" / "1.npz"))
     assert meta["reference_dt"] < meta["dt"] and state.reference_dt == meta["reference_dt"]
     assert state.step_scale == pytest.approx(dem.TIME_STEP_RULES["per-axis"][1] / 0.5, rel=1e-9)  # the cap binds
+    again = run_script("run_states.py", "--ids", "1,2", *common)
+    assert again.returncode == 0, again.stderr[-2000:]
+    assert "--time-step not given" in again.stdout and "per-axis" in again.stdout
+    other = run_script("run_states.py", "--ids", "1,2", "--time-step", "smallest-inertia", *common)
+    assert other.returncode != 0 and "--time-step" in other.stderr, other.stderr[-2000:]
 
 
 def test_a_specimen_file_keeps_a_reference_step_that_is_not_its_step(specimen_150, tmp_path):
     """Saved only where it differs from dt: a file made under the reference rule is the same bytes."""
     scene, meta = specimen_file.load(str(specimen_150))
     assert "reference_dt" not in meta and scene.reference_dt == scene.dt
-    scene.reference_dt = 0.5 * scene.dt
+    # The per-axis rule's step, as its chain sets it (dem.Chain): the reference step stays.
+    _, safety = dem.TIME_STEP_RULES["per-axis"]
+    scene.dt = min(dem.reference_time_step(scene, safety=safety), safety * engines.TimeStepper.per_axis_bound(scene))
     path = tmp_path / "s.npz"
     specimen_file.save(str(path), scene, seed=meta.get("seed"), parameters=meta.get("parameters"))
     again, meta2 = specimen_file.load(str(path))
-    assert meta2["reference_dt"] == again.reference_dt == 0.5 * scene.dt
-    assert again.step_scale == 2.0
+    assert meta2["reference_dt"] == again.reference_dt == scene.reference_dt < again.dt
+    assert again.step_scale == scene.dt / scene.reference_dt > 1.5
