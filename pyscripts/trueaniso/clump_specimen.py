@@ -222,14 +222,16 @@ def check_count(assembly, n):
 
 def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_number=1e-2, prep_unbalanced=1e-2,
                    unbalanced=1e-3, stress_tolerance=100.0, gain=0.002, max_steps=5_000_000, progress=None,
-                   checkpoints=None, hold_deviator=None, **overrides):
+                   checkpoints=None, hold_deviator=None, switch_pressure=None, **overrides):
     """A clump specimen (assembly "clump1" or "clump2", recipe RECIPES[assembly] with `overrides`)
     consolidated isotropically to `pressure`; returns (scene, log dict). The final state is in
     force and moment balance below `unbalanced` (a probe or static solve with rotations free
     starts from it). `checkpoints`: as in specimen.prepare_spheres (an interrupted preparation
     resumes). hold_deviator (a gain in (0, 1], or None): while the radii grow, the cell holds the
     normal stresses at their mean at constant volume with that gain (RadiusExpansion.hold_deviator);
-    None, the growth is at a fixed cell."""
+    None, the growth is at a fixed cell. switch_pressure: where the radii, grown to `pressure`, are
+    unloaded to and the friction becomes mu_final (None: the recipe's switch_fraction of `pressure`,
+    specimen.default_switch_pressure; `pressure`: no unloading, the recipes before it)."""
     if hold_deviator is not None and not 0 < hold_deviator <= 1:
         raise ValueError("hold_deviator %r: the deviator hold's gain must lie in (0, 1]" % (hold_deviator,))
     if pressure <= 0:
@@ -237,6 +239,12 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
     r = recipe(assembly, **overrides)
     if r["mu_prep"] < 0 or r["mu_final"] < 0:
         raise ValueError("friction coefficients must be >= 0")
+    switch = switch_pressure
+    if switch is None:
+        switch = specimen.default_switch_pressure(pressure, r["switch_fraction"], stress_tolerance)
+    problem = switch != pressure and specimen.switch_pressure_problem(switch, pressure, stress_tolerance)
+    if problem:
+        raise ValueError(problem)
     t0 = time.time()
     tmpl = clump_shapes.template(r["shape"])
     resumed = checkpoints.resume() if checkpoints is not None else None
@@ -258,14 +266,21 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         # Stage 1: compaction by radius expansion, rotations blocked or free.
         scene.block_rotations = r["stage1_rotations"] == "blocked"
         # The growth scale so far multiplies the controllers' own (one per run between checkpoints).
+        final = scene_at(1.0)
         place = dict(stage="gas", steps={}, start_scale=start, grown_scale=1.0, generation_time=time.time() - t0,
-                     max_dt=dem.reference_time_step(scene_at(1.0), pressure))
+                     max_dt=dem.reference_time_step(final, pressure))
+        if switch < pressure:  # the unloaded packing's cap, as the spheres' (specimen.prepare_spheres)
+            place["unloading_max_dt"] = dem.reference_time_step(final, switch)
         place["elapsed"] = time.time() - t0
     rate = dem.strain_rate_for_inertial_number(inertial_number, r["d50"], scene.density, pressure)
     expanding = ("gas", "stage 1", "expansion")
 
     def build(st):
-        if st.place["stage"] in expanding:
+        if st.at("unloading"):
+            st.controller = specimen.expansion(switch, gain, rate, stress_tolerance, prep_unbalanced)
+            st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller],
+                                 max_dt=st.place["unloading_max_dt"])
+        elif st.place["stage"] in expanding:
             # The loose start (solid fraction 0.2) carries no stress: grow 10 times faster until the
             # contact network takes 1 % of the target pressure (the rate cap only matters under load).
             st.controller = specimen.expansion(pressure, gain, 10.0 * rate if st.at("gas") else rate,
@@ -279,7 +294,7 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
             st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller])
 
     def fold(st):
-        if st.place["stage"] in expanding:
+        if st.place["stage"] in expanding + ("unloading",):
             st.place["grown_scale"] *= st.controller.scale
 
     st = _checkpointed.Stages(scene, place, checkpoints, build, fold)
@@ -309,10 +324,20 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
             raise PreparationError("%s did not converge within %d steps (p or unbalanced force off target)"
                                    % (label, max_steps))
         fold(st)
+        st.advance("unloading" if switch < pressure else "switch")
+    if st.at("unloading"):
+        # Rotations as the expansion left them, its friction: the radii shrink until the switch pressure
+        # is held.
+        if not st.run("unloading", _checkpointed.CHUNK, lambda: st.controller.reached, max_steps, progress):
+            raise PreparationError("unloading did not converge within %d steps (p or unbalanced force off the "
+                                   "switch pressure)" % max_steps)
+        fold(st)
+        st.advance("switch")
+    if st.at("switch"):
         st.scene.rescale(1.0 / (st.place["start_scale"] * st.place["grown_scale"]))
         st.scene.cell_ref_size = st.scene.cell_size
-        # Stage 2: rotations free, final friction, the cell servoed to the isotropic stress until the
-        # forces and the moments are balanced.
+        # Stage 2: rotations free, final friction, the cell servoed from the switch pressure to the
+        # isotropic stress until the forces and the moments are balanced.
         st.scene.block_rotations = False
         st.scene.friction = r["mu_final"]
         st.advance("consolidation")
@@ -333,6 +358,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
                generation_time=st.place["generation_time"], wall_time=st.elapsed(),
                aspect_ratio=clump_shapes.aspect_ratio(tmpl), template_volume_error=tmpl.volume_error_estimate,
                **{k: (list(v) if isinstance(v, tuple) else v) for k, v in r.items()})
+    if switch < pressure:  # absent, as in every file before the unloading: the switch at the final pressure
+        log.update(switch_pressure=switch, unloaded_from=pressure, steps_unloading=st.steps("unloading"))
     if hold_deviator is not None:  # the default's log records none
         log["hold_deviator"] = hold_deviator
     if checkpoints is not None:
