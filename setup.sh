@@ -77,5 +77,6 @@ if [ -n "$level" ] && [ "$level" != x86-64 ]; then  # sticky: say so on every ru
   echo "setup: the engines are built for $level (TRUEANISO_ARCH; TRUEANISO_ARCH= ./setup.sh returns to the portable baseline)"
 fi
 grep -E "warning:" "$log" || true
+cmake/link_package.sh
 
 finish_plugin

@@ -4,7 +4,7 @@ import sys
 
 DOCS = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(DOCS)
-sys.path[:0] = [os.path.join(DOCS, "_ext"), os.path.join(REPO, "pyscripts"), REPO]
+sys.path[:0] = [os.path.join(DOCS, "_ext"), os.path.join(REPO, "pyscripts")]
 
 project = "trueaniso"
 author = "the trueaniso authors"

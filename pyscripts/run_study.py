@@ -8,9 +8,9 @@
 2. a selection of the paper's Table C1 states, each reached by the b-controlled servo and probed
    on z, x and y (docs/triaxial.md), with the micro-structure of each state (docs/fabric.md);
 3. the exact static stiffness at the isotropic state and the rotation factor zeta it implies
-   (docs/statics.md), and zeta fitted on the contrast over the probed states (analysis/zeta_contrast.py);
+   (docs/statics.md), and zeta fitted on the contrast over the probed states (pyscripts/trueaniso/analysis/zeta_contrast.py);
 4. figures (E_i against sigma_i, K and G against Zm), the report beside the paper's numbers
-   (OUT/report/report.md, analysis/report.py) and a summary.
+   (OUT/report/report.md, pyscripts/trueaniso/analysis/report.py) and a summary.
 The output directory is one study (docs/runs.md): a rerun continues it where it stopped, also
 after a kill, and may add states (--ids 1,5 then --ids 1,5,9); a rerun that asks for another
 specimen or other settings refuses in one line.
@@ -29,9 +29,9 @@ import inspect
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
-sys.path[:0] = [HERE, os.path.dirname(HERE)]  # the trueaniso package and the analysis package
+sys.path.insert(0, HERE)  # this checkout's trueaniso, under yade-double too (it does not put the script's folder first)
 try:
-    from analysis import figures, report, zeta_contrast
+    from trueaniso.analysis import figures, report, zeta_contrast
     from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, resources,
                            specimen, statics, specimen_file, study, study_dir, triaxial)
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback

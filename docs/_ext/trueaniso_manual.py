@@ -4,8 +4,8 @@ A page holding a line ``<!-- generated: KIND -->`` gets Markdown in its place (`
 
 * ``scripts``: every user script's ``--help`` (pyscripts/*.py);
 * ``analysis-tools``: the ``--help`` of every analysis module that runs as a tool;
-* ``bench``: the ``--help`` of every benchmark script (pyscripts/bench/*.py);
-* ``python-api``: an autodoc section per module of the ``trueaniso`` and ``analysis`` packages,
+* ``bench``: the ``--help`` of every benchmark script (bench/*.py);
+* ``python-api``: an autodoc section per module of the ``trueaniso`` package and its ``analysis``,
   whose docstrings (plain text) are shown as written.
 
 The lists are discovered from the files, so a new script or module has its page without an edit.
@@ -33,7 +33,7 @@ def user_scripts():
 
 
 def bench_scripts():
-    return sorted(os.path.relpath(p, REPO) for p in glob.glob(os.path.join(REPO, "pyscripts", "bench", "*.py"))
+    return sorted(os.path.relpath(p, REPO) for p in glob.glob(os.path.join(REPO, "bench", "*.py"))
                   if not os.path.basename(p).startswith("_"))
 
 
@@ -48,14 +48,15 @@ def modules(package, folder):
 
 
 def api_modules():
-    return modules("trueaniso", os.path.join("pyscripts", "trueaniso")) + modules("analysis", "analysis")
+    return (modules("trueaniso", os.path.join("pyscripts", "trueaniso"))
+            + modules("trueaniso.analysis", os.path.join("pyscripts", "trueaniso", "analysis")))
 
 
 def analysis_tools():
-    """Analysis modules that run as a tool (``python3 -m analysis.X``)."""
+    """Analysis modules that run as a tool (``python3 -m trueaniso.analysis.X``)."""
     tools = []
-    for name in modules("analysis", "analysis")[1:]:
-        with open(os.path.join(REPO, "analysis", name.split(".")[1] + ".py")) as f:
+    for name in modules("trueaniso.analysis", os.path.join("pyscripts", "trueaniso", "analysis"))[1:]:
+        with open(os.path.join(REPO, "pyscripts", "trueaniso", "analysis", name.rsplit(".", 1)[1] + ".py")) as f:
             if "__main__" in f.read():
                 tools.append(name)
     return tools
@@ -73,7 +74,8 @@ def machine_independent(text):
 
 
 def help_text(args):
-    env = dict(os.environ, COLUMNS="100", OMP_NUM_THREADS="1", PYTHONDONTWRITEBYTECODE="1")
+    env = dict(os.environ, COLUMNS="100", OMP_NUM_THREADS="1", PYTHONDONTWRITEBYTECODE="1",
+               PYTHONPATH=os.path.join(REPO, "pyscripts"))
     done = subprocess.run([PYTHON] + args + ["--help"], cwd=REPO, env=env, capture_output=True, text=True,
                           timeout=120)
     if done.returncode != 0:

@@ -14,7 +14,6 @@ void exportStatics();
 void exportFabric();
 void exportControl();
 void exportClump();
-void exportWalls();
 
 np::ndarray toNumpy(const std::vector<Vec3>& v) {
   np::ndarray a = np::zeros(bp::make_tuple(v.size(), 3), np::dtype::get_builtin<double>());
@@ -131,5 +130,4 @@ BOOST_PYTHON_MODULE(_trueaniso) {
   exportFabric();
   exportControl();
   exportClump();
-  exportWalls();
 }

@@ -44,7 +44,7 @@ def _find_extension():
 
 def __getattr__(name):
     """`engines` (the compiled module) is loaded on first use, not with the package: reading and
-    analysing results (trueaniso.results_csv, analysis/) needs none of it, and on a machine without
+    analysing results (trueaniso.results_csv, trueaniso.analysis) needs none of it, and on a machine without
     the build those tools run, rather than end in a 20-line ImportError traceback."""
     if name == "engines":
         global engines

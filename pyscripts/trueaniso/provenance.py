@@ -6,14 +6,15 @@
   is, installed or in a build tree. In a source tree the same hash is computed from engines/ and
   compared: a module built from other sources than those beside it (edited, not rebuilt) is
   refused, because its numbers would be credited to code that did not make them;
-- the package: the .py files of trueaniso itself, wherever it is imported from;
+- the package: the .py files of trueaniso itself, wherever it is imported from, but for its
+  subpackage trueaniso.analysis;
 - the x86-64 level the module was compiled for, when it is not the portable baseline
   (``engines.build_arch()``, CMake's TRUEANISO_ARCH): a build for x86-64-v3 fuses multiply-adds and
   its results differ in the last bits, so its studies and specimens are another code's. The
   baseline adds nothing.
 It changes exactly when that code changes, committed or not, in a checkout or an installation;
-edits to docs, tests, benchmarks, analysis/ (which only reads results, and is rerun on every study
-run) or the user scripts (whose options are recorded in the study's fingerprint) leave it alone.
+edits to docs, tests, benchmarks, trueaniso.analysis (which only reads results, and is rerun on
+every study run) or the user scripts (whose options are recorded in the study's fingerprint) leave it alone.
 The git commit and the release version (``__version__``, the file VERSION, which is not hashed:
 the same engines under a new version number make the same numbers) are recorded beside it for
 people, not compared.
@@ -34,12 +35,13 @@ class StaleBuild(Refusal):
     """The compiled module was not built from the engine sources beside it."""
 
 
-def manifest_hash(root, top, suffixes):
+def manifest_hash(root, top, suffixes, skip=()):
     """SHA-256 of the lines "path sha256(content)", sorted by path (the scheme of
-    cmake/EngineSourceHash.cmake; paths relative to root, '/'-separated)."""
+    cmake/EngineSourceHash.cmake; paths relative to root, '/'-separated); the folders of `top`
+    named in `skip` are left out."""
     lines = []
     for d, dirs, files in os.walk(os.path.join(root, top)):
-        dirs[:] = [x for x in dirs if x != "__pycache__"]
+        dirs[:] = [x for x in dirs if x != "__pycache__" and not (d == os.path.join(root, top) and x in skip)]
         for name in files:
             if name.endswith(suffixes):
                 full = os.path.join(d, name)
@@ -64,7 +66,7 @@ def engine_source_hash(root=REPO_ROOT):
 @functools.lru_cache(maxsize=None)
 def code_version(root=REPO_ROOT):
     """'src-' + 16 hex digits of the SHA-256 of the engines' and the package's hashes (module doc)."""
-    package = manifest_hash(os.path.dirname(_HERE), os.path.basename(_HERE), (".py",))
+    package = manifest_hash(os.path.dirname(_HERE), os.path.basename(_HERE), (".py",), skip=("analysis",))
     parts = engine_source_hash(root) + " " + package
     if engines.build_arch() != buildarch.BASELINE:
         parts += " " + engines.build_arch()

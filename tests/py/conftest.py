@@ -9,7 +9,10 @@ import pytest
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(REPO, "pyscripts"))
-sys.path.insert(0, REPO)
+# Processes the tests start (python3 -m trueaniso.analysis.report, yade-double scripts) import this
+# checkout's package, whichever checkout setup.sh linked for the machine.
+os.environ["PYTHONPATH"] = os.pathsep.join([os.path.join(REPO, "pyscripts")]
+                                           + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
 
 
 # The files of the most CPU time first (largest first), the others after them in their order:
@@ -77,13 +80,18 @@ def run_yade_scripts(directory, jobs, timeout=1800):
 SCRIPTS = os.path.join(REPO, "pyscripts")
 
 
+def script_path(name):
+    """pyscripts/<name>, or <repository>/<name> for a benchmark (bench/...)."""
+    return os.path.join(REPO if name.startswith("bench" + os.sep) else SCRIPTS, name)
+
+
 def run_script(name, *args, timeout=600, cwd=None, env=None):
-    """Run pyscripts/<name> under /usr/bin/python3 on one engine thread: the tests that use it
-    check orchestration, not parallel speed, and two OpenMP threads on a shared 2-core machine
-    wait at every barrier (15x slower measured while other jobs ran)."""
+    """Run pyscripts/<name> (or bench/<name>) under /usr/bin/python3 on one engine thread: the tests
+    that use it check orchestration, not parallel speed, and two OpenMP threads on a shared 2-core
+    machine wait at every barrier (15x slower measured while other jobs ran)."""
     full = dict(os.environ, OMP_NUM_THREADS="1")
     full.update(env or {})
-    return subprocess.run([sys.executable, os.path.join(SCRIPTS, name), *map(str, args)], capture_output=True,
+    return subprocess.run([sys.executable, script_path(name), *map(str, args)], capture_output=True,
                           text=True, timeout=timeout, cwd=cwd, env=full)
 
 

@@ -1,13 +1,13 @@
-"""The one writer of benchmark tables (pyscripts/bench/_bench.py): a block between markers is
+"""The one writer of benchmark tables (bench/_bench.py): a block between markers is
 replaced and nothing else in the document changes; a document without the markers gets the block
 at the end of its heading's section, or appended (after a new heading if given); a new document is
 created."""
 import os
 import sys
 
-from conftest import SCRIPTS
+from conftest import REPO
 
-sys.path.insert(0, os.path.join(SCRIPTS, "bench"))
+sys.path.insert(0, os.path.join(REPO, "bench"))
 import _bench  # noqa: E402
 
 

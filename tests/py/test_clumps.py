@@ -400,8 +400,8 @@ def test_a_clump_specimen_without_an_assembly_is_not_taken_for_spheres(packing, 
     recorded assembly that is unknown or contradicts the bodies is refused."""
     import json
     from conftest import one_line_error, run_script
-    from analysis import report
-    from analysis.results import ResultsError
+    from trueaniso.analysis import report
+    from trueaniso.analysis.results import ResultsError
     scene, meta = specimen_file.load(packing)
     bare, banana, liar = (str(tmp_path / n) for n in ("bare.npz", "banana.npz", "liar.npz"))
     specimen_file.save(bare, scene, seed=meta["seed"], summary=meta["summary"])
@@ -488,7 +488,7 @@ def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
     E at state 21 over E at state 1 of the run's probes.csv (read here with the csv module: the
     frictionless seed-1 run's x probe, 309.8 / 387.0 MPa in its log)."""
     import csv
-    sys.path.insert(0, os.path.join(REPO, "pyscripts", "bench"))
+    sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump_recipe_variants as crv
     data = os.path.join(REPO, "docs", "data", "clump-recipes")
     doc = tmp_path / "clumps.md"

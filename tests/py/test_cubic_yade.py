@@ -1,5 +1,5 @@
 """Table B1's Sphere*, the simple cubic packing at 100 kPa, by a second code: YADE's own
-Hertz-Mindlin law and stress on a periodic cubic packing (pyscripts/bench/cubic_yade.py, nothing of
+Hertz-Mindlin law and stress on a periodic cubic packing (bench/cubic_yade.py, nothing of
 trueaniso imported) against the closed form E = (12 E*^2 sigma)^(1/3) / 2 that our probe test
 checks (docs/triaxial.md), and the committed record docs/data/cubic-yade.json against both."""
 import json
@@ -9,7 +9,7 @@ import pytest
 
 from conftest import REPO, run_yade
 
-SCRIPT = os.path.join(REPO, "pyscripts", "bench", "cubic_yade.py")
+SCRIPT = os.path.join(REPO, "bench", "cubic_yade.py")
 PAPER = (386.1e6, 386.7e6)  # Table B1, Sphere*: predicted and DEM
 
 

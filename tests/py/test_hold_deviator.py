@@ -151,7 +151,7 @@ def test_the_clump1_preparation_table_is_that_of_its_data(tmp_path):
     """docs/clumps.md's clump1 preparation table is what clump1_prep.py --doc writes from
     docs/data/clump1-prep (no number typed by hand)."""
     import shutil
-    sys.path.insert(0, os.path.join(REPO, "pyscripts", "bench"))
+    sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump1_prep
     doc = tmp_path / "clumps.md"
     shutil.copy(os.path.join(REPO, "docs", "clumps.md"), doc)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from analysis import hyperelastic
+from trueaniso.analysis import hyperelastic
 
 
 def test_inverse_recovers_k_g_and_a():

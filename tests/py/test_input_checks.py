@@ -9,7 +9,7 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import REPO, SCRIPTS, one_line_error, run_script
+from conftest import REPO, SCRIPTS, one_line_error, run_script, script_path
 
 from trueaniso import cli, dem, fabric, specimen
 
@@ -183,7 +183,7 @@ def test_required_options_can_come_from_a_table(specimen_100, tmp_path):
 def test_figures_on_missing_or_truncated_tables(tmp_path):
     """A missing, cut or malformed probe table: one line each, naming the file's fault."""
     def figures(path):
-        return subprocess.run([sys.executable, "-m", "analysis.figures", str(path), "--out", str(tmp_path / "f")],
+        return subprocess.run([sys.executable, "-m", "trueaniso.analysis.figures", str(path), "--out", str(tmp_path / "f")],
                               capture_output=True, text=True, cwd=REPO, timeout=120)
     one_line_error(figures(tmp_path / "none.csv"), "does not exist")
     header = "state,probe,E,sigma_x,sigma_y,sigma_z,Zm,b,q,nu_1,nu_2,nu_1_name,nu_2_name\n"
@@ -219,7 +219,7 @@ def test_fabric_of_a_scene_without_contacts_is_refused():
 
 # Every script; modules the scripts share start with "_" (bench/_report.py) and have no command line.
 SCRIPT_NAMES = (sorted(n for n in os.listdir(SCRIPTS) if n.endswith(".py"))
-                + sorted("bench/" + n for n in os.listdir(os.path.join(SCRIPTS, "bench"))
+                + sorted("bench/" + n for n in os.listdir(os.path.join(REPO, "bench"))
                          if n.endswith(".py") and not n.startswith("_")))
 
 
@@ -229,7 +229,7 @@ def test_help_shows_defaults_and_a_whole_description(name):
     assert proc.returncode == 0, proc.stderr
     text = " ".join(proc.stdout.split())
     assert "--table" in text and "--line" in text
-    doc = open(os.path.join(SCRIPTS, name)).read().split('"""')[1]
+    doc = open(script_path(name)).read().split('"""')[1]
     first = " ".join(doc.strip().split("\n\n")[0].split())
     assert first in text  # the whole first paragraph, not cut at its first line
     if name in ("run_states.py", "prepare_specimen.py", "run_study.py"):
@@ -281,8 +281,7 @@ def test_unbuilt_module_is_one_line(tmp_path, name):
     """A checkout whose engines are not built yet: one line saying so, not a traceback around the
     ImportError's message. The Python parts alone, beside no build/ and without TRUEANISO_BUILD,
     stand for that checkout."""
-    for part in ("pyscripts", "analysis"):
-        shutil.copytree(os.path.join(REPO, part), tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(os.path.join(REPO, "pyscripts"), tmp_path / "pyscripts", ignore=shutil.ignore_patterns("__pycache__"))
     env = {k: v for k, v in os.environ.items() if k != "TRUEANISO_BUILD"}
     proc = subprocess.run([sys.executable, str(tmp_path / "pyscripts" / name), "--help"], capture_output=True,
                           text=True, timeout=120, cwd=tmp_path, env=env)
@@ -293,20 +292,20 @@ def test_analysis_without_the_build(tmp_path):
     """On a machine without the build, the tools that only read tables work (figures,
     cross_anisotropy: the package does not load the compiled module on import), and those that
     need the engines (report, path_fidelity) say so in one line, not in a traceback."""
-    for part in ("pyscripts", "analysis"):
-        shutil.copytree(os.path.join(REPO, part), tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(os.path.join(REPO, "pyscripts"), tmp_path / "pyscripts", ignore=shutil.ignore_patterns("__pycache__"))
     env = {k: v for k, v in os.environ.items() if k != "TRUEANISO_BUILD"}
+    env["PYTHONPATH"] = str(tmp_path / "pyscripts")
     table = os.path.join(REPO, "docs", "data", "spheres-4000-s1", "probes.csv")
     fig16 = os.path.join(REPO, "docs", "data", "fig16-spheres-4000-s1", "probes.csv")
 
     def tool(*args):
         return subprocess.run([sys.executable, "-m"] + list(args), capture_output=True, text=True, timeout=300,
                               cwd=tmp_path, env=env)
-    figs = tool("analysis.figures", table, "--out", str(tmp_path / "figs"))
+    figs = tool("trueaniso.analysis.figures", table, "--out", str(tmp_path / "figs"))
     assert figs.returncode == 0 and (tmp_path / "figs" / "E_vs_sigma.png").is_file(), figs.stderr
-    cross = tool("analysis.cross_anisotropy", fig16)
+    cross = tool("trueaniso.analysis.cross_anisotropy", fig16)
     assert cross.returncode == 0 and "G_vh" in cross.stdout, cross.stderr
-    for args in (("analysis.report", table, "--out", str(tmp_path / "r")), ("analysis.path_fidelity", table)):
+    for args in (("trueaniso.analysis.report", table, "--out", str(tmp_path / "r")), ("trueaniso.analysis.path_fidelity", table)):
         one_line_error(tool(*args), "compiled module _trueaniso was not found", "build it first")
 
 

@@ -1,6 +1,8 @@
-"""`cmake --install` gives a working installation: the Python module with the trueaniso and analysis
-packages found by Debian's python3 from anywhere, the scripts runnable, and the engines library
-with self-contained headers for a C++ user."""
+"""`cmake --install` gives a working installation: the Python module with the trueaniso package
+(trueaniso.analysis in it) found by Debian's python3 from anywhere, the scripts runnable, and the
+engines library with self-contained headers for a C++ user. And ./setup.sh links a checkout's
+package for python3 and yade-double (cmake/link_package.sh)."""
+import json
 import os
 import subprocess
 import sys
@@ -26,7 +28,7 @@ def _env(prefix):
 
 
 def test_python_module_and_scripts_run_from_the_installation(prefix, tmp_path):
-    probe = ("import trueaniso, analysis.figures; from trueaniso import provenance; e = trueaniso.engines; "
+    probe = ("import trueaniso, trueaniso.analysis.figures; from trueaniso import provenance; e = trueaniso.engines; "
              "print(e.__file__); print(trueaniso.__file__); print(e.PROBE_FRICTION); print(provenance.code_version())")
     out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=_env(prefix), capture_output=True,
                          text=True, check=True).stdout.split()
@@ -69,3 +71,33 @@ int main() {
     # Hertz of two r = 0.1 mm spheres overlapping by 0.1 um: (4/3) E* sqrt(r/2) delta^1.5, E* = G/(1-nu)
     estar = 18e9 / (1 - 0.15)
     assert N == pytest.approx(4 / 3 * estar * (0.5e-4) ** 0.5 * (1e-7) ** 1.5, rel=1e-6)
+
+
+def test_setup_links_the_checkout_for_python3_and_yade(tmp_path):
+    """cmake/link_package.sh writes a .pth naming this checkout's pyscripts/ into a site directory
+    (here one of the test's own, TRUEANISO_SITE), says so once, and then both interpreters import
+    trueaniso.analysis from this checkout in a folder of their own, with no PYTHONPATH."""
+    site = tmp_path / "site"
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env["TRUEANISO_SITE"] = str(site)
+    link = os.path.join(REPO, "cmake", "link_package.sh")
+    first = subprocess.run([link], env=env, capture_output=True, text=True, check=True)
+    assert "import trueaniso from %s" % os.path.join(REPO, "pyscripts") in first.stdout
+    assert (site / "trueaniso.pth").read_text().strip() == os.path.join(REPO, "pyscripts")
+    again = subprocess.run([link], env=env, capture_output=True, text=True, check=True)
+    assert again.stdout == again.stderr == ""  # nothing changed, nothing said
+    (site / "trueaniso.pth").write_text("/elsewhere/pyscripts\n")
+    moved = subprocess.run([link], env=env, capture_output=True, text=True, check=True)
+    assert "now import trueaniso from" in moved.stdout and "(was /elsewhere/pyscripts)" in moved.stdout
+    probe = ("import site, sys; site.addsitedir(%r); import trueaniso.analysis.report as r; "
+             "print(r.__file__)" % str(site))
+    out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == os.path.join(REPO, "pyscripts", "trueaniso", "analysis", "report.py")
+    script = tmp_path / "in_yade.py"
+    script.write_text(probe.replace("print(r.__file__)", "import json; json.dump(r.__file__, open(sys.argv[-1], 'w'))")
+                      + "\n")
+    proc = subprocess.run(["yade-double", "-n", "-x", str(script), str(tmp_path / "out.json")], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert json.loads((tmp_path / "out.json").read_text()) == out

@@ -131,7 +131,7 @@ def test_a_lost_checkpoint_of_state_21_is_reached_again(added_21, tmp_path):
 
 
 def check_contrast_against_checkpoints(out, got):
-    """The summary's zeta (fitted from the probe table's columns: analysis/zeta_contrast.py) must
+    """The summary's zeta (fitted from the probe table's columns: pyscripts/trueaniso/analysis/zeta_contrast.py) must
     equal a fit whose stiffness parts come from the held-state checkpoints themselves (B and M of
     the scene, all 81 M components) and whose E_i come from the rows: the two routes share only
     fit_contrast. 1e-6: the fit converges to 1e-15; the columns hold every digit (repr)."""

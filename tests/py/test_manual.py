@@ -51,7 +51,7 @@ def test_the_script_reference_holds_every_script_s_help(manual):
     assert proc.returncode == 0
     html = _text(out, os.path.join("reference", "scripts.html"))
     scripts = sorted(glob.glob(os.path.join(REPO, "pyscripts", "*.py")))
-    bench = sorted(p for p in glob.glob(os.path.join(REPO, "pyscripts", "bench", "*.py"))
+    bench = sorted(p for p in glob.glob(os.path.join(REPO, "bench", "*.py"))
                    if not os.path.basename(p).startswith("_"))
     assert len(scripts) >= 3 and len(bench) >= 10
     for path in scripts + bench:
@@ -59,7 +59,7 @@ def test_the_script_reference_holds_every_script_s_help(manual):
         assert rel in html, "%s has no section in reference/scripts" % rel
     assert html.count("usage:") >= len(scripts) + len(bench), "a section without the script's usage"
     for tool in ("report", "figures", "zeta_contrast", "cross_anisotropy", "path_fidelity"):
-        assert "python3 -m analysis.%s" % tool in html
+        assert "python3 -m trueaniso.analysis.%s" % tool in html
     cores = os.cpu_count() or 1
     for said in (r"all\s+%d\s+cores" % cores, r"at most\s+%d\s+\(" % (4 * cores)):
         assert not re.search(said, html), "the help names this machine's core count: %s" % said
@@ -67,12 +67,14 @@ def test_the_script_reference_holds_every_script_s_help(manual):
 
 
 def test_the_api_reference_documents_every_module(manual):
-    """Every module of the trueaniso and analysis packages is documented by autodoc (its docstring
-    imported, not only named): the page lists them from the folders, so a new module needs no edit."""
+    """Every module of the trueaniso package and its trueaniso.analysis is documented by autodoc (its
+    docstring imported, not only named): the page lists them from the folders, so a new module needs
+    no edit."""
     proc, out = manual
     assert proc.returncode == 0
     html = _html(out, os.path.join("reference", "python-api.html"))
-    for package, folder in (("trueaniso", os.path.join("pyscripts", "trueaniso")), ("analysis", "analysis")):
+    for package, folder in (("trueaniso", os.path.join("pyscripts", "trueaniso")),
+                            ("trueaniso.analysis", os.path.join("pyscripts", "trueaniso", "analysis"))):
         names = [package] + ["%s.%s" % (package, os.path.splitext(os.path.basename(p))[0])
                              for p in glob.glob(os.path.join(REPO, folder, "*.py"))
                              if not p.endswith("__init__.py")]
@@ -184,7 +186,7 @@ def test_the_benchmark_tables_are_where_the_scripts_write_them():
     with open(os.path.join(DOCS, "benchmarks.md")) as f:
         lines = f.read().split("\n")
     checked = 0
-    for path in glob.glob(os.path.join(REPO, "pyscripts", "bench", "*.py")):
+    for path in glob.glob(os.path.join(REPO, "bench", "*.py")):
         for heading in _bench_names(path)[1]:
             assert heading in lines, "%s writes under %r, which docs/benchmarks.md lacks" % (path, heading)
             checked += 1
@@ -193,9 +195,9 @@ def test_the_benchmark_tables_are_where_the_scripts_write_them():
     for page in glob.glob(os.path.join(DOCS, "*.md")):
         with open(page) as f:
             text = f.read()
-        for command in re.findall(r"Reproduce: `([^`]*pyscripts/bench/[^`]*--doc [^`]*)`", text):
+        for command in re.findall(r"Reproduce: `([^`]*bench/[^`]*--doc [^`]*)`", text):
             words = shlex.split(command)
-            script = next(w for w in words if w.startswith("pyscripts/bench/"))
+            script = next(w for w in words if w.startswith("bench/"))
             doc = words[words.index("--doc") + 1]
             names = [words[words.index("--block") + 1]] if "--block" in words else \
                 sorted(_bench_names(os.path.join(REPO, script))[0])

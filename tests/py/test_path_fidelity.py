@@ -1,7 +1,7 @@
-"""analysis/path_fidelity.py: reversals counted on a hand-made table."""
+"""pyscripts/trueaniso/analysis/path_fidelity.py: reversals counted on a hand-made table."""
 import pytest
 
-from analysis import path_fidelity
+from trueaniso.analysis import path_fidelity
 
 
 def _row(state, b, sz, probe, E, sx, sy, szz, zm="5.9", gap="6.0"):
@@ -30,7 +30,7 @@ def test_reversals_on_a_hand_made_path():
 def test_zeta_trend_by_hand():
     """Spearman's rho of per-state zeta with Zm, and the high-Zm and low-Zm means, on five states."""
     import numpy as np
-    from analysis import chain
+    from trueaniso.analysis import chain
     tab = dict(state=["1", "2", "3", "4", "5"], Zm=np.array([5.95, 5.94, 5.80, 5.70, 5.60]))
     zetas = {"2": 0.40, "3": 0.30, "4": 0.10, "5": 0.05}  # state 1 is the reference: no zeta
     t = chain.zeta_trend(tab, zetas)
@@ -48,7 +48,7 @@ def test_table_row_of_a_study_directory(tmp_path):
     import json
     import os
     from conftest import REPO
-    from analysis import zeta_contrast
+    from trueaniso.analysis import zeta_contrast
     data = os.path.join(REPO, "docs", "data", "table-c1-spheres-4000.csv")
     keep = ("1", "5", "9", "13", "21", "25", "29", "37")
     with open(data, newline="") as f:

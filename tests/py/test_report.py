@@ -1,5 +1,5 @@
-"""The paper's analysis chain (analysis/chain.py) against hand-computed values, and the report
-(analysis/report.py) built from a small fixed probe table: eight states of the committed
+"""The paper's analysis chain (pyscripts/trueaniso/analysis/chain.py) against hand-computed values, and the report
+(pyscripts/trueaniso/analysis/report.py) built from a small fixed probe table: eight states of the committed
 4000-sphere, 39-state study (docs/data/table-c1-spheres-4000.csv)."""
 import csv
 import json
@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from conftest import REPO, SMALL_TABLE_STATES
-from analysis import chain, figures, hyperelastic, report
-from analysis.results import ResultsError
+from trueaniso.analysis import chain, figures, hyperelastic, report
+from trueaniso.analysis.results import ResultsError
 
 STATES = SMALL_TABLE_STATES
 
@@ -171,7 +171,7 @@ def test_report_for_a_clump_assembly_names_the_clump_paper_values(small_table, t
 
 
 def test_report_refuses_a_wrong_material_and_bad_input(small_table, tmp_path):
-    run = lambda *a: subprocess.run([sys.executable, "-m", "analysis.report", *a], cwd=REPO,  # noqa: E731
+    run = lambda *a: subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", *a], cwd=REPO,  # noqa: E731
                                     capture_output=True, text=True)
     proc = run(small_table, "--out", str(tmp_path / "r"), "--shear-modulus", "28e9")
     assert proc.returncode == 2 and proc.stderr.startswith("error:") and "mic_E" in proc.stderr
@@ -208,7 +208,7 @@ def test_table_b1_at_the_isotropic_state_and_state_21(specimen_100, tmp_path):
     proc = run_script("run_states.py", "--specimen", specimen_100, "--out", out, "--ids", "1,21", "--probes", "z")
     assert proc.returncode == 0, proc.stderr
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    cmd = [sys.executable, "-m", "analysis.report", str(out), "--statics", "--out", str(tmp_path / "rep")]
+    cmd = [sys.executable, "-m", "trueaniso.analysis.report", str(out), "--statics", "--out", str(tmp_path / "rep")]
     proc = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr.count("solving the contact network") == 2
@@ -228,10 +228,10 @@ def test_table_b1_at_the_isotropic_state_and_state_21(specimen_100, tmp_path):
     # stands for its directory (its metadata applies).
     (tmp_path / "bare").mkdir()
     shutil.copy(out / "probes.csv", tmp_path / "bare" / "probes.csv")
-    bare = subprocess.run([sys.executable, "-m", "analysis.report", str(tmp_path / "bare" / "probes.csv"), "--statics"],
+    bare = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", str(tmp_path / "bare" / "probes.csv"), "--statics"],
                           cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
     one_line_error(bare, "--statics", "state checkpoints")
-    given = subprocess.run([sys.executable, "-m", "analysis.report", str(out / "probes.csv"), "--out",
+    given = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", str(out / "probes.csv"), "--out",
                             str(tmp_path / "rep2")], cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
     assert given.returncode == 0, given.stderr
     assert "Study: 100 spheres (seed 3)" in (tmp_path / "rep2" / "report.md").read_text()  # the study line, from the table alone
@@ -311,7 +311,7 @@ def test_b1_data_is_refused_before_anything_is_written(tmp_path):
                          ("no statics record of state 21",)),
                         ([os.path.join(REPO, "docs", "data", "clump1-4000-s1"), "--b1-data", B1_OTHER],
                          ("is of clump2, not clump1",))):
-        proc = subprocess.run([sys.executable, "-m", "analysis.report", *args, "--out", str(tmp_path / "rep")],
+        proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", *args, "--out", str(tmp_path / "rep")],
                               cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
         one_line_error(proc, *words)
         assert not (tmp_path / "rep").exists()
@@ -322,7 +322,7 @@ def test_b1_records_of_a_recipe_study_are_the_committed_ones(tmp_path):
     (the probes row's fabric at the counted density) equals a study's own static-solve record
     (affine stiffness, zeta = 1) to round-off (rtol 1e-12; they agree to 2e-15), and the committed
     docs/data/b1-clump2-1000-s1 is what it writes from the committed recipe study."""
-    sys.path.insert(0, os.path.join(REPO, "pyscripts", "bench"))
+    sys.path.insert(0, os.path.join(REPO, "bench"))
     import b1_records
     study = os.path.join(REPO, "docs", "data", "clump2-4000-s1")
     row = next(r for r in csv.DictReader(open(os.path.join(study, "probes.csv"))) if r["state"] == "1")
@@ -364,7 +364,7 @@ def test_clump_section_from_the_committed_anisotropy_data(small_table, tmp_path,
 def test_figures_5_to_12_plot_the_table_s_own_numbers(small_table, tmp_path):
     """Figs 5, 6, 8, 9, 10 and 12: what each plots is the probe table's column, state by state, and
     the report's ranges are those of the table."""
-    from analysis import figures
+    from trueaniso.analysis import figures
     rows = list(csv.DictReader(open(small_table)))
     z = {r["state"]: r for r in rows if r["probe"] == "z"}
     zm = figures.zm_vs_q(rows, str(tmp_path / "f8.png"))
@@ -404,7 +404,7 @@ def test_bad_optional_inputs_are_refused_before_anything_is_written(small_table,
                         # scripts' word) was among the refused
                         (["--assembly", "clump3"], ("--assembly clump3", "clump1, clump2, spheres"))):
         out = tmp_path / "rep"
-        proc = subprocess.run([sys.executable, "-m", "analysis.report", small_table, "--out", str(out), *args],
+        proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", small_table, "--out", str(out), *args],
                               cwd=REPO, capture_output=True, text=True, timeout=300)
         one_line_error(proc, *words)
         assert not out.exists()
@@ -514,7 +514,7 @@ def test_a_zeta_at_its_bound_is_said_to_be_undetermined(tmp_path, text_only):
     """clump2 (docs/data/clump2-4000-s1): the contrast fit stops at zeta_v = 0 and every state's own
     fit at 0: the report says zeta is undetermined, not 'zeta_h = 0.051, zeta_v = 0.000 (fitted)'
     like a result, nor a Spearman correlation over per-state values of 1e-20."""
-    from analysis import report
+    from trueaniso.analysis import report
     path, _ = report.build(os.path.join(REPO, "docs", "data", "clump2-4000-s1"), str(tmp_path / "r"), "clump2",
                            log=lambda m: None)
     text = open(path).read()
@@ -544,7 +544,7 @@ def test_slopes_are_said_undetermined_only_below_the_r2_floor():
 
 def test_sphere_and_spheres_name_one_assembly(small_table, tmp_path):
     """prepare_specimen.py and run_study.py say --assembly sphere; the report took only 'spheres'."""
-    proc = subprocess.run([sys.executable, "-m", "analysis.report", small_table, "--out", str(tmp_path / "r"),
+    proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", small_table, "--out", str(tmp_path / "r"),
                            "--assembly", "sphere"], cwd=REPO, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "r" / "report.md").read_text().startswith("# Report: spheres")
@@ -608,25 +608,25 @@ def _set_E(value):
     (lambda rows: rows[2].__setitem__(rows[0].index("nu_1"), "nan"), ["nu_1 = 'nan', not a finite number (line 3)"]),
 ])
 def test_every_analysis_refuses_a_bad_row_the_same_way(tmp_path, edit, words):
-    """The shared reader (analysis/results.py) refuses a table appended twice and a modulus that is
+    """The shared reader (pyscripts/trueaniso/analysis/results.py) refuses a table appended twice and a modulus that is
     not a positive number, naming the row: figures and path_fidelity used them without a word (a
     NaN E moved the K r^2 from 0.976 to 0.950), the report refused without naming the row."""
-    from analysis import results
+    from trueaniso.analysis import results
     path = _edited(tmp_path, edit)
     with pytest.raises(ResultsError) as exc:
         results.read_probes(path)
     assert all(w in str(exc.value) for w in words), str(exc.value)
-    for tool in (["analysis.figures", path, "--out", str(tmp_path / "f")], ["analysis.path_fidelity", path],
-                 ["analysis.report", path, "--out", str(tmp_path / "r")]):
+    for tool in (["trueaniso.analysis.figures", path, "--out", str(tmp_path / "f")], ["trueaniso.analysis.path_fidelity", path],
+                 ["trueaniso.analysis.report", path, "--out", str(tmp_path / "r")]):
         proc = subprocess.run([sys.executable, "-m"] + tool, capture_output=True, text=True, cwd=REPO, timeout=120)
         assert proc.returncode == 2 and proc.stderr.strip().startswith("error:") and words[-1] in proc.stderr, \
             (tool, proc.stderr)
 
 
 def test_a_study_directory_is_taken_for_its_probe_table(tmp_path):
-    """analysis.figures, path_fidelity and cross_anisotropy said a study directory 'does not
+    """trueaniso.analysis.figures, path_fidelity and cross_anisotropy said a study directory 'does not
     exist'; report took it. Each now reads DIR/probes.csv; a directory without one is named so."""
-    from analysis import results
+    from trueaniso.analysis import results
     path = _edited(tmp_path, lambda rows: None)
     assert results.read_probes(str(tmp_path)) == results.read_probes(path)
     (tmp_path / "empty").mkdir()
@@ -654,22 +654,22 @@ def test_study_line_of_a_specimen_saved_without_summary(specimen_100, tmp_path):
 def test_an_os_error_is_said_by_its_file_and_reason(tmp_path):
     """An output the tools cannot write is said by its file and the reason, not '[Errno 30]
     Read-only file system: ...', also through the figures tool."""
-    from analysis.results import said
+    from trueaniso.analysis.results import said
     assert said(OSError(30, "Read-only file system", "/x/report")) == "/x/report: Read-only file system"
     assert said(ResultsError("no rows")) == "no rows"
     blocker = tmp_path / "a-file"
     blocker.write_text("")
-    proc = subprocess.run([sys.executable, "-m", "analysis.figures", SMALL_TABLE, "--out", str(blocker / "figs")],
+    proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.figures", SMALL_TABLE, "--out", str(blocker / "figs")],
                           capture_output=True, text=True, cwd=REPO, timeout=120)
     assert proc.returncode == 2 and proc.stderr == "error: %s: Not a directory\n" % (blocker / "figs"), proc.stderr
 
 
 def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
-    """`python3 -m analysis.zeta_contrast DIR` ran nothing and exited 0, --help included (an outside
+    """`python3 -m trueaniso.analysis.zeta_contrast DIR` ran nothing and exited 0, --help included (an outside
     check). It prints run_study.py's line, the material from the study's metadata; the committed
     4000-sphere study gives the values docs/path-fidelity.md quotes (zeta 0.116 and 0.111)."""
     def tool(*args):
-        return subprocess.run([sys.executable, "-m", "analysis.zeta_contrast", *args], capture_output=True,
+        return subprocess.run([sys.executable, "-m", "trueaniso.analysis.zeta_contrast", *args], capture_output=True,
                               text=True, cwd=REPO, timeout=120)
     proc = tool(os.path.join("docs", "data", "spheres-4000-s1"))
     assert proc.returncode == 0, proc.stderr
@@ -713,7 +713,7 @@ def test_report_says_in_itself_that_a_torn_row_was_left_out(tmp_path):
     shutil.copy(os.path.join(src, "metadata.json"), study / "metadata.json")
     lines = open(os.path.join(src, "probes.csv")).read().splitlines(keepends=True)
     (study / "probes.csv").write_text("".join(lines[:-1]) + lines[-1][:40])
-    proc = subprocess.run([sys.executable, "-m", "analysis.report", str(study), "--out", str(tmp_path / "out")],
+    proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", str(study), "--out", str(tmp_path / "out")],
                           capture_output=True, text=True, cwd=REPO, timeout=300)
     assert proc.returncode == 0, proc.stderr
     report = (tmp_path / "out" / "report.md").read_text()
@@ -727,7 +727,7 @@ def test_a_refused_material_leaves_no_output_directory(tmp_path):
     for args, words in ((["--shear-modulus", "-1"], "--shear-modulus must be > 0"),
                         (["--poisson", "0.7"], "--poisson must lie in")):
         out = tmp_path / "out"
-        proc = subprocess.run([sys.executable, "-m", "analysis.report", os.path.join("docs", "data", "spheres-4000-s1"),
+        proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", os.path.join("docs", "data", "spheres-4000-s1"),
                                "--out", str(out), *args], capture_output=True, text=True, cwd=REPO, timeout=120)
         assert proc.returncode == 2 and proc.stderr.startswith("error: " + words), proc.stderr
         assert not out.exists()

@@ -48,7 +48,7 @@ def _study_with_checkpoint(tmp_path, specimen_path, **changes):
 ])
 def test_statics_refuses_a_checkpoint_of_another_study(specimen_100, tmp_path, changes, words):
     out = _study_with_checkpoint(tmp_path, specimen_100, **changes)
-    proc = _module("analysis.report", out, "--statics")
+    proc = _module("trueaniso.analysis.report", out, "--statics")
     one_line_error(proc, "states/1.npz", words)
     assert not (out / "statics_state-1.json").exists() and not (out / "report").exists()
 
@@ -57,7 +57,7 @@ def test_statics_solves_the_study_s_own_checkpoint(specimen_100, tmp_path):
     """The control of the test above: the same file with this study's parameters passes the checks
     (the report then refuses the committed rows, which are another study's)."""
     out = _study_with_checkpoint(tmp_path, specimen_100)
-    proc = _module("analysis.report", out, "--statics")
+    proc = _module("trueaniso.analysis.report", out, "--statics")
     assert (out / "statics_state-1.json").exists(), proc.stderr
     last = proc.stderr.strip().splitlines()[-1]  # after the solve's own line
     assert proc.returncode == 2 and last.startswith("error: ") and "does not define" in last, proc.stderr
@@ -103,8 +103,8 @@ def _drop_state(sid):
 ])
 def test_rows_that_are_not_the_study_s_are_refused_by_every_analysis(tmp_path, edit_meta, edit_rows, words):
     out = _copy_study(tmp_path, edit_meta, edit_rows)
-    for tool in (["analysis.report", out], ["analysis.figures", out / "probes.csv", "--out", tmp_path / "f"],
-                 ["analysis.path_fidelity", out]):
+    for tool in (["trueaniso.analysis.report", out], ["trueaniso.analysis.figures", out / "probes.csv", "--out", tmp_path / "f"],
+                 ["trueaniso.analysis.path_fidelity", out]):
         one_line_error(_module(*tool), *words)
     assert not (out / "report").exists() and not (tmp_path / "f").exists()
 
@@ -114,13 +114,13 @@ def test_a_nan_cell_leaves_its_row_out_and_the_report_says_so(tmp_path):
     kept, it fails the report's fit as a LinAlgError (SVD did not converge) and the figures as a
     SystemError."""
     out = _copy_study(tmp_path, edit_rows=_set(5, "Zm", "nan"))
-    proc = _module("analysis.report", out)
+    proc = _module("trueaniso.analysis.report", out)
     assert proc.returncode == 0, proc.stderr
     text = (out / "report" / "report.md").read_text()
     assert "1 row with a NaN or infinite cell left out: line 5 (state 6 probe z: Zm = nan)" in text, text[:3000]
-    proc = _module("analysis.figures", out / "probes.csv", "--out", tmp_path / "f")
+    proc = _module("trueaniso.analysis.figures", out / "probes.csv", "--out", tmp_path / "f")
     assert proc.returncode == 0 and "left out: line 5" in proc.stderr, proc.stderr
-    proc = _module("analysis.path_fidelity", out / "probes.csv")  # says so too, not only the report
+    proc = _module("trueaniso.analysis.path_fidelity", out / "probes.csv")  # says so too, not only the report
     assert proc.returncode == 0 and "left out: line 5" in proc.stderr, proc.stderr
 
 
@@ -129,4 +129,4 @@ def test_an_infinite_cell_in_every_row_is_refused(tmp_path):
         for line in range(2, len(rows) + 1):
             _set(line, "Zm", "inf")(rows)
     out = _copy_study(tmp_path, edit_rows=edit)
-    one_line_error(_module("analysis.report", out), "every row has a NaN or infinite cell")
+    one_line_error(_module("trueaniso.analysis.report", out), "every row has a NaN or infinite cell")

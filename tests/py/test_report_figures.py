@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from conftest import REPO
-from analysis import chain, cross_anisotropy, figures, hyperelastic, report
+from trueaniso.analysis import chain, cross_anisotropy, figures, hyperelastic, report
 
 DATA = os.path.join(REPO, "docs", "data")
 # The units an axis may carry; "-" marks a dimensionless quantity (a ratio, Zm, a state's index).

@@ -90,7 +90,7 @@ def test_run_states_with_rolling_resistance(specimen_100, tmp_path):
     with open(out / "probes.csv", newline="") as f:
         row = next(csv.DictReader(f))
     assert float(row["Zm_gap1e-3"]) >= float(row["Zm"]) > 0
-    from analysis import path_fidelity  # the checkpoints recount the row's two columns exactly
+    from trueaniso.analysis import path_fidelity  # the checkpoints recount the row's two columns exactly
     assert path_fidelity.gap_scan(str(out), [1e-3])["1"] == [float(row["Zm"]), float(row["Zm_gap1e-3"])]
     before = (out / "probes.csv").read_bytes()
     one_line_error(run_script("run_states.py", *args), "another study", "state.rolling_")

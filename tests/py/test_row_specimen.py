@@ -16,7 +16,7 @@ import sys
 import pytest
 from conftest import REPO, one_line_error, run_script
 
-from analysis import results
+from trueaniso.analysis import results
 from trueaniso import specimen_file, study
 
 WALL = set(study.WALL_TIME_COLUMNS)  # the only columns a rerun may change
@@ -108,8 +108,8 @@ def mixed(study_a, study_b, tmp_path):
 def test_rows_of_two_studies_are_refused_by_every_analysis(mixed, study_b, tmp_path):
     a, b = _own(mixed), _own(study_b)
     assert a != b
-    for tool in (["analysis.report", mixed], ["analysis.figures", mixed / "probes.csv", "--out", tmp_path / "f"],
-                 ["analysis.path_fidelity", mixed], ["analysis.zeta_contrast", mixed]):
+    for tool in (["trueaniso.analysis.report", mixed], ["trueaniso.analysis.figures", mixed / "probes.csv", "--out", tmp_path / "f"],
+                 ["trueaniso.analysis.path_fidelity", mixed], ["trueaniso.analysis.zeta_contrast", mixed]):
         line = one_line_error(_module(*tool), str(mixed / "probes.csv"), "line 4", a, b)
         assert "another study" in line
     assert not (mixed / "report").exists() and not (tmp_path / "f").exists()
@@ -128,7 +128,7 @@ def test_a_mixed_table_away_from_its_study_is_refused_too(mixed, study_b, tmp_pa
     bare = tmp_path / "bare"
     bare.mkdir()
     shutil.copyfile(mixed / "probes.csv", bare / "copy.csv")
-    proc = _module("analysis.figures", bare / "copy.csv", "--out", tmp_path / "f")
+    proc = _module("trueaniso.analysis.figures", bare / "copy.csv", "--out", tmp_path / "f")
     line = one_line_error(proc, "copy.csv", "line 4", _own(mixed), _own(study_b))
     assert "two studies" in line
     assert not (tmp_path / "f").exists()
@@ -158,19 +158,19 @@ def test_the_report_on_a_full_study_with_the_column(tmp_path):
     out.mkdir()
     shutil.copy(os.path.join(COMMITTED, "metadata.json"), out)
     shutil.copy(os.path.join(COMMITTED, "probes.csv"), out)
-    proc = _module("analysis.report", out)
+    proc = _module("trueaniso.analysis.report", out)
     assert proc.returncode == 0, proc.stderr
     old = (out / "report" / "report.md").read_text()
     shutil.rmtree(out / "report")
     own, other = _own(out), "f" * 64
     _with_column(out, lambda n: [own] * n)
-    proc = _module("analysis.report", out)
+    proc = _module("trueaniso.analysis.report", out)
     assert proc.returncode == 0, proc.stderr
     assert (out / "report" / "report.md").read_text() == old  # the column changes no number
     shutil.rmtree(out / "report")
     _with_column(out, lambda n: [own] * (n // 2) + [other] * (n - n // 2))
     n = len(_table(out / "probes.csv")[1])
-    one_line_error(_module("analysis.report", out), "line %d" % (n // 2 + 2), own, other)
+    one_line_error(_module("trueaniso.analysis.report", out), "line %d" % (n // 2 + 2), own, other)
     assert not (out / "report").exists()
 
 

@@ -125,13 +125,13 @@ def test_study_metadata_of_the_wrong_shape_is_refused_by_the_scripts(specimen_10
     if field == "fingerprint.specimen":  # the analysis takes every field as optional, typed
         return
     shutil.copy(os.path.join(REPO, "docs", "data", "spheres-4000-s1", "probes.csv"), out / "probes.csv")
-    from analysis import results
+    from trueaniso.analysis import results
     with pytest.raises(results.ResultsError, match="metadata.json: %s: " % field.replace(".", r"\.")):
         results.read_metadata(str(out))
 
 
 def test_study_metadata_that_is_a_list_is_refused_by_the_report(tmp_path):
-    """analysis.report reads metadata.json through its schema: a file that is a list is one line
+    """trueaniso.analysis.report reads metadata.json through its schema: a file that is a list is one line
     naming the file, not an AttributeError traceback."""
     import subprocess
     import sys
@@ -139,7 +139,7 @@ def test_study_metadata_that_is_a_list_is_refused_by_the_report(tmp_path):
     out.mkdir()
     shutil.copy(os.path.join(REPO, "docs", "data", "spheres-4000-s1", "probes.csv"), out / "probes.csv")
     (out / "metadata.json").write_text("[]")
-    proc = subprocess.run([sys.executable, "-m", "analysis.report", str(out)], capture_output=True, text=True,
+    proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", str(out)], capture_output=True, text=True,
                           cwd=REPO, timeout=120)
     one_line_error(proc, "metadata.json: (whole file): must be a table")
 
@@ -150,7 +150,7 @@ def test_study_metadata_that_is_a_list_is_refused_by_the_report(tmp_path):
     ("1.5", "probe_steps", "must be an integer"),
 ])
 def test_probe_table_cells_of_the_wrong_type_are_refused_naming_line_and_column(tmp_path, cell, column, what):
-    from analysis import results
+    from trueaniso.analysis import results
     src = os.path.join(REPO, "docs", "data", "table-c1-spheres-4000.csv")
     lines = open(src).read().splitlines()
     head = lines[0].split(",")
@@ -181,8 +181,8 @@ def test_a_parameter_table_value_of_the_wrong_kind_is_refused(tmp_path):
 def test_a_statics_record_of_the_wrong_shape_is_refused_by_the_report(tmp_path):
     """Table B1 reads each statics record through its schema: too few moduli, or a file that is a
     list, is refused naming the file and the field (not a TypeError or KeyError in the table)."""
-    from analysis import chain, report
-    from analysis.results import ResultsError
+    from trueaniso.analysis import chain, report
+    from trueaniso.analysis.results import ResultsError
     (tmp_path / "statics_isotropic.json").write_text(json.dumps({"E_kinematic": [1, 2], "E_blocked": [1, 2, 3]}))
     with pytest.raises(ResultsError, match="statics_isotropic.json: E_kinematic: must have at least 3 items"):
         report.table_b1(str(tmp_path), chain.PAPER["spheres"])
@@ -200,8 +200,8 @@ def test_a_statics_record_of_the_wrong_shape_is_refused_by_the_report(tmp_path):
     ("clumps.json", "anisotropy-clumps-4000.json", lambda rows: rows[1].update(n="4000"), "1.n: must be an integer"),
 ])
 def test_the_report_s_optional_json_inputs_are_checked_by_their_schemas(tmp_path, name, source, edit, words):
-    from analysis import report
-    from analysis.results import ResultsError
+    from trueaniso.analysis import report
+    from trueaniso.analysis.results import ResultsError
     rows = json.loads(open(os.path.join(REPO, "docs", "data", source)).read())
     read = report.fig16_rows if name == "fig16.json" else report.clump_entries
     assert read(os.path.join(REPO, "docs", "data", source))  # the committed files fit

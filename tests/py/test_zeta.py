@@ -120,7 +120,7 @@ def test_refuses_what_it_cannot_fit(states):
 
 
 def script(*args):
-    return subprocess.run([sys.executable, os.path.join(REPO, "pyscripts", "bench", "bench_zeta.py"), *args],
+    return subprocess.run([sys.executable, os.path.join(REPO, "bench", "bench_zeta.py"), *args],
                           capture_output=True, text=True, timeout=120)
 
 

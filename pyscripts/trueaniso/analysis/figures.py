@@ -1,0 +1,232 @@
+"""Figures like the paper's, from a probes.csv of pyscripts/run_states.py.
+
+    /usr/bin/python3 -m trueaniso.analysis.figures results/x/probes.csv --out docs/figures
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+from . import hyperelastic
+from .results import ResultsError, number, read_probes, said
+
+
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def _save(fig, path):
+    tmp = path + ".tmp.png"
+    fig.savefig(tmp, dpi=130)
+    os.replace(tmp, path)
+
+
+def _finish(plt, fig, path):
+    """Lay out, write atomically and close a figure."""
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
+
+
+def modulus_vs_stress(rows, path, title="sphere assembly"):
+    """Fig. 3: E_i against sigma_i, one series per direction."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    for axis, mark in zip("xyz", "os^"):
+        sel = [r for r in rows if r["probe"] == axis]
+        s = [float(r["sigma_" + axis]) / 1e3 for r in sel]
+        e = [float(r["E"]) / 1e6 for r in sel]
+        ax.scatter(s, e, marker=mark, label="$E_%s$" % axis, alpha=0.8)
+    ax.set_xlabel(r"$\sigma_i$ (kPa)")
+    ax.set_ylabel(r"$E_i$ (MPa)")
+    ax.set_title("Young's moduli against the stress in their direction\n(%s)" % title, fontsize=10)
+    ax.legend()
+    _finish(plt, fig, path)
+
+
+def scalar_moduli_vs_zm(rows, path):
+    """Fig. 11: K and G of the hyperelastic model against Zm, with quadratic fits."""
+    plt = _plt()
+    states = hyperelastic.states_from_rows(rows)
+    z, K, G = [], [], []
+    for st in states.values():
+        if np.all(np.isfinite(st["E"])) and np.all(np.isfinite(st["nu"][~np.eye(3, dtype=bool)])):
+            m = hyperelastic.scalar_moduli(st["E"], st["nu"])
+            z.append(st["Zm"])
+            K.append(m["K"] / 1e6)
+            G.append(m["G"] / 1e6)
+    if not hyperelastic.quadratic_fittable(z):
+        return None
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    out = {}
+    for vals, name, mark in ((K, "K", "o"), (G, "G", "s")):
+        c, r2 = hyperelastic.quadratic_fit(z, vals)
+        xs = np.linspace(min(z), max(z), 50)
+        ax.scatter(z, vals, marker=mark, label=name)
+        ax.plot(xs, np.polyval(c, xs), label="%s fit, $R^2$ = %.3f" % (name, r2))
+        out[name] = dict(c=c.tolist(), r2=r2)
+    ax.set_xlabel(ZM_LABEL)
+    ax.set_ylabel("$K$, $G$ (MPa)")
+    ax.legend(fontsize=8)
+    _finish(plt, fig, path)
+    return out
+
+
+def _by_state(rows):
+    """One row per state (its z probe's, else the first normal probe's): the state's own columns."""
+    out = {}
+    for r in rows:
+        if r["probe"] in ("x", "y", "z") and (r["state"] not in out or r["probe"] == "z"):
+            out[r["state"]] = r
+    return list(out.values())
+
+
+def _b_groups(states):
+    """{b: [states sorted by q]}: the constant-b paths, as the paper's Figs 5, 6 and 8 draw them."""
+    groups = {}
+    for st in states:
+        groups.setdefault(round(float(st["b"]), 3), []).append(st)
+    return {b: sorted(v, key=lambda st: float(st["q"])) for b, v in sorted(groups.items())}
+
+
+def poisson_vs_q(rows, path):
+    """Fig. 5: nu_zx, nu_xz | nu_zy, nu_yz | nu_xy, nu_yx against q, one line per b. Returns
+    {b: (q, nu (n, 3, 3))} in kPa and ratios."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
+    out = {}
+    pairs = (((2, 0), (0, 2)), ((2, 1), (1, 2)), ((0, 1), (1, 0)))
+    for b, sts in _b_groups(hyperelastic.states_from_rows(rows).values()).items():
+        q = np.array([st["q"] for st in sts]) / 1e3
+        nu = np.array([st["nu"] for st in sts])
+        out[b] = (q, nu)
+        for ax, ((i, j), (k, m)) in zip(axes, pairs):
+            line, = ax.plot(q, nu[:, i, j], "o-", ms=3, label="b = %.2f" % b)
+            ax.plot(q, nu[:, k, m], "s--", ms=3, color=line.get_color())
+    for ax, ((i, j), (k, m)) in zip(axes, pairs):
+        ax.set_title(r"$\nu_{%s%s}$ (solid), $\nu_{%s%s}$ (dashed)" % ("xyz"[i], "xyz"[j], "xyz"[k], "xyz"[m]),
+                     fontsize=9)
+        ax.set_xlabel("$q$ (kPa)")
+        ax.set_ylabel(r"$\nu_{%s%s}$, $\nu_{%s%s}$ (-)" % ("xyz"[i], "xyz"[j], "xyz"[k], "xyz"[m]))
+    axes[2].legend(fontsize=7)
+    _finish(plt, fig, path)
+    return out
+
+
+def stress_ratios_vs_q(rows, path):
+    """Fig. 6: sigma_z/sigma_x, sigma_z/sigma_y, sigma_x/sigma_y against q, one line per b."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
+    out = {}
+    for b, sts in _b_groups(_by_state(rows)).items():
+        q = np.array([float(st["q"]) for st in sts]) / 1e3
+        sig = np.array([[float(st["sigma_" + a]) for a in "xyz"] for st in sts])
+        ratios = np.stack([sig[:, 2] / sig[:, 0], sig[:, 2] / sig[:, 1], sig[:, 0] / sig[:, 1]], axis=1)
+        out[b] = (q, ratios)
+        for k, ax in enumerate(axes):
+            ax.plot(q, ratios[:, k], "o-", ms=3, label="b = %.2f" % b)
+    for ax, name in zip(axes, (r"$\sigma_z/\sigma_x$", r"$\sigma_z/\sigma_y$", r"$\sigma_x/\sigma_y$")):
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel("$q$ (kPa)")
+        ax.set_ylabel(name + " (-)")
+    axes[2].legend(fontsize=7)
+    _finish(plt, fig, path)
+    return out
+
+
+PAPER_ZM_SPHERES = (5.94, 5.99)  # section 4.1 / Fig. 8a: the sphere assembly's Zm over the 39 states
+
+
+def zm_vs_q(rows, path, band=PAPER_ZM_SPHERES):
+    """Fig. 8: Zm against q, one line per b, the paper's band shaded; Zm counted with a gap
+    tolerance of 1e-3 (r1 + r2) as open markers when the table has it."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    if band:
+        ax.axhspan(*band, color="0.85", label="paper, spheres (%.2f-%.2f)" % band)
+    out, gap = {}, False
+    for b, sts in _b_groups(_by_state(rows)).items():
+        q = np.array([float(st["q"]) for st in sts]) / 1e3
+        zm = np.array([float(st["Zm"]) for st in sts])
+        out[b] = (q, zm)
+        line, = ax.plot(q, zm, "o-", ms=3, label="b = %.2f" % b)
+        if sts[0].get("Zm_gap1e-3", "") != "":
+            gap = True
+            ax.plot(q, [float(st["Zm_gap1e-3"]) for st in sts], "o:", ms=3, mfc="none", color=line.get_color())
+    if gap:  # the open markers, said once in the legend
+        ax.plot([], [], "o:", ms=3, mfc="none", color="0.4", label="$Z_m$, contacts within a gap of\n"
+                "$10^{-3}(r_1 + r_2)$ counted")
+    ax.set_xlabel("$q$ (kPa)")
+    ax.set_ylabel(ZM_LABEL)
+    ax.legend(fontsize=7)
+    _finish(plt, fig, path)
+    return out
+
+
+# What Figs 9, 10 and 12 plot of each fabric tensor, with its unit. H (Eq. 16, m^2) is shown as
+# H_ii / tr H, the share of each direction, which does not depend on the particle size; B and M
+# (Eqs. 33-34) are <rbar^(1/3) N^(1/3) L L> and <rbar^(1/3) N^(1/3) L n L n>: m^(1/3) N^(1/3) m^2.
+FABRIC_LABELS = dict(R=r"$R_{ii}$ (-)", H=r"$H_{ii}/\mathrm{tr}\,H$ (-)",
+                     B=r"$B_{ii}$ (m$^{7/3}$ N$^{1/3}$)", M=r"$M_{iiii}$ (m$^{7/3}$ N$^{1/3}$)")
+ZM_LABEL = "$Z_m$ (-)"
+
+
+def fabric_vs_stress(rows, path, name):
+    """Figs 9, 10, 12: the diagonal of a fabric tensor of the rows (R, B: name_ii; H: H_ii / tr H;
+    M: M_iiii) against the stress in the same direction, one series per direction. Returns {axis:
+    (sigma in kPa, values)}, the values as plotted."""
+    plt = _plt()
+    states = _by_state(rows)
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    out = {}
+    trace = np.array([sum(float(st["H_" + a * 2]) for a in "xyz") for st in states]) if name == "H" else 1.0
+    for axis, mark in zip("xyz", "os^"):
+        col = name + "_" + axis * (4 if name == "M" else 2)
+        s = np.array([float(st["sigma_" + axis]) for st in states]) / 1e3
+        v = np.array([float(st[col]) for st in states]) / trace
+        out[axis] = (s, v)
+        ax.scatter(s, v, marker=mark, label="$%s_{%s}$" % (name, axis * (4 if name == "M" else 2))
+                   + (r"$/\mathrm{tr}\,H$" if name == "H" else ""), alpha=0.8)
+    ax.set_xlabel(r"$\sigma_i$ (kPa)")
+    ax.set_ylabel(FABRIC_LABELS[name])
+    ax.legend(fontsize=8)
+    _finish(plt, fig, path)
+    return out
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description="figures from a probes.csv")
+    p.add_argument("csv", help="probe table of run_states.py or run_study.py")
+    p.add_argument("--out", required=True, help="directory for the PNG files")
+    p.add_argument("--title", default="sphere assembly", help="assembly named in the titles")
+    o = p.parse_args(argv)
+    try:
+        rows = read_probes(o.csv, need=("state", "probe", "E", "sigma_x", "sigma_y", "sigma_z", "Zm", "b", "q",
+                                        "nu_1", "nu_2", "nu_1_name", "nu_2_name"))
+        # The figures are of the normal probes (E, Poisson ratios); a shear probe's row (yz, xz, xy:
+        # G, no E) is a valid row they do not use, and its empty E must not refuse the whole table.
+        normal = [r for r in rows if r["probe"] in ("x", "y", "z")]
+        if not normal:
+            raise ResultsError("%s has no rows of normal probes (x, y, z), which the figures plot" % o.csv)
+        for r in normal:
+            for column in ("E", "sigma_x", "sigma_y", "sigma_z", "Zm", "b", "q", "nu_1", "nu_2"):
+                number(r, column, o.csv)
+        if rows.note:
+            sys.stderr.write("note: %s\n" % rows.note)
+        os.makedirs(o.out, exist_ok=True)
+        modulus_vs_stress(rows, os.path.join(o.out, "E_vs_sigma.png"), o.title)
+        fits = scalar_moduli_vs_zm(rows, os.path.join(o.out, "K_G_vs_Zm.png"))
+    except (ResultsError, OSError, ValueError) as exc:
+        sys.stderr.write("error: %s\n" % said(exc))
+        sys.exit(2)
+    # No fit (fewer than three complete states with distinct Zm) is said in words: 'K, G fits: None'.
+    print("figures in %s; K, G fits: %s" % (o.out, fits if fits else "none (Fig. 11 needs 3 states probed on x, y "
+                                                                    "and z with distinct Zm; no K_G_vs_Zm.png)"))
+
+
+if __name__ == "__main__":
+    main()
