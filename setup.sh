@@ -9,12 +9,15 @@ cd "$(dirname "$0")"
 # Everything ./main.sh, ./test.sh, ./test.sh --long, the YADE plugin and ./docs/build.sh need on a
 # machine with only Debian's base packages (tests/fresh_machine.sh checks that on a debootstrap root):
 # libopenmpi-dev for the plugin's FindMPI (YADE's headers are built with MPI), bzip2 to unpack the
-# YADE source, python3-pyflakes for the layout test's unused-import check.
+# YADE source, python3-pyflakes for the layout test's unused-import check, libjs-mathjax for the
+# manual's formulas without a network, chromium for the test that no table of the built manual is
+# clipped (tests/py/test_manual.py).
 PACKAGES=(g++ cmake make ninja-build bzip2 yade libeigen3-dev libboost-python-dev libboost-numpy-dev
           libgtest-dev libsuitesparse-dev libcgal-dev libopenmpi-dev openmpi-bin
           python3-numpy python3-scipy python3-matplotlib python3-pytest python3-pytest-xdist
           python3-jsonschema python3-mpi4py python3-pyflakes
-          python3-sphinx python3-myst-parser python3-sphinx-rtd-theme)
+          python3-sphinx python3-myst-parser python3-sphinx-rtd-theme libjs-mathjax
+          chromium)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

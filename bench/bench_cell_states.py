@@ -2,17 +2,19 @@
 principal stress against its goal and every off-diagonal stress against zero.
 
     /usr/bin/python3 bench/bench_cell_states.py --specimen specimens/spheres-1000-s1.npz
-    /usr/bin/python3 bench/bench_cell_states.py --specimen S.npz --control three
+    /usr/bin/python3 bench/bench_cell_states.py --specimen S.npz --control three --csv docs/data/cell-states-N-three.csv
     /usr/bin/python3 bench/bench_cell_states.py --doc docs/cell.md     (tables only)
 
 Each loading path starts from the specimen and reaches its states in order, each from the one
 before it, as run_states.py does; the isotropic state (b = 0, sigma_z = 100 kPa) is reached from
 the specimen. --control six holds the shear stresses at zero (the full cell); --control three
 holds the cell's shear strains (an orthorhombic servo), for the steps and the shear
-stress it leaves. One row per state is appended to docs/data/cell-states-N-CONTROL.csv as it
-comes (the file is rewritten from the start by each run). With --doc, the tables between
-<!-- cell-states:begin --> and <!-- cell-states:end --> of that file are rebuilt from every
-docs/data/cell-states-*.csv.
+stress it leaves. One row per state is appended to --csv as it comes (by default
+results/bench/cell-states-N-CONTROL.csv; the file is rewritten from the start by each run): the
+measurements the manual's tables are made of, docs/data/cell-states-*.csv, change only when the
+run is told to write there. With --doc, the tables between <!-- cell-states:begin --> and
+<!-- cell-states:end --> of that file are rebuilt from every cell-states-*.csv of --data
+(docs/data by default).
 """
 import csv
 import glob
@@ -27,15 +29,17 @@ import _bench  # noqa: E402  (it makes trueaniso and analysis importable)
 from trueaniso import cli  # noqa: E402
 
 ROOT = os.path.dirname(HERE)
-DATA = os.path.join(ROOT, "docs", "data")
+DATA = os.path.join(ROOT, "docs", "data")  # read by --doc; written only when --csv names a file there
+RESULTS = os.path.join(ROOT, "results", "bench")
 COLUMNS = ["n", "control", "state", "b", "sigma_z_goal", "goal_1", "goal_2", "goal_3", "sigma_x", "sigma_y",
            "sigma_z", "sigma_1", "sigma_2", "sigma_3", "sigma_yz", "sigma_xz", "sigma_xy", "principal_error",
            "tau_max", "unbalanced", "steps", "wall_time", "start"]
 TOLERANCE = 500.0  # Pa: a state's acceptance, 0.5 kPa
 
 
-def data_path(n, control):
-    return os.path.join(DATA, "cell-states-%d-%s.csv" % (n, control))
+def csv_path(n, control):
+    """Where a run writes its rows unless --csv says: results/bench/, never the manual's data."""
+    return os.path.join(RESULTS, "cell-states-%d-%s.csv" % (n, control))
 
 
 def run(o):
@@ -46,7 +50,7 @@ def run(o):
     n = base.num_bodies
     states = [("iso", 0.0, 100e3)] + list(triaxial.table_c1_states())
     groups = triaxial.paths(states)
-    out = o.data or data_path(n, o.control)
+    out = o.csv or csv_path(n, o.control)
     os.makedirs(os.path.dirname(out), exist_ok=True)
     t_all = time.time()
     with open(out, "w", newline="") as f:
@@ -75,9 +79,9 @@ def run(o):
     print("wrote %s (%.0f s; specimen %s, sha256 %s)" % (out, time.time() - t_all, o.specimen, meta["sha256"][:12]))
 
 
-def _rows():
+def _rows(data):
     out = {}
-    for path in sorted(glob.glob(os.path.join(DATA, "cell-states-*.csv"))):
+    for path in sorted(glob.glob(os.path.join(data, "cell-states-*.csv"))):
         with open(path) as f:
             rows = list(csv.DictReader(f))
         if rows:
@@ -85,12 +89,14 @@ def _rows():
     return out
 
 
-def tables():
-    data = _rows()
+def tables(directory=DATA):
+    data = _rows(directory)
     if not data:
-        raise cli.InputError("no docs/data/cell-states-*.csv yet: run with --specimen first")
+        raise cli.InputError("no %s yet: run with --specimen and --csv first"
+                             % os.path.join(os.path.relpath(directory, ROOT), "cell-states-*.csv"))
     lines = ["Machine: %s; 1 engine thread; %s. Data: `docs/data/cell-states-N-CONTROL.csv`; "
-             "run: `bench/bench_cell_states.py --specimen specimens/spheres-N-s1.npz [--control three]` "
+             "run: `bench/bench_cell_states.py --specimen specimens/spheres-N-s1.npz [--control three] "
+             "--csv docs/data/cell-states-N-CONTROL.csv` "
              "(reach_state defaults: stress tolerance 100 Pa, unbalanced force 1e-4, mu = 0.5). State 1 of Table C1 "
              "is the isotropic state; `iso` is the same goal reached from the specimen, state 1 from `iso`."
              % (_bench.machine(), time.strftime("%Y-%m-%d")), "",
@@ -120,8 +126,8 @@ def tables():
     return "\n".join(lines)
 
 
-def write_doc(path):
-    _bench.replace_block(path, "cell-states", tables())
+def write_doc(path, data):
+    _bench.replace_block(path, "cell-states", tables(data))
     print("updated %s" % path)
 
 
@@ -131,8 +137,9 @@ def main(argv=None):
     p.add_argument("--control", choices=("six", "three"), default="six",
                    help="six: shear stresses held at zero (the full cell); three: shear strains held (orthorhombic)")
     p.add_argument("--threads", type=cli.count, default=1, help="engine threads (the tables use 1)")
-    p.add_argument("--data", help="CSV to write (default docs/data/cell-states-N-CONTROL.csv)")
-    p.add_argument("--doc", help="markdown file whose cell-states block is rebuilt from docs/data")
+    p.add_argument("--csv", help="CSV to write (default results/bench/cell-states-N-CONTROL.csv)")
+    p.add_argument("--doc", help="markdown file whose cell-states block is rebuilt from --data")
+    p.add_argument("--data", default=DATA, help="folder of the cell-states-*.csv the tables are made of")
     o = cli.parse(p, argv)
     if not o.specimen and not o.doc:
         raise cli.InputError("give --specimen (run the states) and/or --doc (rebuild the tables)")
@@ -145,7 +152,7 @@ def main(argv=None):
     if o.specimen:
         run(o)
     if o.doc:
-        write_doc(o.doc)
+        write_doc(o.doc, o.data)
 
 
 if __name__ == "__main__":

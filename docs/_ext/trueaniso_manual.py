@@ -5,8 +5,13 @@ A page holding a line ``<!-- generated: KIND -->`` gets Markdown in its place (`
 * ``scripts``: every user script's ``--help`` (pyscripts/*.py);
 * ``analysis-tools``: the ``--help`` of every analysis module that runs as a tool;
 * ``bench``: the ``--help`` of every benchmark script (bench/*.py);
-* ``python-api``: an autodoc section per module of the ``trueaniso`` package and its ``analysis``,
-  whose docstrings (plain text) are shown as written.
+* ``python-api``: an autodoc section per module of the ``trueaniso`` package and its ``analysis``:
+  the modules a user's script calls first (``trueaniso.PUBLIC_MODULES``, each with the functions
+  of its ``__all__``), then the internal ones under a heading that says so; docstrings are Google
+  style, read by napoleon;
+* ``yade-classes``: the classes of the YADE plugin (engines/yade) with their attributes, read
+  from the classes as yade-double loads them (yade_classes.py), or a note where the plugin is not
+  built.
 
 The lists are discovered from the files, so a new script or module has its page without an edit.
 
@@ -50,6 +55,33 @@ def modules(package, folder):
 def api_modules():
     return (modules("trueaniso", os.path.join("pyscripts", "trueaniso"))
             + modules("trueaniso.analysis", os.path.join("pyscripts", "trueaniso", "analysis")))
+
+
+def public_and_internal():
+    """(public, internal) module names: the package, then trueaniso.PUBLIC_MODULES in its order;
+    every other module of the folders is internal."""
+    import trueaniso
+    public = ["trueaniso"] + ["trueaniso." + m for m in trueaniso.PUBLIC_MODULES]
+    found = api_modules()
+    unknown = [m for m in public if m not in found]
+    if unknown:
+        raise ValueError("trueaniso.PUBLIC_MODULES names modules that do not exist: %s" % ", ".join(unknown))
+    return public, [m for m in found if m not in public]
+
+
+def automodule(name, level):
+    return ("%s `%s`\n\n```{eval-rst}\n.. automodule:: %s\n   :members:\n   :undoc-members:\n"
+            "   :show-inheritance:\n```\n\n" % ("#" * level, name, name))
+
+
+def python_api():
+    public, internal = public_and_internal()
+    return ("".join(automodule(name, 2) for name in public)
+            + "## Internal modules\n\n"
+            "These serve the scripts and the modules above. They are documented for those who change "
+            "trueaniso; a script of yours should not need them, and their functions may change without "
+            "notice.\n\n"
+            + "".join(automodule(name, 3) for name in internal))
 
 
 def analysis_tools():
@@ -96,11 +128,10 @@ def generate(kind):
     if kind == "bench":
         return "".join(help_section(s, [s]) for s in bench_scripts())
     if kind == "python-api":
-        out = []
-        for name in api_modules():
-            out.append("## `%s`\n\n```{eval-rst}\n.. automodule:: %s\n   :members:\n   :undoc-members:\n"
-                       "   :show-inheritance:\n```\n\n" % (name, name))
-        return "".join(out)
+        return python_api()
+    if kind == "yade-classes":
+        import yade_classes
+        return yade_classes.markdown(REPO)
     raise ValueError("unknown generated section %r" % kind)
 
 
@@ -326,14 +357,26 @@ class SchemaTable(Directive):
         return [intro, table]
 
 
-def plain_docstring(app, what, name, obj, options, lines):
-    """The package's docstrings are plain text (equations, tables, indented examples), not
-    reStructuredText: shown as written, in a literal block, they need no markup and warn of none."""
-    if any(line.strip() for line in lines):
-        text = [line.rstrip() for line in lines]
-        while text and not text[-1]:
-            text.pop()
-        lines[:] = ["::", ""] + ["   " + line if line else "" for line in text] + [""]
+# Debian's MathJax 2 (libjs-mathjax), the parts the TeX-AMS_CHTML configuration loads: the manual
+# then renders its formulas without a network. conf.py points mathjax_path here when it exists.
+MATHJAX_PARTS = ("MathJax.js", "config/TeX-AMS_CHTML.js", "extensions", "jax/input/TeX", "jax/output/CommonHTML",
+                 "jax/element", "localization/en", "fonts/HTML-CSS/TeX/woff")
+
+
+def copy_mathjax(app, exception):
+    source = app.config.trueaniso_mathjax_dir
+    if exception is not None or app.builder.format != "html" or not source or \
+            not app.config.mathjax_path.startswith("mathjax/"):
+        return
+    import shutil
+    target = os.path.join(app.outdir, "_static", "mathjax")
+    for part in MATHJAX_PARTS:
+        src, dst = os.path.join(source, part), os.path.join(target, part)
+        os.makedirs(os.path.dirname(dst), exist_ok=True)
+        if os.path.isdir(src):
+            shutil.copytree(src, dst, dirs_exist_ok=True)
+        else:
+            shutil.copyfile(src, dst)
 
 
 def on_source_read(app, docname, source):
@@ -342,6 +385,7 @@ def on_source_read(app, docname, source):
 
 def setup(app):
     app.connect("source-read", on_source_read)
-    app.connect("autodoc-process-docstring", plain_docstring)
+    app.add_config_value("trueaniso_mathjax_dir", None, "html")
+    app.connect("build-finished", copy_mathjax)
     app.add_directive("schema-table", SchemaTable)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

@@ -100,7 +100,7 @@ def quaternion_from_matrix(R):
 
 def long_axes(n, rng, weights):
     """n unit vectors from the angular central Gaussian distribution with covariance
-    diag(w_x^2, w_y^2, w_z^2): u = g / |g| with g = (w_x g1, w_y g2, w_z g3), g standard normal.
+    diag(w_x^2, w_y^2, w_z^2): u = g / norm(g) with g = (w_x g1, w_y g2, w_z g3), g standard normal.
     Equal weights give isotropic directions; w_z > w_x = w_y favours the vertical, w_z < w_x = w_y
     the horizontal plane, and the distribution is then transversely isotropic about z."""
     w = np.asarray(weights, dtype=float)

@@ -2,16 +2,18 @@
 compacted by radius expansion and consolidated isotropically (docs/specimens.md, "Clump specimens").
 
 The paper only cites its two preparation methods; our readings of them:
- - clump1, "two-stage isotropic consolidation" (after Zhao & Guo 2015): clumps generated with
-   their long axes favouring the vertical, stage 1 compacts them with particle rotation blocked
-   until the network carries 10 kPa (the orientation fabric is kept while the contact network
-   forms), stage 2 releases rotation, compacts to the isotropic 100 kPa and consolidates there with
-   the final friction;
- - clump2, "multi-layer rotational replication" (after Zhou et al. 2026b, c): one horizontal layer
-   of clumps lying near the horizontal is generated, and the specimen is built from copies of it
-   stacked along z, copy k turned by k x 90 degrees about z (which maps the square periodic cell
-   onto itself), so the two horizontal directions are equivalent by construction; stage 1 (rotation
-   blocked) goes to 100 kPa, stage 2 consolidates there with the final friction.
+
+- clump1, "two-stage isotropic consolidation" (after Zhao & Guo 2015): clumps generated with
+  their long axes favouring the vertical, stage 1 compacts them with particle rotation blocked
+  until the network carries 10 kPa (the orientation fabric is kept while the contact network
+  forms), stage 2 releases rotation, compacts to the isotropic 100 kPa and consolidates there with
+  the final friction;
+- clump2, "multi-layer rotational replication" (after Zhou et al. 2026b, c): one horizontal layer
+  of clumps lying near the horizontal is generated, and the specimen is built from copies of it
+  stacked along z, copy k turned by k x 90 degrees about z (which maps the square periodic cell
+  onto itself), so the two horizontal directions are equivalent by construction; stage 1 (rotation
+  blocked) goes to 100 kPa, stage 2 consolidates there with the final friction.
+
 Recipe parameters live in RECIPES (clump_recipes); every one can be overridden by a keyword of prepare_clumps.
 """
 import math
@@ -24,8 +26,11 @@ from . import clump_shapes, dem, engines, prep_checkpoint as _checkpointed, psd 
 from .clump_recipes import RECIPES, recipe  # noqa: F401
 
 
+__all__ = ["prepare_clumps", "check_count", "least_layered_count", "PreparationError"]
+
+
 class PreparationError(RuntimeError):
-    pass
+    """A stage of a clump preparation did not converge within its steps."""
 
 
 def random_sequential_clumps(template, scales, quats, box, rng, periodic_z=True, max_attempts=100000):
@@ -139,8 +144,26 @@ def _with_estimate(thin):
 
 
 def least_layered_count(assembly, start, seed, phi_start=0.20, **overrides):
-    """The least count >= start that the recipe builds (a multiple of its layers) and whose layers
-    hold their clumps with this seed, or None if none within 20 x start."""
+    """The least count >= `start` that the recipe builds and whose layers hold their clumps with this seed.
+
+    A count the recipe builds is a multiple of its layers; a layer too thin for its clumps is refused
+    by the preparation (`layers_problem`).
+
+    Args:
+        assembly: "clump1" or "clump2".
+        start: the least count wanted.
+        seed: the seed of the preparation.
+        phi_start: the solid fraction of the placement.
+        **overrides: any parameter of the recipe.
+
+    Returns:
+        int or None: None if no count within 20 x `start` fits.
+
+    Example:
+        >>> from trueaniso import clump_specimen
+        >>> clump_specimen.least_layered_count("clump2", 10, seed=1)
+        60
+    """
     layers = recipe(assembly, **overrides)["layers"]
     fits = _layers_check(assembly, seed, phi_start, overrides)
     first = -(-start // layers) * layers
@@ -214,7 +237,19 @@ def members_per_clump(assembly):
 
 
 def check_count(assembly, n):
-    """ValueError if n clumps cannot be built by the assembly's recipe (layers must divide n)."""
+    """Refuse a count of clumps the assembly's recipe cannot build (its layers must divide it).
+
+    Raises:
+        ValueError: with the reason.
+
+    Example:
+        >>> from trueaniso import clump_specimen
+        >>> clump_specimen.check_count("clump2", 1000)
+        >>> clump_specimen.check_count("clump2", 1001)
+        Traceback (most recent call last):
+        ...
+        ValueError: clump2 is built from 4 identical layers: --n must be a multiple of 4
+    """
     layers = recipe(assembly)["layers"]
     if n < layers or n % layers:
         raise ValueError("%s is built from %d identical layers: --n must be a multiple of %d" % (assembly, layers, layers))
@@ -223,15 +258,50 @@ def check_count(assembly, n):
 def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_number=1e-2, prep_unbalanced=1e-2,
                    unbalanced=1e-3, stress_tolerance=100.0, gain=0.002, max_steps=5_000_000, progress=None,
                    checkpoints=None, hold_deviator=None, switch_pressure=None, **overrides):
-    """A clump specimen (assembly "clump1" or "clump2", recipe RECIPES[assembly] with `overrides`)
-    consolidated isotropically to `pressure`; returns (scene, log dict). The final state is in
-    force and moment balance below `unbalanced` (a probe or static solve with rotations free
-    starts from it). `checkpoints`: as in specimen.prepare_spheres (an interrupted preparation
-    resumes). hold_deviator (a gain in (0, 1], or None): while the radii grow, the cell holds the
-    normal stresses at their mean at constant volume with that gain (RadiusExpansion.hold_deviator);
-    None, the growth is at a fixed cell. switch_pressure: where the radii, grown to `pressure`, are
-    unloaded to and the friction becomes mu_final (None: the recipe's switch_fraction of `pressure`,
-    specimen.default_switch_pressure; `pressure`: no unloading, the recipes before it)."""
+    """A clump specimen consolidated isotropically to `pressure` (module doc; docs/specimens.md).
+
+    The final state is in force and moment balance below `unbalanced`, so a probe or a static solve
+    with rotations free starts from it.
+
+    Args:
+        assembly: "clump1" or "clump2".
+        n: number of clumps (a multiple of the recipe's layers: `check_count`).
+        seed: seed of the random placement and orientations.
+        pressure: isotropic stress of the specimen, Pa.
+        damping: YADE's local non-viscous damping.
+        inertial_number: caps the rate of growth and of the cell.
+        prep_unbalanced: unbalanced force at which a stage of growth stops.
+        unbalanced: unbalanced force at which the consolidation stops.
+        stress_tolerance: every stress within this of `pressure` (Pa) at the end.
+        gain: gain of the cell servo.
+        max_steps: each stage gives up after this many steps (`PreparationError`).
+        progress: a `progress.Progress` for progress lines, or None.
+        checkpoints: as in `specimen.prepare_spheres`: an interrupted preparation resumes.
+        hold_deviator: a gain in (0, 1]: while the radii grow, the cell holds the normal stresses at
+            their mean at constant volume with that gain; None: the growth is at a fixed cell.
+        switch_pressure: the mean stress to which the packing grown to `pressure` is unloaded (rotations
+            as the growth left them, its friction), where the friction becomes mu_final and the cell
+            servo compresses it to `pressure`. None: the recipe's ``switch_fraction`` of `pressure`
+            (`specimen.default_switch_pressure`); `pressure`: no unloading (every recipe before it).
+        **overrides: any parameter of the recipe (`clump_recipes.RECIPES`), e.g. ``mu_prep``.
+
+    Returns:
+        (scene, log): the engines' Scene at rest at the state, and a dict of the recipe and the
+        steps and wall time of each stage.
+
+    Raises:
+        ValueError: an unknown assembly or parameter, a count the layers cannot hold, a pressure
+            <= 0, a negative friction, a switch pressure out of range.
+        PreparationError: a stage did not converge within `max_steps`.
+
+    Example:
+        >>> from trueaniso import clump_specimen, specimen
+        >>> scene, log = clump_specimen.prepare_clumps("clump1", 20, seed=1)
+        >>> s = specimen.state(scene)
+        >>> print("%d clumps of %d spheres, p = %.0f kPa" % (scene.num_bodies, scene.num_members // scene.num_bodies,
+        ...                                                   s["p"] / 1e3))
+        20 clumps of 5 spheres, p = 100 kPa
+    """
     if hold_deviator is not None and not 0 < hold_deviator <= 1:
         raise ValueError("hold_deviator %r: the deviator hold's gain must lie in (0, 1]" % (hold_deviator,))
     if pressure <= 0:

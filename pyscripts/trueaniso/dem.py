@@ -3,6 +3,8 @@ import math
 
 from . import engines as _e
 
+__all__ = ["Chain", "refresh", "strain_rate_for_inertial_number"]
+
 
 # Time step rules of TimeStepper: name -> (per_axis, safety). "smallest-inertia" is the rule every
 # committed result was made with; "per-axis" is the per-axis bound at the largest factor at which
@@ -17,15 +19,34 @@ time_step_rule = "smallest-inertia"
 
 
 class Chain:
-    """A simulation with the usual order: detection, forces, [controllers], time step, integrator.
+    """A simulation in the usual order: detection, forces, [controllers], time step, integrator.
 
-    Attributes name the engines so protocols can switch them (e.g. ``chain.detection.dead = True``
-    during a probe, where nothing slides and the contact network cannot change).
+    The attributes name the engines, so that a protocol can switch them (``chain.detection.dead =
+    True`` during a probe, where nothing slides and the contact network cannot change):
+    ``detection``, ``forces``, ``controllers``, ``timestep``, ``integrator``, and ``sim``, the
+    engines' Simulation. ``run(n)`` runs n steps and returns n.
+
+    Args:
+        scene: the engines' Scene.
+        damping: YADE's local non-viscous damping of the integrator.
+        skin_factor: the Verlet list's skin, as a fraction of the mean radius.
+        safety: the time step's safety factor (None: the rule's).
+        max_dt: the cap of the time step (None: `reference_time_step` at 100 kPa).
+        controllers: engines run after the forces (a servo, a probe, a `fabric.recorder`).
+        rule: a key of `TIME_STEP_RULES` (None: the module's `time_step_rule`, "smallest-inertia").
+
+    Raises:
+        ValueError: an unknown time step rule.
+
+    Example:
+        >>> from trueaniso import specimen_file, dem
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> chain = dem.Chain(scene, damping=0.4)
+        >>> chain.run(100), scene.step
+        (100, 108100)
     """
 
     def __init__(self, scene, damping=0.2, skin_factor=0.2, safety=None, max_dt=None, controllers=(), rule=None):
-        """`rule`: a key of TIME_STEP_RULES (default: the module's time_step_rule); `safety`, when
-        given, replaces the rule's factor."""
         self.scene = scene
         rule = time_step_rule if rule is None else rule
         if rule not in TIME_STEP_RULES:
@@ -55,13 +76,24 @@ class Chain:
             scene.dt = self.timestep.max_dt
 
     def run(self, n):
+        """Run n steps; returns n."""
         return self.sim.run(int(n))
 
 
 def refresh(scene):
-    """Recompute every contact quantity (forces, normals, branches) for the current positions
-    without any tangential increment: what a loaded or edited scene needs before it is measured.
-    The C++ engines/dynamics/ContactRefresh is the one home of this."""
+    """Recompute every contact quantity (forces, normals, branches) for the current positions.
+
+    No tangential increment is made: what a loaded or edited scene needs before it is measured.
+    The C++ engines/dynamics/ContactRefresh is the one home of this.
+
+    Example:
+        >>> from trueaniso import specimen_file, dem, engines
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> scene.positions = scene.positions * 1.0  # an edit
+        >>> dem.refresh(scene)
+        >>> print("p = %.1f kPa" % (engines.stress(scene).trace() / 3e3))
+        p = 100.0 kPa
+    """
     _e.refresh_contacts(scene)
 
 
@@ -92,5 +124,17 @@ def reference_time_step(scene, pressure=100e3, safety=None, coordination=12):
 
 
 def strain_rate_for_inertial_number(inertial_number, d50, density, pressure):
-    """Strain rate with inertial number I = rate d sqrt(rho/p) (I < 1e-3: quasi-static)."""
+    """The strain rate of an inertial number, I = rate d sqrt(rho / p) (I < 1e-3: quasi-static).
+
+    Args:
+        inertial_number: I.
+        d50: the particles' diameter, m.
+        density: the particles' density, kg/m^3.
+        pressure: the mean stress, Pa.
+
+    Example:
+        >>> from trueaniso import dem
+        >>> print("%.3g /s" % dem.strain_rate_for_inertial_number(1e-3, 0.2e-3, 2500.0, 100e3))
+        31.6 /s
+    """
     return inertial_number / (d50 * math.sqrt(density / pressure))

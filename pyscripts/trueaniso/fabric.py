@@ -3,14 +3,14 @@
 The numbers come from the C++ engines (measure/Fabric, theory/Micromechanics); this module names
 them for the study's tables:
 
- - ``fabric(scene)``: Zm (Eq. 14), R (15), H (16), B (33), M (34, 3x3x3x3), Nc/V by Eq. (36)
-   and by count, void ratio, mean normal force, Nc, Np, Np0, Np1;
- - ``prediction(scene, zeta, density)``: C_ijkl (Eq. 37), its orthotropic Voigt matrix
-   (Appendix A) and E_i, nu_ij, G_ij (Eqs. 39-42);
- - ``fabric_row(scene, zeta)``: one flat dict of CSV columns;
- - ``recorder(every)`` / ``history(recorder)``: the engine that records every N steps;
- - ``fabric_from_interactions(O)``: the same measures in plain Python over YADE's
-   ``O.interactions`` (no trueaniso scene needed); slow, kept as the peer and the benchmark.
+- ``fabric(scene)``: Zm (Eq. 14), R (15), H (16), B (33), M (34, 3x3x3x3), Nc/V by Eq. (36)
+  and by count, void ratio, mean normal force, Nc, Np, Np0, Np1;
+- ``prediction(scene, zeta, density)``: C_ijkl (Eq. 37), its orthotropic Voigt matrix
+  (Appendix A) and E_i, nu_ij, G_ij (Eqs. 39-42);
+- ``fabric_row(scene, zeta)``: one flat dict of CSV columns;
+- ``recorder(every)`` / ``history(recorder)``: the engine that records every N steps;
+- ``fabric_from_interactions(O)``: the same measures in plain Python over YADE's
+  ``O.interactions`` (no trueaniso scene needed); slow, kept as the peer and the benchmark.
 
 The scene's contacts must come from a force evaluation at its current configuration (a step of
 the engine chain); a freshly loaded or imported scene needs one first.
@@ -20,6 +20,8 @@ import math
 import numpy as np
 
 from . import engines
+
+__all__ = ["fabric", "prediction", "recorder", "history", "NoContacts"]
 
 AXES = "xyz"
 DENSITIES = ("eq36", "count")
@@ -48,15 +50,53 @@ def _require_contacts(scene, nc):
 
 
 def fabric(scene):
-    """Dict of the fabric measures of the scene's last force evaluation (see module doc);
-    raises NoContacts for a scene without a loaded contact (never a quiet NaN)."""
+    """The fabric measures of the scene's last force evaluation (paper sections 3.2 and 4.2).
+
+    Returns:
+        dict: ``Zm`` (Eq. 14), ``R`` (Eq. 15) and ``H`` (Eq. 16) as 3x3 arrays, ``B`` (Eq. 33, 3x3),
+        ``M`` (Eq. 34, 3x3x3x3), ``NcV_eq36`` and ``NcV_count`` (contacts per volume by Eq. 36 and
+        counted, docs/fabric.md), ``e`` (void ratio), ``mean_N`` (mean normal force), ``Nc``,
+        ``Np``, ``Np0``, ``Np1``, ``mean_r3`` and ``volume``.
+
+    Raises:
+        NoContacts: a scene without a contact carrying a normal force (never a quiet NaN).
+
+    Example:
+        >>> from trueaniso import specimen_file, fabric
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> f = fabric.fabric(scene)
+        >>> print("Zm = %.2f, R_zz = %.3f" % (f["Zm"], f["R"][2, 2]))
+        Zm = 5.84, R_zz = 0.335
+    """
     f = engines.fabric(scene)
     _require_contacts(scene, int(f["Nc"]))
     return f
 
 
 def prediction(scene, zeta=1.0, density="eq36"):
-    """Micromechanical C (Eq. 37), Voigt matrix (Appendix A), E, nu[i, j] = nu_ij, G (yz, xz, xy)."""
+    """The micromechanical elastic prediction of the scene's contact network (Eqs. 33-42).
+
+    Args:
+        scene: the engines' Scene, its forces evaluated at its state.
+        zeta: the rotation factor of Eq. (37) (the paper fits 0.552 for spheres; 1: kinematic).
+        density: Nc/V by "eq36" (the paper's Eq. 36, read with the mean r^3) or "count".
+
+    Returns:
+        dict: ``C`` (C_ijkl, Eq. 37, 3x3x3x3), ``voigt`` (its orthotropic 6x6, Appendix A), ``E``
+        (E_x, E_y, E_z), ``nu`` (3x3, nu[i, j] = nu_ij), ``G`` (G_yz, G_xz, G_xy), in Pa, with
+        ``zeta`` and ``contact_density``.
+
+    Raises:
+        NoContacts: a scene without a loaded contact.
+        ValueError: an unknown `density`, a zeta outside [0, 5].
+
+    Example:
+        >>> from trueaniso import specimen_file, fabric
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> p = fabric.prediction(scene, zeta=0.552)
+        >>> print("E_z = %.0f MPa, nu_zx = %.3f" % (p["E"][2] / 1e6, p["nu"][2, 0]))
+        E_z = 346 MPa, nu_zx = 0.102
+    """
     _require_contacts(scene, int(engines.coordination(scene)["Nc"]))
     return engines.micromechanical_prediction(scene, float(zeta), _check_density(density))
 
@@ -77,7 +117,7 @@ def _material(shear_modulus, poisson):
 
 
 def fabric_row(scene, zeta=1.0, density="eq36"):
-    """Flat dict of CSV columns: counts, R_/H_/B_ (6 independent components each), the M
+    """Flat dict of CSV columns: counts, ``R_``, ``H_``, ``B_`` (6 independent components each), the M
     components of Appendix A, NcV_eq36, NcV_count, e, mean_N, and the micromechanical moduli
     mic_E_i, mic_nu_ij, mic_G_ij for the given zeta (prefixed so they cannot be mistaken for
     the probe's measured E_i, nu_ij)."""
@@ -129,7 +169,23 @@ def row(f, p, zeta, density):
 
 
 def recorder(every=100):
-    """A FabricRecorder engine; add it after ContactForces (e.g. ``dem.Chain(controllers=[rec])``)."""
+    """A FabricRecorder engine, which records the fabric every `every` steps of a simulation.
+
+    Add it to a chain after the contact forces (``dem.Chain(scene, controllers=[rec])``); `history`
+    reads what it recorded.
+
+    Raises:
+        ValueError: `every` < 1.
+
+    Example:
+        >>> from trueaniso import specimen_file, fabric, dem
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> rec = fabric.recorder(every=10)
+        >>> dem.Chain(scene, controllers=[rec]).run(30)
+        30
+        >>> len(fabric.history(rec)["Zm"])
+        3
+    """
     every = int(every)
     if every < 1:
         raise ValueError("every must be >= 1 step")
@@ -139,7 +195,22 @@ def recorder(every=100):
 
 
 def history(rec):
-    """All records of a FabricRecorder: dict of numpy arrays (tensors (n,3,3) and (n,3,3,3,3))."""
+    """Every record of a FabricRecorder (`recorder`).
+
+    Returns:
+        dict: numpy arrays with one entry per record: ``step``, ``time``, the measures of `fabric`
+        (tensors as (n, 3, 3) and (n, 3, 3, 3, 3) arrays).
+
+    Example:
+        >>> from trueaniso import specimen_file, fabric, dem
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> rec = fabric.recorder(every=10)
+        >>> dem.Chain(scene, controllers=[rec]).run(20)
+        20
+        >>> h = fabric.history(rec)
+        >>> list(h["step"]), h["R"].shape
+        ([108000, 108010], (2, 3, 3))
+    """
     return rec.history()
 
 
@@ -158,7 +229,7 @@ def history_rows(rec, shear_modulus, poisson, zeta=1.0, density="eq36"):
 def fabric_from_interactions(O, material=None):
     """Zm, R, H, B, M, Nc/V (Eq. 36 and count), e and mean_N in plain Python over YADE's
     O.interactions, for a periodic scene of spheres: branch L = pos2 + hSize cellDist - pos1,
-    n = geom.normal, N = |phys.normalForce|, rbar from the two radii (Eq. 7); e from the sphere
+    n = geom.normal, N = norm(phys.normalForce), rbar from the two radii (Eq. 7); e from the sphere
     volumes. The definitions are those of fabric(scene); only the code differs."""
     from yade import Sphere  # noqa: F401 - fails clearly outside yade-double
     h = np.array([[O.cell.hSize[i][j] for j in range(3)] for i in range(3)])

@@ -1,6 +1,7 @@
 """What produced a result: the code version a study is bound to, and the software around it.
 
 ``code_version()`` hashes the code that makes the numbers, in two parts:
+
 - the engines: the hash of the C++ sources under engines/ that CMake compiled into the module
   (``engines.source_hash()``, cmake/EngineSourceHash.cmake), so it is known wherever the module
   is, installed or in a build tree. In a source tree the same hash is computed from engines/ and
@@ -12,6 +13,7 @@
   (``engines.build_arch()``, CMake's TRUEANISO_ARCH): a build for x86-64-v3 fuses multiply-adds and
   its results differ in the last bits, so its studies and specimens are another code's. The
   baseline adds nothing.
+
 It changes exactly when that code changes, committed or not, in a checkout or an installation;
 edits to docs, tests, benchmarks, trueaniso.analysis (which only reads results, and is rerun on
 every study run) or the user scripts (whose options are recorded in the study's fingerprint) leave it alone.

@@ -7,8 +7,32 @@ Any other gradation can be given as a table (sizes, cumulative mass), as YADE's 
 """
 import numpy as np
 
+__all__ = ["SizeDistribution", "mass_d50_cu"]
+
 
 class SizeDistribution:
+    """A particle size distribution: cumulative mass fraction against diameter, as YADE's psdSizes/psdCumm.
+
+    Args:
+        diameters: increasing diameters, m (at least two).
+        cumulative_mass: the mass fraction finer than each, rising from 0 to 1.
+
+    Raises:
+        ValueError: arrays of other lengths, diameters not increasing, a cumulative mass that does
+            not rise from 0 to 1.
+
+    Example:
+        The paper's spheres (D50 0.195 mm, Cu 1.25), as a linear gradation, and a sample of it:
+
+        >>> import numpy as np
+        >>> from trueaniso import psd
+        >>> dist = psd.SizeDistribution.from_d50_cu(0.195e-3, 1.25)
+        >>> print("D50 = %.3f mm, Cu = %.2f" % (dist.d50 * 1e3, dist.cu))
+        D50 = 0.195 mm, Cu = 1.25
+        >>> d = dist.sample(1000, np.random.default_rng(1))
+        >>> print("sample: D50 = %.3f mm, Cu = %.2f" % tuple(x * f for x, f in zip(psd.mass_d50_cu(d), (1e3, 1))))
+        sample: D50 = 0.195 mm, Cu = 1.25
+    """
     def __init__(self, diameters, cumulative_mass):
         d = np.asarray(diameters, dtype=float)
         c = np.asarray(cumulative_mass, dtype=float)
@@ -33,14 +57,17 @@ class SizeDistribution:
         return cls([dmin, dmin * (1.0 + ratio)], [0.0, 1.0])
 
     def diameter_at(self, mass_fraction):
+        """The diameter at a cumulative mass fraction, interpolated linearly in the table."""
         return float(np.interp(mass_fraction, self.cum, self.d))
 
     @property
     def d50(self):
+        """D50, the diameter at half the mass."""
         return self.diameter_at(0.5)
 
     @property
     def cu(self):
+        """Cu = D60/D10, the coefficient of uniformity."""
         return self.diameter_at(0.6) / self.diameter_at(0.1)
 
     def sample(self, n, rng):
@@ -68,7 +95,17 @@ class SizeDistribution:
 
 
 def mass_d50_cu(diameters):
-    """D50 and Cu of a finite sample, by mass (for checking a specimen)."""
+    """D50 and Cu = D60/D10 of a finite sample of diameters, by mass (for checking a specimen).
+
+    Returns:
+        (D50, Cu), D50 in the diameters' unit.
+
+    Example:
+        >>> from trueaniso import psd
+        >>> d50, cu = psd.mass_d50_cu([1.0, 1.0, 2.0, 2.0])
+        >>> print("D50 = %.3f, Cu = %.3f" % (d50, cu))
+        D50 = 2.000, Cu = 1.875
+    """
     d = np.sort(np.asarray(diameters, dtype=float))
     m = np.cumsum(d ** 3)
     cum = (m - 0.5 * d ** 3) / m[-1]

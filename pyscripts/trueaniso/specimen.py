@@ -2,20 +2,22 @@
 a low pressure, and the consolidation back to the target at the consolidation friction.
 
 Recipe (choices and reasons are in docs/specimens.md):
- 1. random sequential addition at solid fraction 0.30 in a cubic periodic cell sized so that the
-    final radii would fill it to ``phi_cell``; particles ordered along the cell grid for locality;
- 2. radius expansion at fixed cell with friction ``mu_prep``, the growth servoed on the mean
-    stress, until p = ``expansion_pressure`` (the target) and the unbalanced force is below
-    ``prep_unbalanced``: a dense packing, nearly isostatic;
- 3. the radii shrink, still at ``mu_prep``, until p = ``switch_pressure`` (5 kPa) is held with the
-    unbalanced force below ``prep_unbalanced``;
- 4. a similarity rescale back to the exact size distribution (Hertz stresses do not change);
- 5. friction set to ``mu_final`` (0.5, the paper's consolidation friction), the cell servoed from
-    the switch pressure to the isotropic target stress (its shear stresses to zero: the cell
-    shears a little) until every principal stress and every shear stress is within
-    ``stress_tolerance`` and the unbalanced force below ``unbalanced``.
-A switch pressure equal to the expansion pressure skips step 3 (the named variants
-``grown-to-target``, the earlier default, and ``grown-to-switch``, clump_recipes.SPHERE_VARIANTS).
+
+1. random sequential addition at solid fraction 0.30 in a cubic periodic cell sized so that the
+   final radii would fill it to ``phi_cell``; particles ordered along the cell grid for locality;
+2. radius expansion at fixed cell with friction ``mu_prep``, the growth servoed on the mean
+   stress, until p = the target and the unbalanced force is below ``prep_unbalanced``: a dense
+   packing, nearly isostatic;
+3. the radii shrink, still at ``mu_prep``, until p = ``switch_pressure`` (5 % of the target) is held
+   with the unbalanced force below ``prep_unbalanced``;
+4. a similarity rescale back to the exact size distribution (Hertz stresses do not change);
+5. friction set to ``mu_final`` (0.5, the paper's consolidation friction), the cell servoed from
+   the switch pressure to the isotropic target stress (its shear stresses to zero: the cell
+   shears a little) until every principal stress and every shear stress is within
+   ``stress_tolerance`` and the unbalanced force below ``unbalanced``.
+
+A switch pressure at the target skips step 3 (the named variant ``grown-to-target``, the earlier
+default); ``grown-to-switch`` grows the radii to the switch pressure only (clump_recipes.VARIANTS).
 """
 import math
 import time
@@ -25,8 +27,11 @@ import numpy as np
 from . import dem, engines, prep_checkpoint as _checkpointed, psd as _psd
 
 
+__all__ = ["prepare_spheres", "state", "d50_cu", "PreparationError"]
+
+
 class PreparationError(RuntimeError):
-    pass
+    """A stage of a preparation did not converge within its steps."""
 
 
 def random_loose_packing(n, size_distribution, seed, phi_cell=0.60, phi_start=0.30):
@@ -160,21 +165,53 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
                     prep_unbalanced=1e-2, unbalanced=1e-3, stress_tolerance=100.0, gain=0.002,
                     max_steps=5_000_000, progress=None, checkpoints=None, switch_pressure=None,
                     switch_fraction=SWITCH_FRACTION, unload=True):
-    """A sphere specimen consolidated isotropically to `pressure`; returns (scene, log dict).
+    """A sphere specimen consolidated isotropically to `pressure` (the recipe of the module doc).
 
-    With `checkpoints` (prep_checkpoint.Checkpoints) the preparation writes its place every so
-    many steps and goes on from the file, and starts from the checkpoint on disk if there is one:
-    an interrupted preparation resumes. Without, nothing is written (the specimen is the same bits
-    as with checkpoints never due).
+    Args:
+        n: number of spheres.
+        seed: seed of the random placement; the same seed gives the same specimen, bit for bit.
+        size_distribution: a `psd.SizeDistribution`; the paper's (D50 0.195 mm, Cu 1.25) by default.
+        pressure: isotropic stress of the specimen, Pa.
+        mu_prep: friction while the radii grow (lower: a denser specimen).
+        mu_final: friction at the end (the paper's 0.5).
+        phi_cell: solid fraction the final radii would fill the first cell to.
+        damping: YADE's local non-viscous damping.
+        inertial_number: caps the rate of growth and of the cell (quasi-static below 1e-3).
+        prep_unbalanced: unbalanced force at which the growth stops.
+        unbalanced: unbalanced force at which the consolidation stops.
+        stress_tolerance: every stress within this of `pressure` (Pa) at the end.
+        gain: gain of the cell servo.
+        max_steps: each stage gives up after this many steps (`PreparationError`).
+        progress: a `progress.Progress` for progress lines, or None.
+        checkpoints: a `prep_checkpoint.Checkpoints`: the preparation writes its place every so many
+            steps and starts from the checkpoint on disk if there is one, so an interrupted preparation
+            resumes. None: nothing is written (the specimen is the same bits as with checkpoints
+            never due).
+        switch_pressure: the mean stress to which the packing grown to `pressure` is unloaded (at
+            `mu_prep`, in balance), where the friction becomes `mu_final` and the cell servo
+            compresses it to `pressure`. None: `switch_fraction` of `pressure`
+            (default_switch_pressure); `pressure`: no unloading, the friction switched at the target
+            (the variant grown-to-target, every file before the unloading).
+        switch_fraction: the default switch pressure's share of `pressure` (5 %).
+        unload: False grows the radii to `switch_pressure` only, without the unloading (the variant
+            grown-to-switch). The time step and rate caps are those of `pressure`, the unloading's
+            cap that of `switch_pressure`.
 
-    The radii grow at `mu_prep` until p = `pressure` is held and, with `unload`, shrink at `mu_prep`
-    until p = `switch_pressure` (None: `switch_fraction` of `pressure`, default_switch_pressure) is
-    held; the friction then becomes `mu_final` and
-    the cell servo compresses the packing to `pressure`: a specimen consolidated at the final
-    friction from a dense packing. Without `unload` the radii grow to `switch_pressure` only (the
-    variant grown-to-switch); switch_pressure = pressure is the recipe of every file before the
-    unloading (grown-to-target, switch_fraction = 1). The time step and rate caps stay those of
-    `pressure`."""
+    Returns:
+        (scene, log): the engines' Scene at rest at the state, and a dict of the recipe's parameters,
+        the steps of each stage and the wall time.
+
+    Raises:
+        ValueError: a pressure <= 0, a negative friction, a switch pressure the recipe cannot use.
+        PreparationError: a stage did not converge within `max_steps`.
+
+    Example:
+        >>> from trueaniso import specimen
+        >>> scene, log = specimen.prepare_spheres(40, seed=1)
+        >>> s = specimen.state(scene)
+        >>> print("%d spheres, p = %.0f kPa" % (s["n"], s["p"] / 1e3))
+        40 spheres, p = 100 kPa
+    """
     if pressure <= 0:
         raise ValueError("pressure must be > 0")
     if switch_pressure is None:
@@ -276,17 +313,45 @@ def _require_force_evaluation(sig, coordination):
 
 
 def d50_cu(scene):
-    """(D50 in m, Cu) of the scene's particles by mass, each by the diameter of its equal-volume
-    sphere (a clump's union volume): the numbers the paper gives for its assemblies (section 2.1)."""
+    """D50 and Cu of the scene's particles by mass, as the paper gives them for its assemblies (section 2.1).
+
+    Each particle counts by the diameter of its equal-volume sphere (a clump's by its union volume).
+
+    Returns:
+        (D50 in m, Cu).
+
+    Example:
+        >>> from trueaniso import specimen, specimen_file
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> d50, cu = specimen.d50_cu(scene)
+        >>> print("D50 = %.2f mm, Cu = %.1f" % (d50 * 1e3, cu))
+        D50 = 0.19 mm, Cu = 1.3
+    """
     d = np.cbrt(6.0 * np.asarray(scene.volumes, dtype=float) / np.pi)
     return _psd.mass_d50_cu(d)
 
 
 def state(scene):
-    """The numbers a researcher checks on a specimen: the whole stress (normal and shear
-    components, principal values largest first, the largest shear stress tau_max and the
-    deviatoric q of the principal values), the fabric counts and the cell (hSize, columns = cell
-    vectors), and D50 and Cu (d50_cu)."""
+    """The numbers a researcher checks on a specimen.
+
+    Returns:
+        dict: ``n``, ``void_ratio``, ``Zm``, ``Z``, ``Nc``, ``Np0``, ``Np1`` (the fabric counts);
+        ``sigma_x``, ``sigma_y``, ``sigma_z``, ``sigma_yz``, ``sigma_xz``, ``sigma_xy`` and ``p`` (Pa,
+        compression positive); ``sigma_1`` >= ``sigma_2`` >= ``sigma_3``, the largest shear stress
+        ``tau_max`` and the deviatoric ``q`` of the principal values; ``unbalanced``, ``friction``,
+        ``cell`` (hSize, columns are the cell vectors), ``d50`` and ``cu`` (`d50_cu`).
+
+    Raises:
+        ValueError: a scene whose contacts carry forces but were never evaluated at these positions
+            (a scene just imported from YADE: call `dem.refresh` first).
+
+    Example:
+        >>> from trueaniso import specimen, specimen_file
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> s = specimen.state(scene)
+        >>> print("e = %.3f, Zm = %.2f, p = %.1f kPa" % (s["void_ratio"], s["Zm"], s["p"] / 1e3))
+        e = 0.581, Zm = 5.84, p = 100.0 kPa
+    """
     from .triaxial import stress_record
     sig = engines.stress(scene)
     z = engines.coordination(scene)

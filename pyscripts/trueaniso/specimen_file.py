@@ -57,8 +57,11 @@ _ARRAYS_V2 = tuple({"cell": "cell_size", "cell_ref": "cell_ref_size", "velocity_
                    for k in _ARRAYS_V3)
 
 
+__all__ = ["load", "save", "read", "SpecimenFileError"]
+
+
 class SpecimenFileError(ValueError):
-    pass
+    """A specimen file that cannot be read or does not pass its checks; the message names why."""
 
 
 def _canonical_meta(meta):
@@ -110,7 +113,31 @@ def scene_arrays(scene):
 
 
 def save(path, scene, seed=None, parameters=None, summary=None):
-    """Write a specimen atomically (an existing file is replaced only by a complete new one)."""
+    """Write a scene as a specimen file, atomically: an existing file is replaced only by a complete new one.
+
+    Args:
+        path: the .npz to write.
+        scene: the engines' Scene, at rest at its state.
+        seed: the seed it was made with (recorded; None: not known).
+        parameters: how it was made (recorded as given, e.g. the log of `specimen.prepare_spheres`).
+        summary: what it is (recorded as given, e.g. `specimen.state`).
+
+    Returns:
+        dict: the metadata written, its ``sha256`` the checksum of the whole content.
+
+    Raises:
+        SpecimenFileError: a scene that could not be simulated again once read (its arrays or
+            metadata fail the checks `load` makes); nothing is written.
+
+    Example:
+        >>> import os, tempfile
+        >>> from trueaniso import specimen_file
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> path = os.path.join(tempfile.mkdtemp(), "copy.npz")
+        >>> written = specimen_file.save(path, scene, seed=meta["seed"])
+        >>> specimen_file.load(path)[0].num_bodies
+        150
+    """
     arrays = scene_arrays(scene)
     problem = contents_problem(arrays)
     if problem:
@@ -135,7 +162,21 @@ def save(path, scene, seed=None, parameters=None, summary=None):
 
 
 def read(path):
-    """(arrays, meta) after every check; raises SpecimenFileError."""
+    """The arrays and metadata of a specimen file, after every check (module doc), without a scene.
+
+    Returns:
+        (arrays, meta): dict of numpy arrays by name, and the metadata dict.
+
+    Raises:
+        SpecimenFileError: a missing, unreadable or corrupt file, or one that fails a check, with one
+            line naming the field.
+
+    Example:
+        >>> from trueaniso import specimen_file
+        >>> arrays, meta = specimen_file.read("tests/data/spheres-150-s4.npz")
+        >>> arrays["positions"].shape, meta["format_version"]
+        ((150, 3), 4)
+    """
     if os.path.isdir(path):
         raise SpecimenFileError("%s is a directory, not a specimen file (.npz)" % path)
     if not os.path.isfile(path):
@@ -390,7 +431,21 @@ def cell_problem(a):
 
 
 def load(path):
-    """A Scene with the saved state (contact history included) and the metadata."""
+    """A specimen file as a Scene with its saved state, contact history included, after every check.
+
+    Returns:
+        (scene, meta): the engines' Scene and the file's metadata (its material, seed, how it was
+        made, ``sha256``).
+
+    Raises:
+        SpecimenFileError: as `read`, and a contact whose members do not touch.
+
+    Example:
+        >>> from trueaniso import specimen_file
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> scene.num_bodies, meta["seed"], meta["material"]["friction"]
+        (150, 4, 0.5)
+    """
     a, meta = read(path)
     nb = a["positions"].shape[0]
     mb = a["member_begin"]

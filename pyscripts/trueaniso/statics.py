@@ -13,23 +13,39 @@ import os
 from . import engines as _e
 
 VOIGT = ("xx", "yy", "zz", "yz", "xz", "xy")
+__all__ = ["static_stiffness", "rotation_factor", "state_record"]
 
 
 def static_stiffness(scene, rotations=True, max_unbalanced=1e-2, max_residual=1e-8, **solver):
-    """The relaxed static stiffness at the scene's state.
+    """The exact static stiffness of the contact network at the scene's state (module doc).
 
-    Returns a dict: C (6x6 stiffness, Pa), S (its inverse), E (E_x, E_y, E_z of Eq. 40, the
-    probe's moduli), nu (3x3, nu[i, j] = nu_ij, i loading, j lateral, NaN on the diagonal), G
-    (G_yz, G_xz, G_xy of Eq. 39), affine (kinematic stiffness, no relaxation) with its parts
-    affine_normal + affine_shear (= Eq. 32) and affine_geometric (initial-force terms), stress,
-    residual (max ||K u - f|| / ||f|| over the six strains and the equations solved),
-    pinned_reaction (the same over pinned DOFs: 0 for exact zero modes), rattlers (body ids),
-    pinned (list of dicts: body, translation, rotation, reason, ratio), time (s, by phase) and
-    solver counts (dofs, contacts, factor_nonzeros, factor_flops, factorizations, iterations,
-    gmres_iterations).
+    Args:
+        scene: the engines' Scene at rest at its state, its forces evaluated there.
+        rotations: True relaxes the particles' rotations too; False blocks them.
+        max_unbalanced: refuse a state out of balance beyond this unbalanced force.
+        max_residual: refuse a solve whose relative residual exceeds this.
+        **solver: settings of the engine's sparse solver (engines.static_stiffness).
 
-    Raises ValueError for a state out of balance beyond `max_unbalanced` (the engine's check) and
-    RuntimeError when the solver's residual exceeds `max_residual`.
+    Returns:
+        dict: ``C`` (6x6 stiffness, Pa) and ``S`` (its inverse); ``E`` (E_x, E_y, E_z of Eq. 40,
+        the probe's moduli), ``nu`` (3x3, nu[i, j] = nu_ij, i loading, j lateral, NaN on the
+        diagonal), ``G`` (G_yz, G_xz, G_xy of Eq. 39); ``affine`` (the kinematic stiffness, no
+        relaxation) with its parts ``affine_normal`` + ``affine_shear`` (Eq. 32) and
+        ``affine_geometric`` (initial-force terms); ``stress``; ``residual`` (max of
+        norm(K u - f) / norm(f) over the six strains) and ``pinned_reaction``; ``rattlers`` (body
+        ids) and ``pinned`` (the bodies whose degrees of freedom were pinned, and why); ``time``
+        (s, by phase) and the solver's counts.
+
+    Raises:
+        ValueError: a state out of balance beyond `max_unbalanced`.
+        RuntimeError: a residual beyond `max_residual`.
+
+    Example:
+        >>> from trueaniso import specimen_file, statics
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> r = statics.static_stiffness(scene)
+        >>> print("E_z = %.0f MPa, residual below 1e-8: %s" % (r["E"][2] / 1e6, r["residual"] < 1e-8))
+        E_z = 278 MPa, residual below 1e-8: True
     """
     if not 0 < max_unbalanced:
         raise ValueError("max_unbalanced must be > 0")
@@ -43,9 +59,26 @@ def static_stiffness(scene, rotations=True, max_unbalanced=1e-2, max_residual=1e
 def rotation_factor(scene, free=None, blocked=None, **kw):
     """zeta of Eq. (37) derived from static solves (docs/statics.md, "Rotation factor").
 
-    `free` and `blocked` are static_stiffness results with rotations free and blocked; they are
-    computed when not given. Returns dict(zeta (per axis), zeta_h, zeta_v, zeta_rotation,
-    zeta_rotation_h, zeta_rotation_v, E_free, E_blocked, E_kinematic (zeta = 1)).
+    zeta is the value for which the kinematic prediction of Eq. (37) gives the modulus of the static
+    solve with rotations free, between zeta = 1 (rotations blocked, the kinematic stiffness) and 0.
+
+    Args:
+        scene: the engines' Scene at its state.
+        free: a `static_stiffness` result with rotations free (None: solved here).
+        blocked: the same with rotations blocked (None: solved here).
+        **kw: the arguments of `static_stiffness`.
+
+    Returns:
+        dict: ``zeta`` (per axis), ``zeta_h`` (of (E_x + E_y)/2), ``zeta_v`` (of E_z),
+        ``zeta_rotation``, ``zeta_rotation_h``, ``zeta_rotation_v``, ``E_free``, ``E_blocked`` and
+        ``E_kinematic`` (zeta = 1). A zeta no value in ``engines.ZETA_RANGE`` reproduces is NaN.
+
+    Example:
+        >>> from trueaniso import specimen_file, statics
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> z = statics.rotation_factor(scene)
+        >>> print("zeta_h = %.2f, zeta_v = %.2f" % (z["zeta_h"], z["zeta_v"]))
+        zeta_h = 0.33, zeta_v = 0.25
     """
     free = free if free is not None else static_stiffness(scene, rotations=True, **kw)
     blocked = blocked if blocked is not None else static_stiffness(scene, rotations=False, **kw)
@@ -67,9 +100,20 @@ def summary(result):
 
 
 def state_record(scene):
-    """What a study keeps of a state's static solve (Appendix B / Table B1): E with rotations free
-    and blocked, the kinematic (zeta = 1) prediction, nu, the magnitude zeta, the state's normal
-    stresses, residual, rattlers and time; plain lists and numbers (JSON)."""
+    """What a study keeps of a state's static solve (Appendix B, Table B1), as plain numbers (JSON).
+
+    Returns:
+        dict: ``E_free`` and ``E_blocked`` (rotations free and blocked), ``E_kinematic`` (zeta = 1),
+        ``nu_free``, ``zeta_h``, ``zeta_v`` (`rotation_factor`), ``sigma`` (the state's normal
+        stresses), ``residual``, ``rattlers`` (their count) and ``time`` (s).
+
+    Example:
+        >>> from trueaniso import specimen_file, statics
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> rec = statics.state_record(scene)
+        >>> print("E_blocked / E_kinematic = %.2f" % (rec["E_blocked"][2] / rec["E_kinematic"][2]))
+        E_blocked / E_kinematic = 0.97
+    """
     free = static_stiffness(scene, rotations=True)
     blocked = static_stiffness(scene, rotations=False)
     zeta = rotation_factor(scene, free=free, blocked=blocked)

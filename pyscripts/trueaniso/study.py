@@ -1,6 +1,7 @@
 """Runs true-triaxial states and their probes on a specimen, with results written as they come.
 
-Layout of a results directory (one study: trueaniso/study_dir.py, docs/runs.md):
+Layout of a results directory (one study: trueaniso/study_dir.py, docs/runs.md)::
+
   metadata.json    the study's fingerprint (the loading path included), its states (id -> b,
                    sigma_z), the runs that wrote it
   probes.csv       one row per state and probe direction, appended as each probe ends
@@ -33,6 +34,8 @@ from .triaxial import AXES
 # the specimen's checksum (metadata.json's fingerprint.specimen): a row of another study's
 # specimen put into the table is refused by every reader (study_checks.specimen_problem). A table
 # whose header lacks it keeps its columns: rows appended to it are written without it.
+__all__ = ["run_states", "table_states", "parse_ids", "parse_states", "state_id", "read_rows"]
+
 COLUMNS = ["path", "state", "b", "sigma_z_goal", "sigma_x", "sigma_y", "sigma_z", "sigma_yz", "sigma_xz",
            "sigma_xy", "sigma_1", "sigma_2", "sigma_3", "tau_max", "q", "probe", "sign",
            "d_sigma_x", "d_sigma_y", "d_sigma_z", "d_sigma_yz", "d_sigma_xz", "d_sigma_xy", "d_eps_x", "d_eps_y",
@@ -44,7 +47,20 @@ CSV_NAME = study_dir.CSV_NAME
 
 
 def read_rows(path):
-    """The complete rows of a probe table (a torn last row is left out; see results_csv)."""
+    """The complete rows of a probe table, probes.csv; a torn last row is left out (`results_csv`).
+
+    Returns:
+        list: one dict of text per row, by column name.
+
+    Example:
+        >>> import tempfile
+        >>> from trueaniso import study
+        >>> out = tempfile.mkdtemp()
+        >>> _ = study.run_states("tests/data/spheres-150-s4.npz", study.table_states([1]), out, probes="z",
+        ...                      log=lambda line: None)
+        >>> [(r["state"], r["probe"]) for r in study.read_rows(out + "/probes.csv")]
+        [('1', 'z')]
+    """
     return results_csv.read(path).rows
 
 
@@ -303,22 +319,55 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None,
                wait=False, force_new=False, progress_every=EVERY, recipe=None, path="true-triaxial", executor=None,
                checkpoints=()):
-    """states: [(id, b, sigma_z)]; ids name the rows and checkpoints (Table C1 numbering, or
-    ``state_id``; ``sv<kPa>`` on the cross-anisotropic path). path: one of triaxial.PATHS (the
-    mean stress of each state, triaxial.path_mean_stress). probes: axes 0-5 or x, y, z, yz, xz,
-    xy. Returns the complete rows of probes.csv after the run.
+    """Run true-triaxial states and their probes on a specimen, writing each result as it comes (module doc).
 
-    checkpoints: ids of states whose checkpoint must exist when the run ends even if their probes
-    are all done (run_study's static solve of state 21 reads it): a missing one is reached again
-    along its path, which reproduces its bytes (docs/runs.md, "What a resume reproduces exactly").
+    The results directory `out` is one study: a rerun continues it where it stopped (after a kill
+    too) and may add states; a rerun that asks for other settings is refused (study_dir). Each state
+    is reached from the checkpoint of the state before it on its loading path, each probe from its
+    state's checkpoint, so a resumed run computes what an uninterrupted one does, bit for bit.
 
-    executor: a concurrent.futures executor (e.g. mpi4py.futures.MPIPoolExecutor) whose workers
-    each walk whole loading paths (the unit of work: a path's states follow one another). Workers
-    write their states' checkpoints (atomic files, one path each, never shared) and hand their
-    rows back; this process alone, holding the lock, appends them to probes.csv as paths end. A
-    worker computes exactly what this process would (every piece of work starts from a file, at
-    the study's thread count), so the values equal a serial run's; rows arrive in path-completion
-    order."""
+    Args:
+        specimen_path: the specimen file (.npz) the study starts from.
+        states: (id, b, sigma_z) per state (`table_states`, `parse_states`,
+            `triaxial.cross_anisotropic_states`); ids name the rows and the checkpoints.
+        out: the results directory (made if missing).
+        probes: the probe axes, 0-5 or "x", "y", "z", "yz", "xz", "xy"; z, x, y by default.
+        gamma: the strain invariant each probe stops at (Eq. 12).
+        restrain_rotations: block particle rotations during the probes.
+        skip_detection: keep the contact list during a probe.
+        damping: YADE's local non-viscous damping of the loading and the probes.
+        log: called with each line the run says (print by default).
+        state_options: other arguments of `triaxial.reach_state` (e.g. ``{"path_rate": 4.0}``).
+        probe_options: other arguments of `triaxial.probe`.
+        wait: wait for another run that holds the study's lock instead of refusing.
+        force_new: move an existing study in `out` into out/superseded/ and start a new one.
+        progress_every: seconds between progress lines.
+        recipe: a description of the specimen's recipe, recorded in the study's fingerprint.
+        path: the loading path, one of `triaxial.PATHS` (it sets each state's mean stress).
+        executor: a concurrent.futures executor (e.g. mpi4py.futures.MPIPoolExecutor) whose workers
+            each walk whole loading paths and hand their rows back; the values equal a serial run's,
+            the rows come in the order the paths end.
+        checkpoints: ids of states whose checkpoint must exist when the run ends even if their probes
+            are all done; a missing one is reached again along its path, which reproduces its bytes.
+
+    Returns:
+        list: the complete rows of probes.csv after the run, one dict of text per state and probe
+        (columns: `COLUMNS`, reference/formats/probes-csv).
+
+    Raises:
+        trueaniso.refusal.InputError: a specimen, state, option or study directory that does not fit,
+            before any work.
+        trueaniso.study_dir.StudyMismatch: a rerun that asks for other settings than the study's.
+
+    Example:
+        >>> import tempfile
+        >>> from trueaniso import study
+        >>> out = tempfile.mkdtemp()
+        >>> rows = study.run_states("tests/data/spheres-150-s4.npz", study.table_states([1]), out,
+        ...                         log=lambda line: None)
+        >>> [(r["state"], r["probe"], "%.0f MPa" % (float(r["E"]) / 1e6)) for r in rows]
+        [('1', 'z', '278 MPa'), ('1', 'x', '278 MPa'), ('1', 'y', '288 MPa')]
+    """
     ids, axes, spec_meta, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection,
                                       damping, state_options, probe_options, recipe, path)
     record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),
@@ -650,10 +699,17 @@ class _Run:
 
 
 def state_id(b, sigma_z):
-    """The id of a state given by its definition: its Table C1 number when it is one of the
-    table's states, else 'b<b>_sz<sigma_z in Pa>' (exact: the shortest text that reads back as
-    the same float). Ids are functions of the state, never positions in a list, so the same id
-    means the same state in every run."""
+    """The id of a state given by its definition.
+
+    Its Table C1 number when it is one of the table's states, else 'b<b>_sz<sigma_z in Pa>' (exact:
+    the shortest text that reads back as the same float). Ids are functions of the state, never
+    positions in a list, so the same id means the same state in every run.
+
+    Example:
+        >>> from trueaniso import study
+        >>> study.state_id(0.5, 140e3), study.state_id(0.3, 120e3)
+        (21, 'b0.3_sz120000')
+    """
     for i, tb, tsz in triaxial.table_c1_states():
         if tb == b and tsz == sigma_z:
             return i
@@ -665,8 +721,19 @@ def state_id(b, sigma_z):
 
 
 def parse_states(text):
-    """'b:sigma_z,b:sigma_z' (sigma_z in Pa) -> [(id, b, sigma_z)] with ids from ``state_id``. An
-    empty item ('0.5:140e3,') is refused, as --ids refuses one: a state left out, perhaps the one meant."""
+    """States given by their definition, 'b:sigma_z,b:sigma_z' (sigma_z in Pa) -> [(id, b, sigma_z)].
+
+    Ids come from `state_id`. An empty item ('0.5:140e3,') is refused, as `parse_ids` refuses one: a
+    state left out, perhaps the one meant.
+
+    Raises:
+        ValueError: with the reason.
+
+    Example:
+        >>> from trueaniso import study
+        >>> study.parse_states("0.5:140e3,0.3:120e3")
+        [(21, 0.5, 140000.0), ('b0.3_sz120000', 0.3, 120000.0)]
+    """
     items = text.split(",")
     if any(t.strip() for t in items) and not all(t.strip() for t in items):
         raise ValueError("%r has an empty item: give b:sigma_z pairs separated by commas, e.g. 0.5:140e3,0:60e3" % text)
@@ -687,8 +754,19 @@ def parse_states(text):
 
 
 def parse_ids(text):
-    """'1,5,21' -> [1, 5, 21]; an empty list or item, a non-number or a state given twice is refused
-    (never "all states", never a silent de-duplication). The caller names the option."""
+    """Table C1 numbers from the text of --ids, '1,5,21' -> [1, 5, 21].
+
+    An empty list or item, a non-number or a state given twice is refused: never "all states", never
+    a silent de-duplication.
+
+    Raises:
+        ValueError: with the reason; the caller names the option.
+
+    Example:
+        >>> from trueaniso import study
+        >>> study.parse_ids("1,5,21")
+        [1, 5, 21]
+    """
     items = [t.strip() for t in text.split(",")]
     if not any(items):
         raise ValueError("no state named (give Table C1 numbers 1-39, e.g. 1,5,21)")
@@ -705,6 +783,22 @@ def parse_ids(text):
 
 
 def table_states(ids=None):
+    """States of the paper's Table C1 as `run_states` takes them.
+
+    Args:
+        ids: Table C1 numbers (1-39); None: all 39.
+
+    Returns:
+        list: (id, b, sigma_z in Pa) per state, by id.
+
+    Raises:
+        ValueError: an empty list or an id not in the table.
+
+    Example:
+        >>> from trueaniso import study
+        >>> study.table_states([1, 21])
+        [(1, 0.0, 100000.0), (21, 0.5, 140000.0)]
+    """
     states = triaxial.table_c1_states()
     if ids is not None:
         want = set(ids)

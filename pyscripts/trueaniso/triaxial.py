@@ -15,6 +15,9 @@ import numpy as np
 from . import dem, engines
 from .refusal import InputError
 
+__all__ = ["table_c1_states", "b_of", "path_stresses", "reach_state", "stress_as_held", "probe", "probe_state",
+           "cross_anisotropic_states", "StateNotReached"]
+
 # Table C1: (ID, sigma_x, sigma_y, sigma_z, q) in kPa, as printed (rounded to 0.1 kPa).
 TABLE_C1 = [
     (1, 100, 100, 100, 0), (2, 95, 95, 110, 15), (3, 90, 90, 120, 30), (4, 85, 85, 130, 45),
@@ -33,12 +36,29 @@ TABLE_C1 = [
 
 
 def b_of(sx, sy, sz):
-    """Eq. (8); the isotropic state has no b (0 is used: every b passes through it)."""
+    """b of Eq. (8) from the three principal stresses, (sigma_x - sigma_y) / (sigma_z - sigma_y).
+
+    The isotropic state has no b: 0 is returned (every path of Table C1 passes through it).
+
+    Example:
+        >>> from trueaniso import triaxial
+        >>> triaxial.b_of(100e3, 60e3, 140e3)
+        0.5
+    """
     return 0.0 if abs(sz - sy) < 1e-12 else (sx - sy) / (sz - sy)
 
 
 def table_c1_states():
-    """[(id, b, sigma_z in Pa)] with b rounded to the paper's five values."""
+    """The 39 states of the paper's Table C1, b rounded to the paper's five values (0, 0.25, 0.5, 0.75, 1).
+
+    Returns:
+        list: (id, b, sigma_z in Pa) per state, by id.
+
+    Example:
+        >>> from trueaniso import triaxial
+        >>> triaxial.table_c1_states()[20]
+        (21, 0.5, 140000.0)
+    """
     out = []
     for i, sx, sy, sz, _ in TABLE_C1:
         b = min((0.0, 0.25, 0.5, 0.75, 1.0), key=lambda v: abs(v - b_of(sx, sy, sz)))
@@ -61,7 +81,7 @@ def paths(states):
 
 
 class StateNotReached(RuntimeError):
-    pass
+    """The servo or the probe could not bring the specimen to its state; the message says why."""
 
 
 def validate_state(b, sigma_z, p=100e3):
@@ -121,26 +141,65 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
                 stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
                 control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0,
                 gain=None, feed_forward=False, time_step="smallest-inertia"):
-    """Drive the scene to the state with mu = `friction` (the paper's 0.5 while loading) and hold it.
+    """Drive the scene to a true-triaxial state at constant mean stress and hold it there (Eqs. 8-9).
 
-    Holds until every principal stress is within `tolerance` Pa of Eq. (9), every shear stress
-    within `tolerance` of `shear` (sigma_yz, sigma_xz, sigma_xy; zero: the cell's axes are the
-    principal axes) and the unbalanced force is below `unbalanced`. control_shear=False holds the
-    cell's shear strains instead (the orthorhombic servo, whose shear stresses nothing holds; a
-    non-zero `shear` is then refused). rolling_stiffness, rolling_friction: the optional rolling
-    resistance of the contact law (beta, eta_r; docs/rolling.md), set on the scene for the loading
-    and kept in its checkpoint, so its probes run with it too; 0, 0 (the paper) turns it off.
-    gain: the servo's (the fraction of the stress error closed a step; None: the engine's 0.01, every
-    study's; bench_state_split.py compares others). feed_forward: feed the path's rate forward through
-    the cell's measured tangent stiffness, so that the stresses keep pace with the goal instead of
-    lagging it (docs/triaxial.md; off, every study's default; bench_state_speed.py and
-    bench_state_split.py compare the two). time_step: the time step rule of the loading
-    (dem.TIME_STEP_RULES; docs/time-step.md). The path rate, the gain and the step counts are per
-    step of the reference rule (smallest-inertia, every committed study's), so a rule with a longer
-    step reaches the state at the same rate in time, in fewer steps.
-    Raises StateNotReached if the specimen cannot get there: it
-    stops following the path for `stall_steps`, or is held `hold_steps` without settling, or
-    strains beyond `max_strain`, or runs `max_steps`.
+    The servo moves its goal along the straight stress path from where the scene is to the state,
+    as fast as the specimen follows, and holds until every principal stress is within `tolerance` of
+    Eq. (9), every shear stress within `tolerance` of `shear` and the unbalanced force is below
+    `unbalanced`. The scene is left at rest at the state, its forces evaluated there.
+
+    Args:
+        scene: the engines' Scene (a specimen, or a state reached before).
+        b: intermediate principal stress coefficient of Eq. (8), in [0, 1].
+        sigma_z: the vertical stress of the state, Pa.
+        p: the mean stress held along the path, Pa (the paper's 100 kPa).
+        damping: YADE's local non-viscous damping.
+        inertial_number: caps the cell's strain rate (quasi-static below 1e-3).
+        tolerance: stress tolerance of the state, Pa.
+        unbalanced: unbalanced force of the state.
+        path_rate: fastest motion of the goal along the path, Pa per step of the reference time step
+            rule (docs/state-speed.md).
+        max_strain: the specimen fails beyond this cell strain.
+        max_steps: the servo gives up after this many steps.
+        stall_steps: ... or after this many steps in a row without following the path.
+        hold_steps: ... or after this many steps held at the state without settling.
+        friction: friction coefficient while loading (the paper's 0.5).
+        chunk: steps between calls of `progress` (changes no result).
+        progress: called with the engines' TrueTriaxialServo after every chunk, or None.
+        control_shear: True holds the shear stresses (the cell's axes are the principal axes); False
+            holds the cell's shear strains instead (the orthorhombic servo; a non-zero `shear` is
+            then refused).
+        shear: the shear stresses held (sigma_yz, sigma_xz, sigma_xy), Pa.
+        rolling_stiffness: beta of the optional rolling resistance (docs/rolling.md); 0 with
+            `rolling_friction` 0 (the paper) turns it off. Set on the scene, so its probes run with it.
+        rolling_friction: eta_r of the rolling resistance.
+        gain: fraction of the stress error the servo closes a step (None: the engine's 0.01).
+        feed_forward: feed the path's rate forward through the cell's measured tangent stiffness, so
+            that the stresses keep pace with the goal (docs/triaxial.md).
+        time_step: the time step rule (`dem.TIME_STEP_RULES`, docs/time-step.md). Path rate, gain and
+            step counts are per step of the reference rule, so a rule with a longer step reaches the
+            state at the same rate in time, in fewer steps.
+
+    Returns:
+        dict: ``status`` ("reached"), ``steps``, ``wall_time``, ``stress`` (the six Voigt stresses
+        measured last, Pa), ``goal`` (Eq. 9's), ``unbalanced``, ``overshoot``, ``friction`` and the
+        stress record (principal values, the largest shear stress).
+
+    Raises:
+        ValueError: b outside [0, 1] or a principal stress <= 0, or bad rolling parameters, before
+            any step.
+        StateNotReached: the specimen cannot get there: it stops following the path for
+            `stall_steps`, is held `hold_steps` without settling, strains beyond `max_strain`, or
+            runs `max_steps`.
+
+    Example:
+        State 2 of Table C1 (b = 0, sigma_z = 110 kPa) from the 150-sphere specimen:
+
+        >>> from trueaniso import specimen_file, triaxial
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> info = triaxial.reach_state(scene, b=0.0, sigma_z=110e3)
+        >>> info["status"], ["%.1f kPa" % (s / 1e3) for s in info["goal"][:3]]
+        ('reached', ['95.0 kPa', '95.0 kPa', '110.0 kPa'])
     """
     validate_state(b, sigma_z, p)
     set_rolling(scene, rolling_stiffness, rolling_friction)
@@ -185,11 +244,19 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
 
 
 def stress_as_held(scene):
-    """The scene's stress as the six Voigt components a probe holds (sigma_xx, sigma_yy, sigma_zz,
-    sigma_yz, sigma_xz, sigma_xy; Pa, compression positive, the symmetric part): to probe a state
-    as it is, shear stresses included. Holding zero shear instead at a state that carries some
-    first moves it to another state (54 Pa of shear changed E_z of a clump packing by 5.4e-4,
-    docs/clumps.md)."""
+    """The scene's stress as the six Voigt components a probe holds, to probe a state as it is.
+
+    sigma_xx, sigma_yy, sigma_zz, sigma_yz, sigma_xz, sigma_xy in Pa, compression positive, the
+    symmetric part. Holding zero shear instead at a state that carries some first moves it to
+    another state (54 Pa of shear changed E_z of a clump packing by 5.4e-4, docs/clumps.md).
+
+    Example:
+        >>> from trueaniso import specimen_file, triaxial
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> hold = triaxial.stress_as_held(scene)
+        >>> print("%.1f %.1f %.1f kPa, shear below 100 Pa: %s" % (*(hold[:3] / 1e3), max(abs(hold[3:])) < 100))
+        100.0 100.0 100.0 kPa, shear below 100 Pa: True
+    """
     sig = np.asarray(engines.stress(scene))
     sym = 0.5 * (sig + sig.T)
     return np.array([sym[0, 0], sym[1, 1], sym[2, 2], sym[1, 2], sym[0, 2], sym[0, 1]])
@@ -264,18 +331,52 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
           skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
           settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True,
           hold_other_strains=False, progress=None):
-    """One directional probe at a held state; the scene is restored afterwards.
+    """One directional stress probe at a held state (Eqs. 10-12); the scene is restored afterwards.
 
-    axis: x, y, z (a normal stress: E_i, nu_ij) or yz, xz, xy (a shear stress: G_ij).
-    hold: the state's stresses (Pa) held during the probe on the other components: three normal
-    stresses (the shear stresses then held at zero) or six Voigt components.
-    control_shear=False holds the cell's shear strains instead of the shear stresses (the
-    orthorhombic probe; normal axes only).
-    hold_other_strains=True holds the five other strains at zero instead of their stresses: the
-    modulus is then the stiffness C_kk (static solve's C), not 1/S_kk (docs/cell.md).
-    progress: called with the StressProbe after every chunk of steps (the chunk changes no result).
-    Returns a dict with the Voigt increments, E_i (Eq. 10) and nu_ij (Eq. 11) or G_ij, gamma
-    (Eq. 12, or the engineering shear strain of a shear probe), steps, time.
+    From the held state, sliding is suppressed (friction 1e23), the scene relaxes, and the stress on
+    `axis` rises until the strain invariant gamma reaches `gamma` while the other stresses are held.
+
+    Args:
+        scene: the engines' Scene at a held state (`reach_state`, or a specimen).
+        hold: the state's stresses held on the other components, Pa: three normal stresses (the shear
+            stresses then held at zero), or six Voigt components (`stress_as_held`).
+        axis: "x", "y", "z" (a normal stress: E_i, nu_ij) or "yz", "xz", "xy" (a shear stress: G_ij);
+            or 0-5.
+        sign: +1 loads, -1 unloads.
+        gamma: the strain invariant of Eq. (12) the probe stops at.
+        increment: a fixed stress increment instead (Pa; 0: by `gamma`).
+        restrain_rotations: block particle rotations during the probe.
+        skip_detection: keep the contact list of the start (nothing moves beyond about 1e-6 strain).
+        damping: YADE's local non-viscous damping.
+        gain: gain of the probe's servo.
+        relative_tolerance: stress tolerance of the held components, relative to the increment.
+        unbalanced: unbalanced force at which the relaxation ends.
+        settle_steps: steps in a row within tolerance that end a stage.
+        ramp_steps: steps of the ramp of the stress increment.
+        max_steps: the probe gives up after this many steps.
+        chunk: steps between calls of `progress` (changes no result).
+        control_shear: False holds the cell's shear strains instead of the shear stresses (the
+            orthorhombic probe; normal axes only).
+        hold_other_strains: True holds the five other strains at zero instead of their stresses: the
+            modulus is then the stiffness C_kk (the static solve's C), not 1/S_kk (docs/cell.md).
+        progress: called with the engines' StressProbe after every chunk, or None.
+
+    Returns:
+        dict: ``modulus`` and ``E`` (Eq. 10) with ``nu_ij`` (Eq. 11) of a normal probe, or ``G`` of a
+        shear probe, in Pa; ``d_stress`` and ``d_strain`` (Voigt increments), ``gamma``, ``steps``,
+        ``wall_time`` and how it ran (``rotations``, ``detection``, ``damping``).
+
+    Raises:
+        ValueError: an unknown axis, a gamma <= 0, a scene without bodies, or held stresses that are
+            not the scene's, before any step.
+        StateNotReached: the probe did not converge within `max_steps`.
+
+    Example:
+        >>> from trueaniso import specimen_file, triaxial
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> r = triaxial.probe(scene, [100e3, 100e3, 100e3], "z")
+        >>> print("E_z = %.0f MPa, nu_zx = %.3f" % (r["E"] / 1e6, r["nu_zx"]))
+        E_z = 278 MPa, nu_zx = 0.150
     """
     axis = validate_probe(axis, gamma)
     if scene.num_bodies == 0:
@@ -328,7 +429,23 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
 
 
 def probe_state(scene, hold, axes=(2, 0, 1), **kw):
-    """Probes from the same state (the probe restores it after each): z, x, y by default."""
+    """Probes of one state on several axes, each from the same state (`probe` restores it after each).
+
+    Args:
+        scene: the engines' Scene at a held state.
+        hold: the state's stresses, as `probe` takes them.
+        axes: the axes, z, x, y by default (as the study probes).
+        **kw: the other arguments of `probe`.
+
+    Returns:
+        list: one `probe` result per axis, in their order.
+
+    Example:
+        >>> from trueaniso import specimen_file, triaxial
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> [r["axis"] for r in triaxial.probe_state(scene, [100e3] * 3, axes="xyz")]
+        ['x', 'y', 'z']
+    """
     return [probe(scene, hold, a, **kw) for a in axes]
 
 
@@ -368,13 +485,39 @@ def validate_path_state(path, b, sigma_z):
 
 
 def path_stresses(path, b, sigma_z):
-    """sigma_x, sigma_y, sigma_z (Pa) of the state on its path."""
+    """sigma_x, sigma_y, sigma_z (Pa) of the state (b, sigma_z) on a loading path (Eq. 9).
+
+    Args:
+        path: one of `PATHS`: "true-triaxial" (Table C1: p = 100 kPa) or "cross-anisotropic"
+            (Fig. 16: sigma_x = sigma_y = 100 kPa).
+        b: b of Eq. (8) (0 on the cross-anisotropic path).
+        sigma_z: the vertical stress, Pa.
+
+    Example:
+        >>> from trueaniso import triaxial
+        >>> [round(s) for s in triaxial.path_stresses("true-triaxial", 0.5, 140e3)]
+        [100000, 60000, 140000]
+    """
     return engines.true_triaxial_stresses(b, sigma_z, path_mean_stress(path, b, sigma_z))
 
 
 def cross_anisotropic_states(sigma_v=CROSS_ANISOTROPIC_SIGMA_V):
-    """[(id, 0, sigma_v)]: ids 'sv<sigma_v in kPa>' (e.g. sv60, sv112.5), exact for any Pa value
-    that is a multiple of 0.1 Pa."""
+    """The states of a cross-anisotropic study (Fig. 16): sigma_x = sigma_y = 100 kPa, sigma_z = sigma_v.
+
+    Args:
+        sigma_v: the vertical stresses, Pa (by default from 50 to 250 kPa).
+
+    Returns:
+        list: (id, 0, sigma_v) per state, ids 'sv<sigma_v in kPa>' (exact for any multiple of 0.1 Pa).
+
+    Raises:
+        ValueError: a stress off the path, or one given twice.
+
+    Example:
+        >>> from trueaniso import triaxial
+        >>> triaxial.cross_anisotropic_states([60e3, 112.5e3])
+        [('sv60', 0.0, 60000.0), ('sv112.5', 0.0, 112500.0)]
+    """
     out = []
     for sv in sigma_v:
         sv = float(sv)

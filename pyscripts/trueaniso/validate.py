@@ -25,6 +25,8 @@ import jsonschema
 
 from .refusal import InputError
 
+__all__ = ["check", "load_json", "problem", "FileInvalid"]
+
 SCHEMAS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "schemas")
 NAMES = ("specimen", "checkpoint", "prep_checkpoint", "study", "probes", "statics_record", "param_table", "fig16_states",
          "clump_anisotropy")
@@ -127,8 +129,21 @@ def _what(error):
 
 
 def problem(instance, name, required=True):
-    """(field, what) of the first way `instance` does not fit schema `name`, or None; with
-    required=False the fields it holds are checked and none is required."""
+    """The first way `instance` does not fit schema `name`, or None.
+
+    Args:
+        instance: the file's content, as json.load gives it.
+        name: one of `NAMES` (the schemas of reference/formats).
+        required: False checks the fields `instance` holds and requires none.
+
+    Returns:
+        (field, what) or None: the field as a dotted path into the file.
+
+    Example:
+        >>> from trueaniso import validate
+        >>> validate.problem({"E_kinematic": [4.0e8, 3.3e8, 4.5e8]}, "statics_record")
+        ('E_blocked', 'missing')
+    """
     errors = list(_validator(name, required).iter_errors(instance))
     if not errors:
         return None
@@ -147,8 +162,29 @@ def problem(instance, name, required=True):
 
 
 def check(instance, name, file, error=FileInvalid, required=True):
-    """`instance` itself when it fits schema `name`; else raises `error` with one line naming
-    the file and the field."""
+    """`instance` itself when it fits schema `name`; else `error` with one line naming the file and the field.
+
+    Args:
+        instance: the file's content, as json.load gives it.
+        name: one of `NAMES`.
+        file: the file's name, for the message.
+        error: the exception class raised (`FileInvalid`).
+        required: False checks the fields `instance` holds and requires none.
+
+    Raises:
+        FileInvalid: ``<file>: <field>: <what>``.
+
+    Example:
+        >>> import json
+        >>> from trueaniso import validate
+        >>> record = json.load(open("docs/data/spheres-53004-s1/statics_state-21.json"))
+        >>> validate.check(record, "statics_record", "statics_state-21.json") is record
+        True
+        >>> validate.check(dict(record, E_blocked=[3.9e8, -1.0, 4.3e8]), "statics_record", "edited.json")
+        Traceback (most recent call last):
+        ...
+        trueaniso.validate.FileInvalid: edited.json: E_blocked.1: must be a finite number > 0, not -1.0
+    """
     found = problem(instance, name, required)
     if found:
         raise error("%s: %s: %s" % (file, *found))
@@ -156,7 +192,17 @@ def check(instance, name, file, error=FileInvalid, required=True):
 
 
 def load_json(path, name, error=FileInvalid):
-    """The JSON file at `path`, checked against schema `name`; unreadable or unfit: `error`."""
+    """The JSON file at `path`, checked against schema `name`.
+
+    Raises:
+        FileInvalid: (or `error`) a file that cannot be read, is not JSON or does not fit, in one line.
+
+    Example:
+        >>> from trueaniso import validate
+        >>> meta = validate.load_json("docs/data/spheres-53004-s1/metadata.json", "study")
+        >>> sorted(meta["states"])[:3]
+        ['1', '10', '11']
+    """
     try:
         with open(path) as f:
             data = json.load(f)

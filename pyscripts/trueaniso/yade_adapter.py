@@ -1,10 +1,5 @@
 """Our servo and probe inside a YADE simulation (yade-double), with YADE's own dynamics and its
-Hertz-Mindlin law: a thin adapter called every step by a PyRunner.
-
-    from trueaniso import yade_adapter
-    servo = engines.TrueTriaxialServo(); servo.set_goal(0.5, 120e3)
-    yade_adapter.attach(servo, stiffness)        # a PyRunner before NewtonIntegrator
-    O.run(...) until yade_adapter.finished()
+Hertz-Mindlin law: a thin adapter called every step by a PyRunner (`attach`, `run_until_done`).
 
 The adapter measures what our controllers read (YADE's whole getStress tensor with our sign, the
 cell's deformation gradient since the adapter was attached, YADE's unbalanced force), calls the
@@ -17,6 +12,8 @@ import math
 
 import numpy as np
 
+__all__ = ["attach", "detach", "run_until_done", "set_friction"]
+
 _ACTIVE = {}
 
 
@@ -25,6 +22,8 @@ def _matrix(m):
 
 
 class CellAdapter:
+    """The PyRunner's callable of `attach`: measures YADE's cell, updates the controller, sets velGrad."""
+
     def __init__(self, controller, stiffness, O):
         self.controller = controller
         self.stiffness = np.asarray(stiffness, dtype=float)
@@ -63,7 +62,43 @@ DEFAULT_LABEL = "trueanisoController"
 
 
 def attach(controller, stiffness, O=None, label=DEFAULT_LABEL):
-    """Insert a PyRunner calling `controller` every step, just before YADE's NewtonIntegrator."""
+    """Drive YADE's cell with one of our controllers: a PyRunner calling it every step, before NewtonIntegrator.
+
+    Every step the adapter measures what the controller reads (YADE's stress with our sign, the
+    cell's deformation since it was attached, YADE's unbalanced force), calls its update() for the six
+    strain rates, and sets O.cell.velGrad. YADE's save files do not keep the controller: `detach`
+    before O.save, attach again after O.load.
+
+    Args:
+        controller: an engines.TrueTriaxialServo or engines.StressProbe, started (set_goal or begin).
+        stiffness: the six diagonal cell stiffnesses that scale its gain (engines.cell_stiffness of
+            the scene).
+        O: YADE's Omega (None: ``yade.O``).
+        label: the PyRunner's label; another controller needs another label.
+
+    Returns:
+        CellAdapter: the adapter (its ``calls`` count the steps it ran).
+
+    Raises:
+        ValueError: a YADE scene without a NewtonIntegrator.
+
+    Example:
+        Inside yade-double, state 2 of Table C1 reached by our servo on YADE's dynamics:
+
+        >>> import numpy as np
+        >>> from yade import O
+        >>> from trueaniso import engines, specimen_file, yade_adapter, yade_bridge
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> _ = yade_bridge.yade_scene_from(scene, O, damping=0.4)
+        >>> servo = engines.TrueTriaxialServo()
+        >>> servo.set_goal(0.0, 110e3, 100e3)
+        >>> adapter = yade_adapter.attach(servo, engines.cell_stiffness(scene))
+        >>> yade_adapter.run_until_done(servo, O)
+        True
+        >>> print(servo.status, "%.0f %.0f %.0f kPa" % tuple(np.array(servo.stress[:3]) / 1e3))
+        reached 95 95 110 kPa
+        >>> yade_adapter.detach(O)
+    """
     from yade import PyRunner
     if O is None:
         from yade import O
@@ -91,6 +126,22 @@ def attach(controller, stiffness, O=None, label=DEFAULT_LABEL):
 
 
 def detach(O=None, label=DEFAULT_LABEL):
+    """Remove the controller attached with `label` from YADE's engines.
+
+    Example:
+        Inside yade-double:
+
+        >>> from yade import O
+        >>> from trueaniso import engines, specimen_file, yade_adapter, yade_bridge
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> _ = yade_bridge.yade_scene_from(scene, O)
+        >>> servo = engines.TrueTriaxialServo()
+        >>> servo.set_goal(0.0, 110e3, 100e3)
+        >>> _ = yade_adapter.attach(servo, engines.cell_stiffness(scene))
+        >>> yade_adapter.detach(O)
+        >>> yade_adapter.DEFAULT_LABEL in [e.label for e in O.engines]
+        False
+    """
     if O is None:
         from yade import O
     O.engines = [e for e in O.engines if getattr(e, "label", "") != label]
@@ -98,7 +149,20 @@ def detach(O=None, label=DEFAULT_LABEL):
 
 
 def set_friction(O, mu):
-    """Friction of the material and of every existing contact (YADE keeps it per interaction)."""
+    """Friction coefficient `mu` on YADE's materials and on every existing contact (YADE keeps it per contact).
+
+    A probe suppresses sliding with mu = 1e23, as our StressProbe does.
+
+    Example:
+        Inside yade-double:
+
+        >>> from yade import O
+        >>> from trueaniso import specimen_file, yade_adapter, yade_bridge
+        >>> _ = yade_bridge.yade_scene_from(specimen_file.load("tests/data/spheres-150-s4.npz")[0], O)
+        >>> yade_adapter.set_friction(O, 1e23)
+        >>> min(I.phys.tangensOfFrictionAngle for I in O.interactions if I.isReal)
+        1e+23
+    """
     angle = math.atan(mu)
     for m in O.materials:
         m.frictionAngle = angle
@@ -108,6 +172,29 @@ def set_friction(O, mu):
 
 
 def run_until_done(controller, O, chunk=1000, max_steps=5_000_000):
+    """Run YADE in chunks of `chunk` steps until the attached controller is done or `max_steps` ran.
+
+    Returns:
+        bool: whether the controller is done.
+
+    Example:
+        Inside yade-double, a probe of E_z through the adapter (sliding suppressed):
+
+        >>> import numpy as np
+        >>> from yade import O, utils
+        >>> from trueaniso import engines, specimen_file, yade_adapter, yade_bridge
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> _ = yade_bridge.yade_scene_from(scene, O)
+        >>> yade_adapter.set_friction(O, 1e23)
+        >>> probe = engines.StressProbe()
+        >>> probe.axis, probe.max_strain_rate = 2, 10.0
+        >>> probe.begin(-np.diag(np.array(utils.getStress())))
+        >>> _ = yade_adapter.attach(probe, engines.cell_stiffness(scene))
+        >>> yade_adapter.run_until_done(probe, O)
+        True
+        >>> print("E_z = %.0f MPa" % (probe.young_modulus / 1e6))
+        E_z = 278 MPa
+    """
     steps = 0
     while not controller.done and steps < max_steps:
         O.run(chunk, True)

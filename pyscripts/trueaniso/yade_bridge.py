@@ -5,14 +5,15 @@ a sheared cell included), refHSize and the velocity gradient (velGrad, full 3x3)
 contacts' image shifts (YADE's cellDist is our shift: the image of id2 is pos2 + hSize cellDist).
 
 Conventions that differ and are converted here:
- - YADE's state.vel is the total velocity; ours is the fluctuation about the cell's affine field
-   (v_total = v_fluct + velGrad x). A velGrad set in YADE takes effect at its next step (see
-   write_to_yade); the bridge reads the scheduled one as our strain rate.
- - YADE's getStress() is tension positive; ours is compression positive.
- - Material: YADE's FrictMat has (young, poisson, frictionAngle); ours (G, nu, mu) with
-   G = E/(2(1+nu)), mu = tan(frictionAngle).
- - Contacts: YADE's normal points from id1 to id2 and phys.shearForce is the force on id2, as ours;
-   id2's image is pos2 + hSize cellDist, as our shift.
+
+- YADE's state.vel is the total velocity; ours is the fluctuation about the cell's affine field
+  (v_total = v_fluct + velGrad x). A velGrad set in YADE takes effect at its next step (see
+  write_to_yade); the bridge reads the scheduled one as our strain rate.
+- YADE's getStress() is tension positive; ours is compression positive.
+- Material: YADE's FrictMat has (young, poisson, frictionAngle); ours (G, nu, mu) with
+  G = E/(2(1+nu)), mu = tan(frictionAngle).
+- Contacts: YADE's normal points from id1 to id2 and phys.shearForce is the force on id2, as ours;
+  id2's image is pos2 + hSize cellDist, as our shift.
 """
 import math
 
@@ -24,14 +25,36 @@ from .yade_convert import (MATERIAL_FIELDS, BridgeError, _cell, _check_homo_defo
                            _reference_cell, _scheduled_velocity_gradient, _shared_material, _write_cell, _yade,
                            _yade_matrix, contacts_made_at_rest, nearest_image_shifts, write_shear_history)
 
+__all__ = ["yade_scene_from", "scene_from_yade", "write_to_yade"]
+
 
 def scene_from_yade(O=None, import_contacts=True):
-    """Our Scene from YADE's spheres (or clumps), periodic cell, material and (optionally) contact
-    history, with its contacts evaluated by our law at YADE's positions (dem.refresh): unevaluated,
-    its stress, unbalanced force and stiffness would read exactly zero until the caller refreshed
-    it (a servo given that stiffness never converges).
+    """Our Scene from YADE's O: its spheres (or clumps), periodic cell, material and contact history.
 
-    Returns (scene, ids): ids[k] is the YADE body id of our body k.
+    The scene's contacts are evaluated by our law at YADE's positions (`dem.refresh`), so that its
+    stress, unbalanced force and stiffness read what they are.
+
+    Args:
+        O: YADE's Omega (None: ``yade.O``).
+        import_contacts: take YADE's contacts and their shear forces (the contact history).
+
+    Returns:
+        (scene, ids): the engines' Scene, and ids[k] the YADE body id of our body k.
+
+    Raises:
+        BridgeError: bodies that are not free spheres or clumps, a cell or material the scene cannot
+            hold, in one line.
+
+    Example:
+        Inside yade-double:
+
+        >>> from yade import O
+        >>> from trueaniso import specimen_file, yade_bridge, specimen
+        >>> ours, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> _ = yade_bridge.yade_scene_from(ours, O)
+        >>> scene, ids = yade_bridge.scene_from_yade(O)
+        >>> print("%d spheres, p = %.1f kPa" % (scene.num_bodies, specimen.state(scene)["p"] / 1e3))
+        150 spheres, p = 100.0 kPa
     """
     O = O or _yade()
     bodies = [b for b in O.bodies if b is not None]
@@ -139,21 +162,41 @@ def _spheres_from_yade(O, bodies, import_contacts):
 
 
 def write_to_yade(scene, O=None, ids=None):
-    """Positions, velocities, radii, cell and the contacts' shear forces of our scene into YADE's O
-    (for viewing, export, or to continue in YADE).
+    """Our scene's positions, velocities, radii, cell and contact shear forces into YADE's O.
 
-    Each body is written at the image of its position nearest YADE's own: our detection wraps
-    bodies into the cell, YADE never does, and a body written one cell vector away made YADE's
-    collider miss contacts later (2 of 314 after 1500 steps). Our shear forces go onto YADE's
-    interactions of the same pairs, or YADE would go on with its shear history from before our run
-    (0.44 % off in stress after 2000 of our steps). A contact YADE does not have yet
-    starts at its next step with no shear force.
+    For viewing, export, or to go on in YADE. Each body is written at the image of its position
+    nearest YADE's own (our detection wraps bodies into the cell, YADE never does, and a body written
+    one cell vector away made YADE's collider miss contacts), and our shear forces go onto YADE's
+    interactions of the same pairs (else YADE goes on with its shear history from before our run:
+    0.44 % off in stress after 2000 of our steps); a contact YADE does not have yet starts at its
+    next step with no shear force.
 
-    YADE adopts a new velGrad only at its next step, and then adds the jump of the affine field,
-    (new - current velGrad) x, to every body's velocity (homoDeform = 2). So the velocities
-    written carry YADE's current affine field, and the new strain rate is scheduled: after
-    YADE's next step the bodies move with ours, v + rate x. YADE's own rule makes its cell start
-    moving one step later than its bodies (a lag of rate * dt of strain, ~1e-9 in a probe).
+    YADE adopts a new velGrad only at its next step, adding the jump of the affine field to every
+    body's velocity: the velocities written carry YADE's current affine field and the new strain rate
+    is scheduled, so that after YADE's next step the bodies move with ours (YADE's cell starts moving
+    one step after its bodies: a lag of about 1e-9 of strain in a probe).
+
+    Args:
+        scene: the engines' Scene.
+        O: YADE's Omega (None: ``yade.O``).
+        ids: the YADE body id of each of our bodies (None: 0, 1, ...), as `scene_from_yade` or
+            `yade_scene_from` give them.
+
+    Raises:
+        BridgeError: ids that do not match O's bodies, or a cell not deformed as YADE's homoDeform 2.
+
+    Example:
+        Inside yade-double: our engines load the YADE scene to state 2, then YADE goes on from it.
+
+        >>> from yade import O, utils
+        >>> from trueaniso import specimen_file, triaxial, yade_bridge
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> ids = yade_bridge.yade_scene_from(scene, O)
+        >>> _ = triaxial.reach_state(scene, b=0.0, sigma_z=110e3)
+        >>> yade_bridge.write_to_yade(scene, O, ids)
+        >>> O.run(1, True)
+        >>> print("YADE's sigma_z = %.0f kPa" % (-utils.getStress()[2, 2] / 1e3))
+        YADE's sigma_z = 110 kPa
     """
     O = O or _yade()
     from yade import Vector3
@@ -186,14 +229,36 @@ def write_to_yade(scene, O=None, ids=None):
 
 
 def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False, law="yade"):
-    """Rebuild YADE's O from our scene, with YADE's own Hertz-Mindlin law (law="yade"): the peer we
-    compare to; or, with law="trueaniso", with our law as a YADE class (the plugin of engines/yade,
-    loaded through YADE_PREFIX: docs/yade-peer.md).
+    """Rebuild YADE's O from our scene: bodies, periodic cell, material, contacts and an engine list.
 
-    YADE's sphere-sphere geometry scales tangential displacements by (r1+r2)/(r1+r2-delta) to
-    "avoid granular ratcheting" (its default; the law's own flag of that name is unused in
-    2023.02a); our law does not, so it is switched off unless asked (docs/yade-peer.md).
-    Returns the YADE ids of our bodies.
+    With YADE's own Hertz-Mindlin law (law="yade"), the peer we compare to; or with our law as a
+    YADE class (law="trueaniso": the plugin of engines/yade, loaded with YADE_PREFIX, docs/yade-peer.md).
+    YADE's sphere-sphere geometry scales tangential displacements by (r1+r2)/(r1+r2-delta) to "avoid
+    granular ratcheting" (its default); our law does not, so it is switched off unless asked.
+
+    Args:
+        scene: the engines' Scene.
+        O: YADE's Omega (None: ``yade.O``); reset first.
+        damping: the local damping of YADE's NewtonIntegrator.
+        import_contacts: make YADE's interactions of our contacts, with their shear forces.
+        mindlin_ratcheting: keep YADE's tangential scaling.
+        law: "yade" or "trueaniso".
+
+    Returns:
+        list: the YADE ids of our bodies.
+
+    Raises:
+        BridgeError: an unknown law, or law="trueaniso" without the plugin.
+
+    Example:
+        Inside yade-double:
+
+        >>> from yade import O
+        >>> from trueaniso import specimen_file, yade_bridge
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> ids = yade_bridge.yade_scene_from(scene, O, damping=0.4)
+        >>> len(O.bodies), O.periodic, type(O.engines[-1]).__name__
+        (150, True, 'NewtonIntegrator')
     """
     O = O or _yade()
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,

@@ -103,6 +103,28 @@ def test_adding_states_continues_the_study(first, added_21):
     check_contrast_against_checkpoints(out, summary["zeta_contrast"])
 
 
+def test_the_readme_says_what_the_main_job_prints_and_writes(first, added_21):
+    """README.md's first screen: every file and folder it says ./main.sh writes into its results
+    directory is there after a study with state 21, and every line it quotes begins as a line the
+    job prints."""
+    import re
+    with open(os.path.join(REPO, "README.md")) as f:
+        readme = f.read()
+    writes = readme[readme.index("and writes `results/default/`"):]
+    writes = writes[:writes.index("\n\n")]
+    names = re.findall(r"`([\w./-]+)`", writes)[1:]
+    assert {"specimen.npz", "probes.csv", "states/", "report/report.md"} <= set(names), names
+    out, proc = added_21
+    for name in names:
+        assert (out / name).exists(), "README: ./main.sh writes %s" % name
+    printed = readme[readme.index("```text", readme.index("./main.sh` prints")):]
+    printed = printed[len("```text\n"):printed.index("```", 8)].strip().split("\n")
+    said = first[1].stdout + proc.stdout
+    for line in printed:
+        head = re.split(r"[-\d]|results/", line, maxsplit=1)[0]  # the words before a number or the path
+        assert len(head) > 5 and any(x.startswith(head) for x in said.splitlines()), line
+
+
 def test_a_lost_checkpoint_of_state_21_is_reached_again(added_21, tmp_path):
     """With state 21's rows done, a removed states/21.npz (the advice for a damaged one) does not
     leave the study stuck ('specimen file not found' at each rerun): the state is reached again

@@ -1,6 +1,6 @@
 """The manual (docs/, Sphinx with myst-parser): it builds with no warning, its reference covers every
-script, module and input schema, the benchmark tables are where the scripts write them, and the
-tutorial's commands, run as written, give what the tutorial says."""
+script, module and input schema, the benchmark tables are where the scripts write them, no table
+is clipped in a browser, and the tutorial's commands, run as written, give what the tutorial says."""
 import glob
 import html as html_text
 import json
@@ -252,3 +252,180 @@ def test_the_tutorial_s_commands_give_what_it_says(tmp_path):
         rows = f.read().strip().split("\n")[1:]
     assert len(rows) == 12  # four states, three probes each, as the tutorial says
     assert "no state to run" in said  # its rerun, as the tutorial says
+
+
+# --- the built manual in a browser: no table is clipped ------------------------------------------
+
+CHROMIUM = ("chromium", "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync",
+            "--allow-file-access-from-files", "--window-size=1400,1000")
+
+# Loads each page in turn in an iframe of the width of a laptop's browser (1280 px), waits for the
+# theme's script (it wraps every table in its scrolling box) and MathJax (a formula widens its
+# cell), and writes what it measures into the page, which chromium --dump-dom prints: a table
+# wider than its box (the theme lets it scroll, which hides the right-hand columns) or a cell
+# whose content overflows it.
+MEASURE = """<!DOCTYPE html><html><body><pre id="result">running</pre>
+<iframe id="f" style="width:1280px;height:900px;border:0"></iframe>
+<script>
+const pages = %s, out = [], f = document.getElementById("f");
+function measure(doc, page) {
+  const found = [];
+  doc.querySelectorAll("table").forEach((t, k) => {
+    const box = t.closest(".wy-table-responsive") || t.parentElement;
+    if (box.scrollWidth > box.clientWidth + 1)
+      found.push("table " + k + " is " + box.scrollWidth + " px wide in a box of " + box.clientWidth);
+    t.querySelectorAll("td, th").forEach(c => {
+      if (c.scrollWidth > c.clientWidth + 1)
+        found.push("table " + k + ": a cell overflows (" + c.scrollWidth + " px in " + c.clientWidth + "): "
+                   + c.textContent.trim().slice(0, 60));
+    });
+  });
+  const wrapped = doc.querySelectorAll(".wy-table-responsive table").length;
+  return {page: page, tables: doc.querySelectorAll("table").length, wrapped: wrapped, found: found,
+          formulas: doc.querySelectorAll(".math").length, typeset: doc.querySelectorAll(".MathJax_CHTML").length};
+}
+function when_ready(win, then, waited) {
+  const doc = win.document, tables = doc.querySelectorAll("table.docutils").length;
+  if (tables && !doc.querySelector(".wy-table-responsive") && waited < 3000)
+    return setTimeout(() => when_ready(win, then, waited + 50), 50);
+  if (win.MathJax && win.MathJax.Hub) return win.MathJax.Hub.Queue(then);
+  then();
+}
+let i = 0;
+function next() {
+  if (i >= pages.length) { document.getElementById("result").textContent = JSON.stringify(out); return; }
+  const page = pages[i++];
+  f.onload = () => when_ready(f.contentWindow, () => {
+    try { out.push(measure(f.contentDocument, page)); } catch (e) { out.push({page: page, error: String(e)}); }
+    next();
+  }, 0);
+  f.src = page;
+}
+next();
+</script></body></html>
+"""
+
+
+def _pages_with_tables(out):
+    pages = []
+    for path in sorted(glob.glob(os.path.join(str(out), "**", "*.html"), recursive=True)):
+        rel = os.path.relpath(path, str(out))
+        if rel.startswith("_") or rel in ("genindex.html", "search.html", "py-modindex.html"):
+            continue
+        with open(path) as f:
+            if "<table" in f.read():
+                pages.append(rel)
+    return pages
+
+
+def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
+    """Every table of every built page fits its column at a laptop's width (1280 px) in chromium:
+    the theme keeps each cell on one line and lets a wide table scroll in its box, which hid the
+    equation map's code and tests and the schemas' descriptions; docs/_static/trueaniso.css makes
+    cells wrap. A table wider than its box, or a cell whose content overflows, fails here; so does a
+    formula of these pages that MathJax (Debian's, copied into the manual) did not typeset."""
+    proc, out = manual
+    assert proc.returncode == 0
+    pages = _pages_with_tables(out)
+    assert len(pages) >= 20 and "equations.html" in pages
+    harness = os.path.join(str(out), "_measure_tables.html")
+    with open(harness, "w") as f:
+        f.write(MEASURE % json.dumps(pages))
+    done = subprocess.run(list(CHROMIUM) + ["--user-data-dir=%s" % (tmp_path / "profile"),
+                                            "--virtual-time-budget=120000", "--dump-dom", "file://" + harness],
+                          capture_output=True, text=True, timeout=300)
+    found = re.search(r'<pre id="result">(.*?)</pre>', done.stdout, flags=re.S)
+    assert found and found.group(1) != "running", "chromium measured nothing:\n%s\n%s" % (
+        done.stdout[-2000:], done.stderr[-2000:])
+    results = json.loads(html_text.unescape(found.group(1)))
+    assert [r["page"] for r in results] == pages
+    errors = [r for r in results if "error" in r]
+    assert not errors, errors
+    # the theme's script ran (it wraps the tables whose overflow it would hide), so what was
+    # measured is what a reader sees
+    assert all(r["wrapped"] == r["tables"] or r["wrapped"] > 0 for r in results), results
+    clipped = ["%s: %s" % (r["page"], line) for r in results for line in r["found"]]
+    assert not clipped, "tables clipped at 1280 px:\n" + "\n".join(clipped)
+    # the formulas are typeset by the MathJax copied into the manual (no network here)
+    equations = results[pages.index("equations.html")]
+    assert equations["formulas"] >= 30, equations
+    assert [r["page"] for r in results if r["typeset"] < r["formulas"]] == [], \
+        [(r["page"], r["formulas"], r["typeset"]) for r in results if r["typeset"] < r["formulas"]]
+
+
+# --- the YADE classes' reference, generated from the plugin --------------------------------------
+
+def _yade_classes():
+    import sys
+    sys.path.insert(0, os.path.join(DOCS, "_ext"))
+    import yade_classes
+    return yade_classes
+
+
+def _source_docs():
+    """{class: its docstring's first 60 characters} read from the plugin's YADE_CLASS_BASE_DOC*
+    macros in engines/yade/*.cpp (the string literals after the class and base names, joined):
+    the page, made from the loaded classes, must say what the source says."""
+    docs = {}
+    for path in glob.glob(os.path.join(REPO, "engines", "yade", "*.cpp")):
+        with open(path) as f:
+            text = f.read()
+        for name, literals in re.findall(r'YADE_CLASS_BASE_DOC\w*\(\s*(\w+)\s*,\s*\w+\s*,\s*((?:"(?:[^"\\]|\\.)*"\s*)+)',
+                                         text):
+            docs[name] = "".join(re.findall(r'"((?:[^"\\]|\\.)*)"', literals))[:60]
+    return docs
+
+
+def test_the_yade_class_reference_is_the_plugin_s_own_documentation(manual):
+    """reference/yade-classes lists every class of the plugin's YADE_PLUGIN macro; where the plugin
+    is built (build/yade-plugin.status: installed), each with the docstring its source gives it and
+    a table of its attributes, read from yade-double when the manual is built; elsewhere the page
+    says why they are not there."""
+    proc, out = manual
+    assert proc.returncode == 0
+    yc = _yade_classes()
+    names = yc.plugin_classes(REPO)
+    assert {"TrueTriaxialServo", "StressProbe", "FabricRecorder", "Law2_ScGeom_SimplifiedMindlinPhys_Mindlin"} <= set(names)
+    text = _words(_text(out, os.path.join("reference", "yade-classes.html"))).replace("\u2019", "'")
+    for name in names:
+        assert name in text, name
+    installed, line = yc.plugin_state(REPO)
+    if not installed:
+        assert "The YADE plugin was not built where this manual was built" in text
+        return
+    docs = _source_docs()
+    assert set(names) <= set(docs), "classes without a YADE_CLASS_BASE_DOC macro: %s" % (set(names) - set(docs))
+    for name in names:
+        assert _words(docs[name].replace(":yref:", "").replace("`", "")[:40]) in text, name
+    for attribute in ("sigmaZ", "stressTolerance", "gammaTarget", "restrainRotations", "NcOverV"):
+        assert attribute in text
+
+
+def test_the_yade_class_reference_says_why_it_is_empty_where_the_plugin_is_not_built(tmp_path):
+    yc = _yade_classes()
+    os.makedirs(tmp_path / "engines" / "yade")
+    for path in glob.glob(os.path.join(REPO, "engines", "yade", "*.cpp")):
+        os.symlink(path, tmp_path / "engines" / "yade" / os.path.basename(path))
+    note = yc.markdown(str(tmp_path))
+    assert "was not built" in note and "build/yade-plugin.status is missing" in note
+    os.makedirs(tmp_path / "build")
+    (tmp_path / "build" / "yade-plugin.status").write_text("no-source: no YADE source (set TRUEANISO_YADE_SOURCE)\n")
+    note = yc.markdown(str(tmp_path))
+    assert "no-source: no YADE source" in note and "`StressProbe`" in note
+
+
+def test_the_index_opens_with_an_example_that_prints_what_it_shows():
+    """docs/index.md opens with a Python example (within its first lines, before anything else in
+    a code block) and the output it shows; run from the repository's root, the example prints
+    exactly that."""
+    with open(os.path.join(DOCS, "index.md")) as f:
+        text = f.read()
+    blocks = re.findall(r"```(\w*)\n(.*?)```", text, flags=re.S)
+    assert blocks[0][0] == "python" and blocks[1][0] == "text", blocks[:2]
+    assert text.index("```python") < 600, "the index does not open with its example"
+    code, shown = blocks[0][1], blocks[1][1]
+    done = subprocess.run([PYTHON, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout == shown

@@ -4,6 +4,7 @@ Per state: the DEM E_i (three axial probes) and nu_ij, K and G of the hyperelast
 21-22 inverted, hyperelastic.scalar_moduli), the DEM a_i^2 (Eq. 25) and the micromechanical a_i^2
 from the state's fabric (B, M, Nc/V of the row; Eqs. 37-40 with zeta in the directional form
 sqrt(zeta_i zeta_k), trueaniso.zeta). Over the states:
+
 - Table 2: K(Zm) and G(Zm) as quadratics, with R^2 (Fig. 11);
 - Fig. 13: micromechanical against DEM a_i^2 at zeta = 1, at the paper's 0.552 and at the value
   fitted on the contrast (trueaniso.analysis.zeta_contrast);
@@ -12,12 +13,15 @@ sqrt(zeta_i zeta_k), trueaniso.zeta). Over the states:
   0.003; E: relative);
 - Fig. 4a: E_i/E_j against sigma_i/sigma_j, the power-law exponent m of E_i/E_j = (sigma_i/sigma_j)^m
   (a least-squares line through the origin in log-log, all six ordered pairs of every state).
+
 Everything here reads numbers already in the table; nothing is simulated.
 """
 import numpy as np
 
 from . import hyperelastic, zeta_contrast
 from trueaniso import zeta as _zeta
+
+__all__ = ["state_table", "table2", "stress_ratio_exponent"]
 
 AXES = "xyz"
 PAPER_VOID_RATIO = dict(spheres=0.584, clump1=0.445, clump2=0.636)  # section 2.1, at isotropic 100 kPa
@@ -39,9 +43,25 @@ PAPER = dict(
 
 
 def state_table(rows):
-    """The complete states of one rotations setting: dict of arrays over states, in file order:
-    state ids, Zm, sigma (n, 3), E (n, 3), nu (n, 3, 3), K, G (Pa), a2_dem (n, 3). States without
-    all three axial probes or all six nu_ij are left out (a study still running)."""
+    """A probe table's complete states as arrays over states, in file order, for the fits of the chain.
+
+    Give the rows of one rotations setting (the ``rotations`` column). States without all three axial
+    probes or all six nu_ij are left out (a study still running).
+
+    Args:
+        rows: rows of probes.csv (`results.read_probes`).
+
+    Returns:
+        dict: ``state`` (ids), ``Zm``, ``sigma`` (n, 3), ``E`` (n, 3), ``nu`` (n, 3, 3), ``K`` and
+        ``G`` (Pa, `hyperelastic.scalar_moduli`), ``a2_dem`` (n, 3, Eq. 25).
+
+    Example:
+        >>> from trueaniso.analysis import chain, results
+        >>> rows = [r for r in results.read_probes("docs/data/spheres-53004-s1") if r["rotations"] == "free"]
+        >>> tab = chain.state_table(rows)
+        >>> print("%d states, Zm from %.2f to %.2f" % (len(tab["state"]), min(tab["Zm"]), max(tab["Zm"])))
+        39 states, Zm from 5.63 to 5.97
+    """
     per_state = hyperelastic.states_from_rows(rows)
     off = ~np.eye(3, dtype=bool)
     out = dict(state=[], Zm=[], sigma=[], E=[], nu=[], K=[], G=[])
@@ -59,7 +79,21 @@ def state_table(rows):
 
 
 def table2(tab):
-    """Quadratic fits of K and G (MPa) against Zm: {K: (c1, c2, c3, R^2), G: ...}; None below 3 states."""
+    """Table 2: K and G (MPa) against Zm as quadratics, c1 Zm^2 + c2 Zm + c3, with R^2.
+
+    Args:
+        tab: a `state_table`.
+
+    Returns:
+        dict or None: ``{"K": (c1, c2, c3, R^2), "G": (...)}``; None below three states.
+
+    Example:
+        >>> from trueaniso.analysis import chain, results
+        >>> tab = chain.state_table(results.read_probes("docs/data/spheres-53004-s1"))
+        >>> K = chain.table2(tab)["K"]
+        >>> print("K = %.2f Zm^2 %+.2f Zm %+.2f MPa, R^2 = %.3f" % K)
+        K = -3.33 Zm^2 +69.21 Zm -157.88 MPa, R^2 = 0.999
+    """
     if len(tab["state"]) < 3:
         return None
     out = {}
@@ -126,9 +160,25 @@ MIN_LOG_STRESS_RATIO = 0.01
 
 
 def stress_ratio_exponent(tab, pairs=ALL_PAIRS):
-    """Fig. 4: m in E_i/E_j = (sigma_i/sigma_j)^m over the ordered pairs (i, j) of every state
-    (all six for spheres, Fig. 4a; the horizontal pair for clumps, Fig. 4b-c), least squares
-    through the origin in log-log; with R^2 of that line and the points."""
+    """Fig. 4: the exponent m of E_i/E_j = (sigma_i/sigma_j)^m, the stress-induced anisotropy.
+
+    A least-squares line through the origin in log-log over the ordered pairs (i, j) of every state:
+    all six for spheres (Fig. 4a), the horizontal pair for clumps (Fig. 4b-c).
+
+    Args:
+        tab: a `state_table`.
+        pairs: the ordered pairs of axes (0, 1, 2 for x, y, z).
+
+    Returns:
+        dict: ``m``, ``r2`` (of the line), ``log_sigma_ratio`` and ``log_E_ratio`` (the points).
+
+    Example:
+        >>> from trueaniso.analysis import chain, results
+        >>> tab = chain.state_table(results.read_probes("docs/data/spheres-53004-s1"))
+        >>> fit = chain.stress_ratio_exponent(tab)
+        >>> print("m = %.3f, R^2 = %.3f" % (fit["m"], fit["r2"]))
+        m = 0.424, R^2 = 0.962
+    """
     x, y = [], []
     for s, E in zip(tab["sigma"], tab["E"]):
         for i, j in pairs:
@@ -210,7 +260,7 @@ def nu_floor(tab):
     """The nu_ij RMSE that no zeta can beat: Eq. (22) fed with each state's own DEM a_i^2 (Eq. 25)
     and nu0 (hyperelastic.scalar_moduli), against the DEM nu_ij. Any prediction through Eq. (22)
     has nu_ij a_j^2 / a_i^2 equal in all six pairs, which the DEM values are not; this is how far
-    they are from it. Returns dict(rmse, mean_abs (mean |nu_ij|), relative (rmse / mean_abs))."""
+    they are from it. Returns dict(rmse, mean_abs (the mean of abs(nu_ij)), relative (rmse / mean_abs))."""
     off = ~np.eye(3, dtype=bool)
     err, vals = [], []
     for E, nu in zip(tab["E"], tab["nu"]):
@@ -224,7 +274,7 @@ def nu_floor(tab):
 
 
 def relative_nu_rmse(tab, rmse):
-    """An RMSE of nu_ij relative to the values: rmse / mean |nu_ij| over the states' six nu_ij."""
+    """An RMSE of nu_ij relative to the values: rmse over the mean of abs(nu_ij) over the states' six nu_ij."""
     off = ~np.eye(3, dtype=bool)
     return float(rmse / np.mean(np.abs(tab["nu"][:, off])))
 

@@ -28,7 +28,7 @@ def cross_anisotropic_moduli(E, G, nu=None):
     """The measures of one state from E {"x", "y", "z"}, G {"yz", "xz", "xy"} and optionally nu
     {"xy", "yx", "xz", "yz"} (nu_ij = -d eps_j / d eps_i of a probe on i, Eq. 11).
 
-    G_vh_split = |G_yz - G_xz| / G_vh measures the departure from cross-anisotropy (0 for a
+    G_vh_split = abs(G_yz - G_xz) / G_vh measures the departure from cross-anisotropy (0 for a
     cross-anisotropic medium)."""
     E_h = 0.5 * (E["x"] + E["y"])
     G_vh = 0.5 * (G["yz"] + G["xz"])

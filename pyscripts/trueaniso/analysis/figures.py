@@ -1,4 +1,4 @@
-"""Figures like the paper's, from a probes.csv of pyscripts/run_states.py.
+"""Figures like the paper's, from a probes.csv of pyscripts/run_states.py. Run as a tool::
 
     /usr/bin/python3 -m trueaniso.analysis.figures results/x/probes.csv --out docs/figures
 """
@@ -10,6 +10,8 @@ import numpy as np
 
 from . import hyperelastic
 from .results import ResultsError, number, read_probes, said
+
+__all__ = ["modulus_vs_stress", "scalar_moduli_vs_zm"]
 
 
 def _plt():
@@ -33,7 +35,21 @@ def _finish(plt, fig, path):
 
 
 def modulus_vs_stress(rows, path, title="sphere assembly"):
-    """Fig. 3: E_i against sigma_i, one series per direction."""
+    """Fig. 3: each Young's modulus E_i against the stress sigma_i in its direction, one series per axis.
+
+    Args:
+        rows: rows of probes.csv (`results.read_probes`).
+        path: the PNG to write (atomically).
+        title: the figure's title.
+
+    Example:
+        >>> import os, tempfile
+        >>> from trueaniso.analysis import figures, results
+        >>> png = os.path.join(tempfile.mkdtemp(), "fig3.png")
+        >>> figures.modulus_vs_stress(results.read_probes("docs/data/spheres-53004-s1"), png)
+        >>> os.path.getsize(png) > 10000
+        True
+    """
     plt = _plt()
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
     for axis, mark in zip("xyz", "os^"):
@@ -49,7 +65,25 @@ def modulus_vs_stress(rows, path, title="sphere assembly"):
 
 
 def scalar_moduli_vs_zm(rows, path):
-    """Fig. 11: K and G of the hyperelastic model against Zm, with quadratic fits."""
+    """Fig. 11: K and G of the hyperelastic model against Zm, with their quadratic fits (Table 2).
+
+    Args:
+        rows: rows of probes.csv (`results.read_probes`).
+        path: the PNG to write (atomically).
+
+    Returns:
+        dict: the fits drawn, ``{"K": {"c": [c1, c2, c3], "r2": R^2}, "G": {...}}`` (MPa).
+
+    Example:
+        >>> import os, tempfile
+        >>> from trueaniso.analysis import figures, results
+        >>> png = os.path.join(tempfile.mkdtemp(), "fig11.png")
+        >>> fits = figures.scalar_moduli_vs_zm(results.read_probes("docs/data/spheres-53004-s1"), png)
+        >>> print("R^2 of K: %.3f, of G: %.3f" % (fits["K"]["r2"], fits["G"]["r2"]))
+        R^2 of K: 0.999, of G: 0.999
+        >>> os.path.getsize(png) > 10000
+        True
+    """
     plt = _plt()
     states = hyperelastic.states_from_rows(rows)
     z, K, G = [], [], []

@@ -7,9 +7,23 @@ hence K = E0/(3(1-2 nu0)) and G = E0/(2(1+nu0)).
 """
 import numpy as np
 
+__all__ = ["fabric_a2", "scalar_moduli", "predicted", "quadratic_fit", "states_from_rows"]
+
 
 def fabric_a2(E):
-    """Eq. (25): a_i^2 from the three directional Young moduli (array-like (..., 3))."""
+    """Eq. (25): a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) from the three directional Young's moduli.
+
+    Args:
+        E: (E_x, E_y, E_z), or a stack (..., 3); all > 0.
+
+    Raises:
+        ValueError: a modulus <= 0.
+
+    Example:
+        >>> from trueaniso.analysis import hyperelastic
+        >>> [round(a, 4) for a in hyperelastic.fabric_a2([300e6, 300e6, 360e6])]
+        [0.9701, 0.9701, 1.0627]
+    """
     E = np.asarray(E, dtype=float)
     if np.any(E <= 0):
         raise ValueError("Young moduli must be > 0")
@@ -21,10 +35,30 @@ def fabric_a2(E):
 
 
 def scalar_moduli(E, nu):
-    """K and G from E_i (3,) and nu (3x3, nu[i, j] = nu_ij, diagonal ignored).
+    """K and G of the hyperelastic model from a state's E_i and nu_ij (Eqs. 21-22 inverted).
 
-    E0 is the mean of E_i / a_i^4 (all equal when Eq. 21 holds); nu0 the mean of the six
-    nu_ij a_j^2 / a_i^2 (Eq. 22). Returns dict(K, G, E0, nu0, a2)."""
+    E0 is the mean of E_i / a_i^4 (all equal when Eq. 21 holds), nu0 the mean of the six
+    nu_ij a_j^2 / a_i^2 (Eq. 22); K = E0 / (3 (1 - 2 nu0)), G = E0 / (2 (1 + nu0)).
+
+    Args:
+        E: (E_x, E_y, E_z), Pa.
+        nu: 3x3, nu[i, j] = nu_ij (i loading, j lateral); the diagonal is ignored.
+
+    Returns:
+        dict: ``K``, ``G``, ``E0``, ``nu0`` and ``a2`` (Eq. 25).
+
+    Raises:
+        ValueError: nu0 outside (-1, 0.5).
+
+    Example:
+        Moduli the model gives for K = 140 MPa, G = 143 MPa give them back:
+
+        >>> from trueaniso.analysis import hyperelastic
+        >>> E, nu, G = hyperelastic.predicted(140e6, 143e6, [0.97, 0.97, 1 / 0.97 ** 2])
+        >>> m = hyperelastic.scalar_moduli(E, nu)
+        >>> print("K = %.1f MPa, G = %.1f MPa" % (m["K"] / 1e6, m["G"] / 1e6))
+        K = 140.0 MPa, G = 143.0 MPa
+    """
     E = np.asarray(E, dtype=float)
     nu = np.asarray(nu, dtype=float)
     a2 = fabric_a2(E)
@@ -37,7 +71,23 @@ def scalar_moduli(E, nu):
 
 
 def predicted(K, G, a2):
-    """Eqs. (21)-(23) forward: E (3,), nu (3x3), G_ij (yz, xz, xy)."""
+    """Eqs. (21)-(23) forward: the orthotropic moduli of K, G and the fabric's a_i^2.
+
+    Args:
+        K: bulk modulus, Pa.
+        G: shear modulus, Pa.
+        a2: (a_x^2, a_y^2, a_z^2), whose product is 1.
+
+    Returns:
+        (E, nu, G_ij): E (3,), nu (3x3, nu[i, j] = nu_ij, NaN on the diagonal), G_ij (G_yz, G_xz,
+        G_xy).
+
+    Example:
+        >>> from trueaniso.analysis import hyperelastic
+        >>> E, nu, G = hyperelastic.predicted(140e6, 143e6, [1.0, 1.0, 1.0])
+        >>> print("E = %.1f MPa, nu = %.4f, G = %.1f MPa" % (E[0] / 1e6, nu[0, 1], G[0] / 1e6))
+        E = 320.0 MPa, nu = 0.1190, G = 143.0 MPa
+    """
     a2 = np.asarray(a2, dtype=float)
     E0 = 9 * K * G / (3 * K + G)
     nu0 = (3 * K - 2 * G) / (2 * (3 * K + G))
@@ -56,7 +106,24 @@ def quadratic_fittable(x):
 
 
 def quadratic_fit(x, y):
-    """K or G = c1 Zm^2 + c2 Zm + c3 (section 4.1, Table 2): coefficients and R^2."""
+    """K or G against Zm as a quadratic, c1 Zm^2 + c2 Zm + c3 (section 4.1, Table 2).
+
+    Args:
+        x: Zm of each state (at least three distinct values).
+        y: K or G of each state.
+
+    Returns:
+        (c, R^2): the coefficients (c1, c2, c3) and the fit's R^2.
+
+    Raises:
+        ValueError: fewer than three distinct Zm.
+
+    Example:
+        >>> from trueaniso.analysis import hyperelastic
+        >>> c, r2 = hyperelastic.quadratic_fit([5.0, 5.5, 6.0, 6.5], [80e6, 110e6, 140e6, 170e6])
+        >>> print("dK/dZm = %.0f MPa at Zm = 6, R^2 = %.3f" % ((2 * c[0] * 6 + c[1]) / 1e6, r2))
+        dK/dZm = 60 MPa at Zm = 6, R^2 = 1.000
+    """
     x, y = np.asarray(x, float), np.asarray(y, float)
     if not quadratic_fittable(x):
         raise ValueError("a quadratic fit against Zm needs 3 distinct Zm, not %d" % len(np.unique(x)))
@@ -66,7 +133,22 @@ def quadratic_fit(x, y):
 
 
 def states_from_rows(rows):
-    """Group probe rows (dicts from probes.csv) by state: {state: dict(E (3,), nu (3x3), Zm, sigma)}."""
+    """A probe table's rows grouped by state, the shear probes left out.
+
+    Args:
+        rows: rows of probes.csv (`results.read_probes`).
+
+    Returns:
+        dict: by state id, dict(``E`` (3,), ``nu`` (3x3, NaN where not probed), ``Zm``, ``sigma``
+        (3,), ``b``, ``q``).
+
+    Example:
+        >>> from trueaniso.analysis import results, hyperelastic
+        >>> states = hyperelastic.states_from_rows(results.read_probes("docs/data/spheres-53004-s1"))
+        >>> m = hyperelastic.scalar_moduli(states["1"]["E"], states["1"]["nu"])
+        >>> print("%d states; at state 1: K = %.0f MPa, G = %.0f MPa" % (len(states), m["K"] / 1e6, m["G"] / 1e6))
+        39 states; at state 1: K = 136 MPa, G = 138 MPa
+    """
     out = {}
     ax = "xyz"
     for r in rows:

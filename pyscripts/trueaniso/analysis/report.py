@@ -1,5 +1,7 @@
 """report.md with its figures from a study's results: every table and figure beside the paper's.
 
+Run as a tool::
+
     /usr/bin/python3 -m trueaniso.analysis.report results/default            # writes results/default/report/
     /usr/bin/python3 -m trueaniso.analysis.report docs/data/table-c1-spheres-4000.csv --out docs/report-spheres
 
@@ -21,6 +23,8 @@ import numpy as np
 from . import chain, figures, hyperelastic, zeta_contrast
 from .results import ResultsError, read_metadata, read_probes, said, table_path
 from trueaniso import validate  # noqa: E402 (results put pyscripts/ on the path)
+
+__all__ = ["build"]
 
 AXES = "xyz"
 DEFAULT_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)  # the paper's particles (section 2.1)
@@ -504,11 +508,37 @@ def study_assembly(results):
 
 def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, log=print, fig16=None,
           clumps=None, statics=False, b1_data=None):
-    """Write report.md and its PNGs; returns the report's path and the numbers it shows. `fig16`:
-    a cross-anisotropic study (or its JSON) for the Fig. 16 section; `clumps`: the JSON of
-    anisotropy_clumps.py for the clump section; `statics`: solve Table B1's states from the
-    study's checkpoints first (solve_statics); `b1_data`: directories of statics records of other
-    studies, whose state 21 Table B1 shows where the study has none (table_b1)."""
+    """Write a study's report.md and its figures, every table and figure beside the paper's (module doc).
+
+    Args:
+        results: a study directory (of run_study.py or run_states.py) or a probe table alone.
+        out: the report's directory (None: the study's report/).
+        assembly: "spheres", "clump1" or "clump2", the paper's assembly to compare with (None: the
+            study's own).
+        shear_modulus: the particles' shear modulus, Pa, for a table without its study's metadata
+            (None: the metadata's, else the paper's); checked against the table's micromechanical
+            moduli.
+        poisson: the particles' Poisson's ratio, likewise.
+        log: called with each line the build says.
+        fig16: a cross-anisotropic study (or its JSON) for the Fig. 16 section.
+        clumps: the JSON of bench/anisotropy_clumps.py for the clump section.
+        statics: solve Table B1's states from the study's checkpoints first.
+        b1_data: directories of statics records of other studies, whose state 21 Table B1 shows where
+            the study has none.
+
+    Returns:
+        (path, numbers): the report's path, and the numbers it shows by rotations setting.
+
+    Raises:
+        ResultsError: results that cannot be analysed, in one line, before anything is written.
+
+    Example:
+        >>> import tempfile
+        >>> from trueaniso.analysis import report
+        >>> path, numbers = report.build("docs/data/spheres-53004-s1", out=tempfile.mkdtemp(), log=lambda line: None)
+        >>> print(open(path).readline().strip())
+        # Report: spheres
+    """
     csv_path = table_path(results)
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     # A study's probes.csv given as the file: its directory's metadata (assembly, material, the

@@ -9,6 +9,8 @@ import os
 
 from trueaniso import results_csv, study_checks, validate
 
+__all__ = ["read_probes", "read_metadata", "ResultsError"]
+
 
 class ResultsError(ValueError):
     """A results file that cannot be analysed; the message is one line for the user."""
@@ -87,8 +89,27 @@ def _check_rows(path, rows, columns):
 
 
 def read_probes(path, need=("state", "probe", "E")):
-    """Rows of a probe table as dicts of strings, with the columns in `need` present; `path` is the
-    table or a study directory holding probes.csv."""
+    """The rows of a study's probe table, checked, for analysis (module doc).
+
+    Args:
+        path: the table (probes.csv) or a study directory holding it.
+        need: columns the table must have.
+
+    Returns:
+        Probes: a list of rows, each a dict of text by column (reference/formats/probes-csv); its
+        ``note`` says what was left out (a row cut short, rows with a NaN cell), or is None.
+
+    Raises:
+        ResultsError: a missing or unreadable table, a missing column, a probe in two rows, a modulus
+            that is not a positive number, rows of another specimen than the study's; in one line.
+
+    Example:
+        >>> from trueaniso.analysis import results
+        >>> rows = results.read_probes("docs/data/spheres-53004-s1")
+        >>> r = next(r for r in rows if r["state"] == "21" and r["probe"] == "z")
+        >>> print("%d rows; state 21: E_z = %.0f MPa" % (len(rows), float(r["E"]) / 1e6))
+        117 rows; state 21: E_z = 316 MPa
+    """
     path = table_path(path)
     try:
         table = results_csv.read(path)
@@ -152,8 +173,21 @@ def _fitting_rows(path, rows):
 
 
 def read_metadata(results, required=False):
-    """The metadata.json of a study directory (its fingerprint, specimen, runs), or None for a bare
-    table or a directory without one; with `required`, a ResultsError instead of None."""
+    """The metadata.json of a study directory (its fingerprint, states, specimen, runs), checked.
+
+    Args:
+        results: the study directory.
+        required: raise `ResultsError` instead of returning None when there is none.
+
+    Returns:
+        dict or None: None for a directory without a readable one.
+
+    Example:
+        >>> from trueaniso.analysis import results
+        >>> meta = results.read_metadata("docs/data/spheres-53004-s1")
+        >>> meta["fingerprint"]["assembly"], len(meta["states"])
+        ('sphere', 39)
+    """
     import json
     path = os.path.join(results, "metadata.json")
     try:
