@@ -307,7 +307,7 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
     if pressure <= 0:
         raise ValueError("pressure must be > 0")
     r = recipe(assembly, **overrides)
-    if r["mu_prep"] < 0 or r["mu_final"] < 0:
+    if r["mu_prep"] < 0 or r["mu_final"] < 0 or (r["mu_free"] or 0.0) < 0:
         raise ValueError("friction coefficients must be >= 0")
     switch = switch_pressure
     if switch is None:
@@ -386,6 +386,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         raise PreparationError("stage 1 did not reach %.4g Pa within %d steps" % (r["stage1_pressure"], max_steps))
     if st.at("stage 1"):
         st.scene.block_rotations = False
+        if r["mu_free"] is not None:  # the friction of the free expansion and the unloading
+            st.scene.friction = r["mu_free"]
         st.advance("expansion", new_engines=False)
     if st.at("expansion"):
         label = "expansion (free)" if r["stage1_pressure"] < pressure else "expansion"
