@@ -63,7 +63,7 @@ def options(argv=None):
     p.add_argument("--switch-pressure", type=cli.finite, default=None,
                    help="spheres: mean stress (Pa) to which the packing grown at --mu-prep is unloaded, where the "
                         "friction becomes --mu and the cell servo compresses it to --pressure (a specimen "
-                        "consolidated at the final friction; docs/specimens.md). Default: %g of --pressure (5 kPa "
+                        "consolidated at the final friction; docs/specimens.md). Default: %g of --pressure (20 kPa "
                         "at 100 kPa)" % specimen.SWITCH_FRACTION)
     p.add_argument("--recipe", help="a named variant of an assembly's recipe, whose settings replace the defaults "
                                     "that depend on the assembly (docs/specimens.md; docs/clumps.md, section 5b): %s"

@@ -86,9 +86,11 @@ def save_loose_150_at_state_21(path):
                                                                                "loading friction 1.0)"))
 
 
-# spheres-300-s3 is the recipe before the unloading (its variant grown-to-target, the same bits): the
-# tests of probes, zeta and the YADE peers read it, none of them the recipe.
+# spheres-300-s3 and spheres-150-s4 are the recipe before the unloading (its variant grown-to-target,
+# the same bits): the tests of probes, zeta and the YADE peers read the first, the docstrings' examples
+# and the manual's the second (their printed numbers are its), none of them the recipe.
 MAKERS = {"spheres-300-s3.npz": save_spheres(300, 3, "grown-to-target"), "spheres-150-s5.npz": save_spheres(150, 5),
+          "spheres-150-s4.npz": save_spheres(150, 4, "grown-to-target"),
           "clump1-200-s4.npz": save_clump1_200_s4, "loose-150-state21.npz": save_loose_150_at_state_21}
 
 if __name__ == "__main__":

@@ -45,13 +45,13 @@ def test_the_default_is_unloaded_to_the_switch_pressure(unloaded):
     for k in ("sigma_1", "sigma_2", "sigma_3"):
         assert st[k] == pytest.approx(100e3, abs=log["stress_tolerance"])
     assert st["friction"] == 0.5 and st["unbalanced"] < log["unbalanced"]
-    assert log["switch_pressure"] == specimen.default_switch_pressure(100e3) == 5e3
+    assert log["switch_pressure"] == specimen.default_switch_pressure(100e3) == 20e3
     assert log["unloaded_from"] == 100e3 and log["steps_unloading"] > 0
 
 
 @pytest.mark.parametrize("which", ["unloaded", "grown_to_switch"])
 def test_the_cell_compresses_from_the_switch_pressure(which, grown_to_target, request):
-    """From 5 to 100 kPa the cell shrinks by at least the Hertz overlaps' share. Independent bound:
+    """From the switch pressure (20 kPa unloaded, 5 kPa grown-to-switch) to 100 kPa the cell shrinks by at least the Hertz overlaps' share. Independent bound:
     a contact's overlap delta of a pair with reduced radius R* under force f is
     (3 f / (4 E* sqrt(R*)))^(2/3) (Hertz), and the mean contact force of an isotropic packing is
     f = pi d^2 p / (phi Z) (the Love-Weber stress of Z/2 contacts a sphere of volume pi d^3 / 6, branch
@@ -60,7 +60,7 @@ def test_the_cell_compresses_from_the_switch_pressure(which, grown_to_target, re
     two pressures (half: the mean force stands for a distribution, the mean of f^(2/3) is below
     f^(2/3) of the mean). grown-to-target's consolidation starts at the final pressure: its strain
     is below a tenth of the switched one's."""
-    scene, _ = request.getfixturevalue(which)
+    scene, log = request.getfixturevalue(which)
     st = specimen.state(scene)
     g, nu = scene.shear_modulus, scene.poisson
     e_star = g / (1.0 - nu)  # E / (2 (1 - nu^2)) of two identical spheres
@@ -72,7 +72,7 @@ def test_the_cell_compresses_from_the_switch_pressure(which, grown_to_target, re
         delta = (3.0 * f / (4.0 * e_star * np.sqrt(d / 4.0))) ** (2.0 / 3.0)
         return 3.0 * delta / d
 
-    estimate = affine(100e3) - affine(5e3)
+    estimate = affine(100e3) - affine(log["switch_pressure"])
     strain = _volumetric_strain(scene)
     assert strain > 0.5 * estimate, (strain, estimate)
     assert abs(_volumetric_strain(grown_to_target[0])) < 0.1 * strain
@@ -107,7 +107,7 @@ def test_the_lower_bound_holds_only_for_a_switch_below_the_final_pressure():
     switches there (default_switch_pressure)."""
     assert specimen.switch_pressure_problem(500.0, 100e3) is not None
     assert specimen.default_switch_pressure(500.0) == 500.0
-    assert specimen.default_switch_pressure(10e3) == 1e3  # 5 % would be 500 Pa: the bound instead
+    assert specimen.default_switch_pressure(4e3) == 1e3  # 20 % would be 800 Pa: the bound instead
     with pytest.raises(ValueError, match="switch pressure 400 Pa"):
         specimen.prepare_spheres(N, seed=SEED, pressure=500.0, switch_pressure=400.0)
     _, log = specimen.prepare_spheres(N, seed=SEED, pressure=500.0, unbalanced=1e-2)
@@ -119,7 +119,8 @@ def test_the_lower_bound_holds_only_for_a_switch_below_the_final_pressure():
     # below it the unloading's stop is met 10 % off, or by an unjammed packing
     (["--switch-pressure", "1"], ["--switch-pressure 1 Pa", "[1000, 100000]"]),
     (["--switch-pressure", "nan"], ["--switch-pressure", "finite"]),
-    (["--assembly", "clump1", "--n", "98", "--switch-pressure", "5e3"], ["--switch-pressure is for spheres"]),
+    (["--assembly", "clump2", "--n", "100", "--switch-pressure", "5e3"], ["the clump2 recipe switches the friction",
+                                                                          "--switch-pressure 5000"]),
     (["--recipe", "grown-to-target", "--switch-pressure", "5e3"], ["grown-to-target", "--switch-pressure 5000"]),
 ])
 def test_prepare_specimen_refuses_a_bad_switch_pressure(tmp_path, args, words):
@@ -145,4 +146,4 @@ def test_the_switch_is_recorded_in_the_file(unloaded, tmp_path):
     path = str(tmp_path / "s.npz")
     specimen_file.save(path, scene, seed=SEED, parameters=log)
     _, meta = specimen_file.load(path)  # the metadata schema checks the fields
-    assert meta["parameters"]["switch_pressure"] == 5e3 and meta["parameters"]["unloaded_from"] == 100e3
+    assert meta["parameters"]["switch_pressure"] == 20e3 and meta["parameters"]["unloaded_from"] == 100e3
