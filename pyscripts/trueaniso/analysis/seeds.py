@@ -7,8 +7,9 @@ The first form prints one row per study; the second the table of the manual (doc
 "Old and new recipes"): one column per label, each number the mean +/- sample standard deviation
 over that label's studies (one seed: its value, and the count says so), the paper's value beside.
 
-A study is a run_states.py directory: probes.csv, metadata.json, and where written, the statics
-records of states 1 and 21 (Table B1, E_z/E_x with rotations restrained) and specimen.json, the
+A study is a run_study.py or run_states.py directory: probes.csv, metadata.json, and where written,
+the statics records of the isotropic state and state 21 (statics_isotropic.json or statics_state-1.json,
+statics_state-21.json) (Table B1, E_z/E_x with rotations restrained) and specimen.json, the
 specimen's own summary (prepare_specimen.py writes it beside the .npz; copied into the study), for
 the preparation's steps and wall time. What a study lacks is left out of its column, not guessed.
 
@@ -65,12 +66,6 @@ def _specimen_record(study, meta):
     return {}, meta["specimen"]["summary"]
 
 
-def _statics(study, sid):
-    path = os.path.join(study, "statics_state-%s.json" % sid)
-    if not os.path.exists(path):
-        return None
-    with open(path) as f:
-        return json.load(f)
 
 
 def preparation_steps(params):
@@ -113,7 +108,9 @@ def headlines(study):
                                  chain.micromechanical_a2(parts, contrast["zeta_h"], contrast["zeta_v"]))
         out.update(zeta=contrast["zeta"], zeta_h=contrast["zeta_h"], zeta_v=contrast["zeta_v"],
                    zeta_at_bound=bool(contrast["at_bound"]), nu_rmse=pred["nu_rmse"], E_rmse=pred["E_rel_rmse"])
-    s1, s21 = _statics(study, "1"), _statics(study, "21")
+    from .report import b1_records  # the isotropic state's record under either name (run_study.py's, --statics')
+    found = b1_records(study)
+    s1, s21 = found.get("isotropic"), found.get("21")
     out["Ez_Ex"] = None
     out["B1_ratio"] = out["B1_pred_dem_iso"] = out["B1_pred_dem_21"] = None
     if s1:
