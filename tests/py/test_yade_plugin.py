@@ -157,23 +157,29 @@ def test_state_21_and_probes_against_our_stepper(plugin, specimen_1000, tmp_path
 
 def test_save_mid_path_load_in_a_new_process_continues_the_same(plugin, specimen_100, tmp_path):
     """O.save at step 1500 of the path; the run that goes on in the same process and the run that
-    O.load's the file in a new process end at the same state (one thread). The servo's whole state
-    is in its attributes, so the loaded run takes the same decisions: it reaches the state at the
-    same step. Their forces are not the same bits: YADE's loaded scene sums contact forces in
-    another order (the save itself changes nothing: a run with the save and one without are
-    identical to the bit). Measured: stresses 2.4e-12 apart (relative), positions 5e-15 of the
-    cell edge; the tolerances, 1e-9 and 1e-12, are round-off grown over 10,000 steps, far below
-    any change of state (a stress tolerance of the servo is 1e-3)."""
+    O.load's the file in a new process continue alike (one thread). Their forces are not the same
+    bits: YADE's loaded scene sums contact forces in another order (a run with the save and one
+    without are identical to the bit). So the two are compared where round-off has not grown, 200
+    steps after the save: the servo's step count equal, stresses and positions equal to round-off
+    (measured 2.4e-12 and 5e-15 after 10,000 steps; tolerances 1e-9 and 1e-12). A servo state the
+    file did not carry (its place along the path, its gain) moves the stress by the path's 20 Pa a
+    step or more at once. At the end both reach the state, within the servo's tolerance; the step
+    at which round-off lets the stress cross its tolerance may differ (16,435 against 16,446
+    steps was seen), so the counts are held to 1 % of the steps after the save."""
     saved = tmp_path / "mid.yade.gz"
     a = run_plugin("plugin_state", specimen_100, "save:1500:%s" % saved, *STATE_21, cwd=tmp_path)
     b = run_plugin("plugin_state", specimen_100, "load:%s" % saved, *STATE_21, cwd=tmp_path)
     assert a["saved_at"] == b["loaded_at"] >= 1500  # (+ the two steps at rest of the import)
+    sa, sb = a["after_save"], b["after_save"]
+    assert sa["iter"] == sb["iter"] and sa["steps"] == sb["steps"] > 1500
+    np.testing.assert_allclose(sb["stress"], sa["stress"], rtol=0, atol=1e-9 * 100e3)
+    edge = np.array(sa["hSize"])[0, 0]
+    np.testing.assert_allclose(sb["hSize"], sa["hSize"], rtol=0, atol=1e-12 * edge)
+    np.testing.assert_allclose(sb["positions"], sa["positions"], rtol=0, atol=1e-12 * edge)
     assert a["reached"] and b["reached"], (a["message"], b["message"])
-    assert a["iter"] == b["iter"] and a["steps"] == b["steps"] > 1500
-    np.testing.assert_allclose(b["stress"], a["stress"], rtol=0, atol=1e-9 * 100e3)
-    edge = np.array(a["hSize"])[0, 0]
-    np.testing.assert_allclose(b["hSize"], a["hSize"], rtol=0, atol=1e-12 * edge)
-    np.testing.assert_allclose(b["positions"], a["positions"], rtol=0, atol=1e-12 * edge)
+    assert abs(a["steps"] - b["steps"]) <= 0.01 * (a["steps"] - a["saved_at"])
+    for r in (a, b):
+        assert np.abs(np.array(r["stress"]) - np.array(r["goal"])).max() < 100.0
 
 
 def test_two_threads(plugin, specimen_100, tmp_path):

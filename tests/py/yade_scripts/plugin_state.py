@@ -7,6 +7,7 @@ MODE:
                stepper's probe (triaxial.probe) on the same state imported through yade_bridge;
   save:N:FILE  run the servo N steps, O.save(FILE), then on to the state;
   load:FILE    O.load(FILE) (written by save) and on to the state;
+               both record the servo and the cell AFTER_SAVE steps after the save (or the load);
   reach        reach the state only.
 The servo runs with path rate 20 Pa a step (the tests' shortcut: 10x the studies' rate).
 """
@@ -38,6 +39,17 @@ def insert_before_newton(engine):
     O.engines = engines[:k] + [engine] + engines[k:]
 
 
+# Steps after the save (or the load) at which both runs record the servo and the cell: few enough
+# that round-off has not grown (the two sum forces in different orders), so the records compare
+# to round-off and show any servo state the file did not carry.
+AFTER_SAVE = 200
+
+
+def snapshot():
+    return dict(iter=O.iter, steps=servo.steps, stress=list(servo.stress), hSize=[list(r) for r in O.cell.hSize],
+                positions=[list(b.state.pos) for b in O.bodies])
+
+
 def run_to(done, chunk=5000, limit=2_000_000):
     start = O.iter
     while not done() and O.iter - start < limit:
@@ -48,6 +60,8 @@ if mode.startswith("load:"):
     O.load(mode.split(":", 1)[1])
     servo = servo_engine()
     result["loaded_at"] = O.iter
+    O.run(AFTER_SAVE, True)
+    result["after_save"] = snapshot()
 else:
     scene, _ = specimen_file.load(path)
     yade_bridge.yade_scene_from(scene, damping=DAMPING, law="trueaniso")
@@ -62,6 +76,8 @@ else:
         O.run(int(n), True)
         result["saved_at"] = O.iter
         O.save(file)
+        O.run(AFTER_SAVE, True)
+        result["after_save"] = snapshot()
 
 t0 = time.time()
 run_to(lambda: servo.reached or servo.failed)
