@@ -21,7 +21,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(REPO, "pyscripts"))
 
-COPIED = ("probes.csv", "metadata.json", "summary.json", "statics_state-1.json", "statics_state-21.json")
+COPIED = ("probes.csv", "metadata.json", "summary.json", "statics_isotropic.json", "statics_state-1.json",
+          "statics_state-21.json")
 
 
 def ids(text):

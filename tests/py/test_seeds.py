@@ -35,17 +35,20 @@ def test_mean_and_sample_sd():
 
 def test_headlines_of_committed_studies():
     """The numbers the issue quotes from these studies (docs/path-fidelity.md's table): the
-    grown-to-target recipe's Zm drop 0.345 and Table B1's E_y ratio 0.791 at 4000 spheres; the
-    specimen switched at 5 kPa: drop 0.022, zeta 0.550, nu RMSE 0.0037, 714,000 + 4,000 steps."""
+    grown-to-target recipe's Zm drop 0.345, Table B1's E_y ratio 0.791 and 11 reversals beyond 1 % at
+    4000 spheres; the specimen switched at 5 kPa: drop 0.022, zeta 0.550, nu RMSE 0.0037, no
+    reversal, 714,000 + 4,000 steps."""
     old = seeds.headlines(os.path.join(DATA, "spheres-4000-s1"))
     assert old["states"] == 39 and old["Zm_drop"] == pytest.approx(0.345, abs=5e-4)
     assert old["B1_ratio"][1] == pytest.approx(0.791, abs=5e-4)
+    assert old["reversals"] == 11  # docs/departures.md: 10-11 beyond 1 % (4000 and 53,004 spheres)
     assert old["prep_steps"] is None  # its specimen's preparation was not recorded: left out, not guessed
     new = seeds.headlines(os.path.join(DATA, "switch-pressure", "spheres-4000-s1-switch5kpa"))
     assert new["Zm_drop"] == pytest.approx(0.022, abs=5e-4)
     assert new["zeta"] == pytest.approx(0.550, abs=5e-4) and not new["zeta_at_bound"]
     assert new["nu_rmse"] == pytest.approx(0.0037, abs=5e-5)
     assert new["prep_steps"] == 718000 and new["Ez_Ex"] is None
+    assert new["reversals"] == 0  # the issue: no reversal beyond 1 %
 
 
 def test_the_table_puts_the_paper_beside_each_label(tmp_path):

@@ -18,6 +18,8 @@ The headlines (section numbers are the paper's):
 - Zm's drop over the states (largest less smallest) and e's change along the paths (largest |e - e
   of state 1|): the paper's Zm stays in 5.94-5.99 for spheres (Fig. 8a) and its void ratios
   "approximately constant" (section 2.2);
+- the moduli E_i that fall by more than 1 % from one state to the next along a path while sigma_i
+  rises (path_fidelity.reversals; the paper's E_i follow their stress);
 - the largest reciprocity error over the states, |nu_ij/E_i - nu_ji/E_j| over their mean modulus
   (a compliance is symmetric: an elastic response has none, a creeping packing does);
 - K and G at the isotropic state (state 1, Eqs. 21-22 inverted), against the paper's Table 2
@@ -100,6 +102,11 @@ def headlines(study):
                reciprocity=float(np.max(reciprocity_errors(tab))))
     iso = hyperelastic.scalar_moduli(tab["E"][ref], tab["nu"][ref])
     out.update(K_iso=iso["K"] / 1e6, G_iso=iso["G"] / 1e6, Zm_iso=float(tab["Zm"][ref]))
+    from . import path_fidelity, zeta_contrast
+    walk = read_probes(csv_path, need=zeta_contrast.NEEDED + ["b", "sigma_z_goal"])
+    walk = [r for r in walk if r["rotations"] == rows[0]["rotations"]]
+    rev = path_fidelity.reversals(walk, path=csv_path)
+    out["reversals"] = len([r for r in rev if r[4] < 0.99 * r[3]])
     out.update(zeta=None, zeta_h=None, zeta_v=None, zeta_at_bound=None, nu_rmse=None, E_rmse=None)
     if len(tab["state"]) >= 3 and hyperelastic.quadratic_fittable(tab["Zm"]):
         parts = chain.fabric_parts(csv_path, tab, mat["shear_modulus"], mat["poisson"], rows[0]["rotations"])
@@ -165,7 +172,8 @@ def mean_sd(values, fmt="%.3f"):
 # (label, key, format, scale): the rows of the table, in the order.
 ROWS = (("e", "e", "%.4f"), ("Zm", "Zm", "%.3f"), ("rattlers (no contact)", "rattlers", "%.0f"),
         ("Zm drop over the states", "Zm_drop", "%.3f"), ("largest \\|e - e(state 1)\\| along the paths", "e_change", "%.4f"),
-        ("largest reciprocity error", "reciprocity", "%.4f"), ("K at the isotropic state (MPa)", "K_iso", "%.1f"),
+        ("largest reciprocity error", "reciprocity", "%.4f"),
+        ("E_i falling by > 1 % while sigma_i rises along a path", "reversals", "%.1f"), ("K at the isotropic state (MPa)", "K_iso", "%.1f"),
         ("G at the isotropic state (MPa)", "G_iso", "%.1f"), ("zeta fitted (one zeta)", "zeta", "%.3f"),
         ("zeta_h", "zeta_h", "%.3f"), ("zeta_v", "zeta_v", "%.3f"), ("nu RMSE at the fitted zeta", "nu_rmse", "%.4f"),
         ("E relative RMSE at the fitted zeta", "E_rmse", "%.4f"), ("E_z/E_x, isotropic, restrained", "Ez_Ex", "%.3f"),
