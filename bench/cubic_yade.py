@@ -4,7 +4,7 @@
 
 A second code for the closed form E = k_n / (2 r) = (12 E*^2 sigma)^(1/3) / 2 (406.7 MPa for the
 paper's G = 18 GPa, nu = 0.15 at 100 kPa; docs/triaxial.md), against the paper's 386.1-386.7 MPa:
-nothing of trueaniso is imported. 4 x 4 x 4 spheres (YADE's collider needs a cell more than twice
+nothing of trueaniso's physics is imported (its command line only, trueaniso.cli). 4 x 4 x 4 spheres (YADE's collider needs a cell more than twice
 a body's size) of one radius in YADE's periodic cell, its own
 Hertz-Mindlin law (Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin) and its own
 stress (utils.getStress). The cell is set so that every contact carries the Hertz force of the
@@ -14,10 +14,17 @@ strain over a strain of +/- STRAIN along axis i with the other two edges fixed, 
 cubic packing (nu_ij = 0) is Young's modulus. Rotations and sliding play no part (the contacts
 are all normal). Writes the moduli, the stress reached and YADE's version to --json.
 """
-import argparse
 import json
 import math
+import os
 import sys
+
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)
+import _bench  # noqa: E402,F401  (it makes trueaniso importable)
+
+from trueaniso import cli  # noqa: E402
 
 G, NU, RADIUS, SIGMA = 18e9, 0.15, 0.0975e-3, 100e3
 M = 4  # spheres along each edge of the cell
@@ -63,10 +70,9 @@ def stress_at(h):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--json", required=True, help="where the moduli are written")
-    o = p.parse_args(sys.argv[1:])
+    o = cli.parse(p)
     try:
         import yade  # noqa: F401
     except ImportError:

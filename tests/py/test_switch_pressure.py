@@ -3,7 +3,6 @@ mu_prep to the switch pressure (the default: specimen.SWITCH_FRACTION of it), an
 compresses the packing back to the final pressure at mu_final. The named variants: grown-to-switch
 (the radii grow to the switch pressure only, no unloading) and grown-to-target (the switch at the
 final pressure: every specimen before the option, bit for bit)."""
-import shutil
 
 import numpy as np
 import pytest

@@ -14,13 +14,14 @@ specimen's own summary (prepare_specimen.py writes it beside the .npz; copied in
 the preparation's steps and wall time. What a study lacks is left out of its column, not guessed.
 
 The headlines (section numbers are the paper's):
+
 - e, Zm and rattlers (particles without a contact) of the specimen at the isotropic 100 kPa;
-- Zm's drop over the states (largest less smallest) and e's change along the paths (largest |e - e
-  of state 1|): the paper's Zm stays in 5.94-5.99 for spheres (Fig. 8a) and its void ratios
+- Zm's drop over the states (largest less smallest) and e's change along the paths (largest
+  ``abs(e - e of state 1)``): the paper's Zm stays in 5.94-5.99 for spheres (Fig. 8a) and its void ratios
   "approximately constant" (section 2.2);
 - the moduli E_i that fall by more than 1 % from one state to the next along a path while sigma_i
   rises (path_fidelity.reversals; the paper's E_i follow their stress);
-- the largest reciprocity error over the states, |nu_ij/E_i - nu_ji/E_j| over their mean modulus
+- the largest reciprocity error over the states, ``abs(nu_ij/E_i - nu_ji/E_j)`` over their mean modulus
   (a compliance is symmetric: an elastic response has none, a creeping packing does);
 - K and G at the isotropic state (state 1, Eqs. 21-22 inverted), against the paper's Table 2
   quadratics at our Zm (spheres only: the clumps' fits hold on the other side of their vertex);
@@ -45,8 +46,9 @@ PAIRS = ((0, 1), (0, 2), (1, 2))
 
 
 def reciprocity_errors(tab):
-    """Per state, the largest of |nu_ij/E_i - nu_ji/E_j| / mean(|nu_ij/E_i|, |nu_ji/E_j|) over the
-    three pairs (nu[i, j] = nu_ij: probe on i, strain on j; the compliance S_ji = -nu_ij/E_i)."""
+    """Per state, the largest of ``abs(nu_ij/E_i - nu_ji/E_j) / mean(abs(nu_ij/E_i), abs(nu_ji/E_j))``
+    over the three pairs (``nu[i, j]`` = nu_ij: probe on i, strain on j; the compliance
+    ``S_ji = -nu_ij/E_i``)."""
     out = []
     for E, nu in zip(tab["E"], tab["nu"]):
         worst = 0.0
