@@ -3,8 +3,21 @@
 # Used by main.sh and test.sh; safe to run again (it only installs and rebuilds what is needed).
 # Arguments: CMake targets to build. None: everything (target all) and the YADE plugin; given
 # targets (`all` too) build those alone, without the plugin.
+#   --with-lammps   install Debian's lammps too (the speed benchmark's peer, bench/bench_stepper.py;
+#                   docs/benchmarks.md); TRUEANISO_WITH_LAMMPS=1 does the same.
 set -euo pipefail
 cd "$(dirname "$0")"
+with_lammps="${TRUEANISO_WITH_LAMMPS:-0}"
+args=()
+for a in "$@"; do
+  case "$a" in
+    --with-lammps) with_lammps=1 ;;
+    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -*) echo "setup: unknown option $a (--with-lammps, --help, or CMake targets)" >&2; exit 2 ;;
+    *) args+=("$a") ;;
+  esac
+done
+set -- ${args[@]+"${args[@]}"}
 
 # Everything ./main.sh, ./test.sh, ./test.sh --long, the YADE plugin and ./docs/build.sh need on a
 # machine with only Debian's base packages (tests/fresh_machine.sh checks that on a debootstrap root):
@@ -18,6 +31,8 @@ PACKAGES=(g++ cmake make ninja-build bzip2 yade libeigen3-dev libboost-python-de
           python3-jsonschema python3-mpi4py python3-pyflakes
           python3-sphinx python3-myst-parser python3-sphinx-rtd-theme libjs-mathjax
           chromium)
+# LAMMPS is no dependency of trueaniso: only the speed benchmark compares with it.
+if [ "$with_lammps" = 1 ]; then PACKAGES+=(lammps); fi
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -42,8 +57,8 @@ targets="${*:-}"
 # (a stale module from an earlier build must never pass for a fresh one).
 mkdir -p build
 log=build/build.log
-# TRUEANISO_ARCH=x86-64-v3 ./setup.sh (or ./main.sh, ./test.sh) builds for that x86-64 level, about
-# 1.2-1.3x faster and different in the last bits (CMakeLists.txt); unset, the build keeps the level it
+# TRUEANISO_ARCH=x86-64-v3 ./setup.sh (or ./main.sh, ./test.sh) builds for that x86-64 level, faster
+# (docs/benchmarks.md) and different in the last bits (CMakeLists.txt); unset, the build keeps the level it
 # was configured with (the portable baseline unless asked), TRUEANISO_ARCH= returns to the baseline.
 # A new build directory uses Ninja (a fresh build is faster than with make); one configured before
 # keeps its generator, as CMake requires.

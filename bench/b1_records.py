@@ -38,6 +38,15 @@ def kinematic_moduli(row, material):
                                                      "count")["E"]]
 
 
+def identity(meta, sid):
+    """The record's study, as trueaniso.statics.identity writes it, from the study's metadata.json."""
+    spec, d = meta["specimen"], meta["states"][sid]
+    return dict(specimen=meta["fingerprint"]["specimen"], n=int(spec["summary"]["n"]),
+                material={k: float(spec["material"][k]) for k in ("shear_modulus", "poisson", "density")},
+                state=dict(id=sid, b=float(d["b"]), sigma_z=float(d["sigma_z"]),
+                           path=meta["fingerprint"].get("path", "true-triaxial")))
+
+
 def records(study):
     """{state: record} for states 1 and 21 of the study: E_blocked, E_free and sigma from its
     statics.json, E_kinematic from its probes.csv; refused where the two are not of one state."""
@@ -49,6 +58,8 @@ def records(study):
     if material is None:
         raise ResultsError("%s: its metadata.json records no material" % study)
     rows = read_probes(os.path.join(study, "probes.csv"), need=["state", "sigma_x", "sigma_y", "sigma_z"])
+    from trueaniso.analysis.results import read_metadata
+    meta = read_metadata(study, required=True)
     out = {}
     for sid in STATES:
         st = measured[sid]
@@ -60,7 +71,7 @@ def records(study):
             raise ResultsError("%s: state %s has stresses %s in statics.json but %s in probes.csv"
                                % (study, sid, st["sigma"], sigma))
         out[sid] = dict(E_blocked=st["E_restrained"], E_free=st["E_free"], E_kinematic=kinematic_moduli(row, material),
-                        sigma=st["sigma"], rattlers=st["rattlers_free"])
+                        sigma=st["sigma"], rattlers=st["rattlers_free"], study=identity(meta, sid))
     return out
 
 

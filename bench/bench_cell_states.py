@@ -3,7 +3,7 @@ principal stress against its goal and every off-diagonal stress against zero.
 
     /usr/bin/python3 bench/bench_cell_states.py --specimen specimens/spheres-1000-s1.npz
     /usr/bin/python3 bench/bench_cell_states.py --specimen S.npz --control three --csv docs/data/cell-states-N-three.csv
-    /usr/bin/python3 bench/bench_cell_states.py --doc docs/cell.md     (tables only)
+    /usr/bin/python3 bench/bench_cell_states.py --doc docs/studies/cell.md     (tables only)
 
 Each loading path starts from the specimen and reaches its states in order, each from the one
 before it, as run_states.py does; the isotropic state (b = 0, sigma_z = 100 kPa) is reached from

@@ -5,7 +5,7 @@ computation against the same computation in Python over YADE's O.interactions.
 
 OpenMP threads: set OMP_NUM_THREADS in the environment (default: all cores).
 (prepare the specimen with pyscripts/prepare_specimen.py --n 4000 --seed 1). Results are printed
-as a Markdown table and written as JSON; docs/fabric.md quotes them. Timings are minima over
+as a Markdown table and written as JSON; docs/studies/fabric-cost.md quotes them. Timings are minima over
 repeats, runs with and without the recorder interleaved, so that a busy machine biases neither.
 """
 import json

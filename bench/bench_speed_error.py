@@ -1,7 +1,7 @@
 """Speed against error of the ways to get E_i and nu_ij at a held state.
 
     /usr/bin/python3 bench/bench_speed_error.py --specimens A.npz B.npz ... \
-        --doc docs/speed-vs-error.md --plot docs/speed-vs-error.png
+        --doc docs/studies/speed-vs-error.md --plot docs/figures/speed-vs-error.png
 
 Reference: the exact static stiffness (engines/statics, rotations free), whose normal block
 gives what probes on x, y and z measure. Compared, each timed as the wall time of the three

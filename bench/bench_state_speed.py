@@ -1,7 +1,7 @@
 """Steps to reach a state: the servo's path rate and feed-forward against the default, on Table C1 states.
 
     /usr/bin/python3 bench/bench_state_speed.py --specimen S.npz [--ids 1,5,21] \
-        [--rates 2,inf] [--feed-forward off,on] [--doc docs/state-speed.md] [--csv docs/data/state-speed-N.csv]
+        [--rates 2,inf] [--feed-forward off,on] [--doc docs/studies/state-speed.md] [--csv docs/data/state-speed-N.csv]
 
 Every state is reached from the specimen itself (not along its path, so that each pair compares
 the two ways from the same start), once per way: each path rate (Pa per step; inf: the goal jumps

@@ -1,9 +1,9 @@
 """Benchmark of the static stiffness solve (not a test): wall time against N, rotations free and
 blocked, and the moduli against the kinematic (affine) estimate; writes both tables into
-docs/statics.md between their markers.
+docs/studies/statics.md between their markers.
 
     /usr/bin/python3 bench/bench_statics.py /tmp/statics/s1000.npz /tmp/statics/s4000.npz \\
-        /tmp/statics/s16000.npz --doc docs/statics.md
+        /tmp/statics/s16000.npz --doc docs/studies/statics.md
 
 Specimens from: pyscripts/prepare_specimen.py --n N --seed 1 --out /tmp/statics/sN.npz
 """

@@ -1,10 +1,10 @@
 """The rotation factor zeta by the two definitions side by side (not a test): fitted on the
 contrast a_i^2 as the paper does (Fig. 13, trueaniso.zeta) and matched on the magnitude of E_i
-(statics.rotation_factor, with Nc/V by Eq. 36 and counted); writes the table into docs/statics.md
+(statics.rotation_factor, with Nc/V by Eq. 36 and counted); writes the table into docs/studies/statics.md
 between <!-- zeta-contrast --> and <!-- /zeta-contrast -->.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 bench/bench_zeta.py --states results/default/states \\
-        --csv docs/data/table-c1-spheres-4000.csv --csv results/default/probes.csv --doc docs/statics.md
+        --csv docs/data/table-c1-spheres-4000.csv --csv results/default/probes.csv --doc docs/studies/statics.md
 
 DEM E_i come from (a) exact static solves, rotations free and blocked, at the held-state
 checkpoints in --states (N.npz, as pyscripts/run_states.py writes them), and (b) dynamic probes in

@@ -104,7 +104,8 @@ def main():
     if not (o.json and o.out):
         raise cli.InputError("give --out and --json")
     import numpy as np
-    from trueaniso import clump_recipes, clump_specimen, dem, engines, provenance, specimen, specimen_file, statics
+    from trueaniso import clump_recipes, dem, engines, provenance
+    import clump_recipe_variants
     engines.set_threads(1)
     provenance.versions()  # the code version, taken now: sources edited during the run do not refuse its save
     rule = o.time_step or cli.DEFAULT_TIME_STEP
@@ -135,13 +136,7 @@ def main():
         changed[k] = json.loads(v)
     kwargs.update(changed)
     t0 = time.time()
-    scene, log = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, progress=progress,
-                                               max_steps=o.max_steps, **kwargs)
-    log["threads"] = 1
-    if o.recipe:
-        log["recipe"] = o.recipe
-    st = specimen.state(scene)
-    specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=st)
+    scene, log, st = clump_recipe_variants.prepare_saved(o, dict(kwargs, max_steps=o.max_steps), progress=progress)
     prep_wall = time.time() - t0
     expansion = [t for t in trace if not t["stage"].startswith("consolidation")]
     row = dict(assembly=o.assembly, n=o.n, seed=o.seed, recipe=o.recipe, time_step=rule,
@@ -152,12 +147,7 @@ def main():
                q_over_p_end_expansion=expansion[-1]["q_over_p"] if expansion else None,
                wall_prep=prep_wall, load=os.getloadavg()[0])
     if not o.no_statics:
-        for rot in ("restrained", "free"):
-            r = statics.static_stiffness(scene, rotations=(rot == "free"))
-            row["E_" + rot] = [float(x) for x in r["E"]]
-            row["Ez_Ex_" + rot] = float(r["E"][2] / r["E"][0])
-            row["Ez_Ey_" + rot] = float(r["E"][2] / r["E"][1])
-            row["rattlers_" + rot] = len(r["rattlers"])
+        row.update(clump_recipe_variants.static_moduli(scene))
     row["trace"] = trace
     row["wall"] = time.time() - t0
     print(json.dumps({k: v for k, v in row.items() if k != "trace"}), flush=True)

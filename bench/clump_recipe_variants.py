@@ -115,6 +115,34 @@ def write_doc(doc, data):
     _bench.replace_block(doc, "clump2-state21", state21_table(state21_runs(data)))
 
 
+def prepare_saved(o, settings, progress=None):
+    """The preparation of o.assembly, o.n, o.seed with `settings` at one thread, saved to o.out with
+    its log (threads, and the recipe's name when o.recipe names one) and its state summary.
+    Returns the scene, the log and the summary."""
+    from trueaniso import clump_specimen, specimen, specimen_file
+    extra = dict(progress=progress) if progress else {}
+    scene, log = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, **dict(extra, **settings))
+    log["threads"] = 1
+    if o.recipe:
+        log["recipe"] = o.recipe
+    st = specimen.state(scene)
+    specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=st)
+    return scene, log, st
+
+
+def static_moduli(scene):
+    """E_i, E_z/E_x, E_z/E_y and the rattlers of the exact static solve, rotations restrained and free."""
+    from trueaniso import statics
+    row = {}
+    for rot in ("restrained", "free"):
+        r = statics.static_stiffness(scene, rotations=(rot == "free"))
+        row["E_" + rot] = [float(x) for x in r["E"]]
+        row["Ez_Ex_" + rot] = float(r["E"][2] / r["E"][0])
+        row["Ez_Ey_" + rot] = float(r["E"][2] / r["E"][1])
+        row["rattlers_" + rot] = len(r["rattlers"])
+    return row
+
+
 def main():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--assembly", choices=("clump1", "clump2"), help="clump assembly (to prepare)")
@@ -134,7 +162,7 @@ def main():
         return
     if not o.json:
         raise cli.InputError("give --json")
-    from trueaniso import atomic, clump_recipes, clump_specimen, engines, provenance, specimen, specimen_file, statics
+    from trueaniso import atomic, clump_recipes, engines, provenance
     engines.set_threads(1)
     provenance.versions()  # the code version, taken now: sources edited during the run do not refuse its save
     if o.study:
@@ -149,24 +177,14 @@ def main():
     kwargs = dict(clump_recipes.variant(o.assembly, o.recipe)) if o.recipe else {}
     kwargs.update(changed)
     t0 = time.time()
-    scene, log = clump_specimen.prepare_clumps(o.assembly, o.n, seed=o.seed, **kwargs)
-    log["threads"] = 1
-    if o.recipe:
-        log["recipe"] = o.recipe
-    st = specimen.state(scene)
-    specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=st)
+    scene, log, st = prepare_saved(o, kwargs)
     prep_wall = time.time() - t0
     row = dict(label=o.label or (o.recipe or "default") + "".join(" %s=%s" % kv for kv in changed.items()),
                assembly=o.assembly, n=o.n, seed=o.seed, recipe=o.recipe, settings=changed,
                e=st["void_ratio"], Zm=st["Zm"], Np0=st["Np0"], Np1=st["Np1"],
                steps_expansion=log["steps_expansion"], steps_consolidation=log["steps_consolidation"],
                wall_prep=prep_wall)
-    for rot in ("restrained", "free"):
-        r = statics.static_stiffness(scene, rotations=(rot == "free"))
-        row["E_" + rot] = [float(x) for x in r["E"]]
-        row["Ez_Ex_" + rot] = float(r["E"][2] / r["E"][0])
-        row["Ez_Ey_" + rot] = float(r["E"][2] / r["E"][1])
-        row["rattlers_" + rot] = len(r["rattlers"])
+    row.update(static_moduli(scene))
     row["rattler_fraction"] = row["rattlers_free"] / float(o.n)
     row["wall"] = time.time() - t0
     print(json.dumps(row), flush=True)

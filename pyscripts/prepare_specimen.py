@@ -14,18 +14,12 @@ Inside yade-double the result is also written into O (cell and spheres) for view
 import json
 import math
 import os
-import signal
 import sys
-
-# Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
-# and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
-# crash; cli.guarded gives both signals their meaning for the work when it starts.
-for _signal in (signal.SIGINT, signal.SIGTERM):
-    signal.signal(_signal, lambda number, _: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
-                                              os._exit(128 + number)))
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+from trueaniso import start_guard  # noqa: E402  (first: Ctrl-C while numpy and the engines load is one line)
+start_guard.install()
 try:
     from trueaniso import (clump_recipes, clump_specimen, cli, engines, lock, prep_checkpoint, progress, provenance,
                            psd, resources, specimen, specimen_file, study_dir, triaxial)
@@ -99,9 +93,18 @@ def options(argv=None):
 def validate(o):
     if o.recipe is not None:
         try:
-            clump_recipes.variant(o.assembly, o.recipe)
+            named = clump_recipes.variant(o.assembly, o.recipe)
         except ValueError as exc:
             raise cli.InputError("--recipe: %s" % exc) from None
+        # An option that contradicts the recipe named: the file would record the name with another
+        # setting (a 'frictionless' specimen with mu_prep 0.3).
+        for key, value in named.items():
+            given = getattr(o, key, None)
+            if given is not None and given != value:
+                raise cli.InputError("--%s %g contradicts --recipe %s, which sets %s = %g: leave --%s out, or give "
+                                     "no --recipe (the assembly's default recipe with --%s %g)"
+                                     % (key.replace("_", "-"), given, o.recipe, key, value, key.replace("_", "-"),
+                                        key.replace("_", "-"), given))
     for k, v in assembly_defaults(o.assembly, o.recipe).items():
         if getattr(o, k) is None:
             setattr(o, k, v)
@@ -254,17 +257,42 @@ def switched_below(o):
     return o.switch_pressure is not None and o.switch_pressure != o.pressure
 
 
+DEFAULT_RECIPE = "the assembly's default"
+
+
+def recipe_settings(o):
+    """The settings of the recipe this run asks for that a file records and no option gives: each
+    keyword of the preparation that a named variant sets (the growth servo's gain, the deviator
+    hold), at the variant's value or the preparation's default; and those defaults."""
+    import inspect
+    prepare = specimen.prepare_spheres if o.assembly == "sphere" else clump_specimen.prepare_clumps
+    defaults = {k: p.default for k, p in inspect.signature(prepare).parameters.items()
+                if p.default is not inspect.Parameter.empty}
+    named = clump_recipes.variant(o.assembly, o.recipe) if o.recipe else {}
+    keys = sorted({k for variants in clump_recipes.VARIANTS.values() for v in variants.values() for k in v
+                   if k in defaults and k not in SPHERE_DEFAULTS})
+    return {k: named.get(k, defaults[k]) for k in keys}, {k: defaults[k] for k in keys}
+
+
 def differences(o, meta):
     """The settings of this run that the specimen file was not made with ("seed: 5 there, 1 here");
-    settings a file does not record (older files) are not compared."""
+    settings a file does not record (older files) are not compared, but for the recipe: its name
+    always (a file of the default recipe records none) and a variant's settings where the file
+    records them or their absence means the default (no deviator hold), so that a specimen of
+    another --recipe is not kept."""
     p = meta.get("parameters", {})
     have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"),
                 time_step=p.get("time_step", cli.DEFAULT_TIME_STEP),
                 switch_pressure=p.get("switch_pressure", p.get("pressure")), unloaded="unloaded_from" in p)
     want = dict(settings(o), time_step=o.time_step,
                 switch_pressure=o.switch_pressure if switched_below(o) else o.pressure, unloaded=unloaded(o))
-    want = {k: v for k, v in want.items() if have.get(k) is not None}
-    return study_dir.said(study_dir.differences({k: have[k] for k in want}, want, rel_tol=1e-9))
+    want = {k: v for k, v in want.items() if have.get(k) is not None and k != "recipe"}
+    recipe, defaults = recipe_settings(o)
+    recipe = {k: v for k, v in recipe.items() if k in p or defaults[k] is None}
+    want.update(recipe, recipe=o.recipe or DEFAULT_RECIPE)
+    have = {k: have.get(k) for k in want}
+    have["recipe"] = p.get("recipe") or DEFAULT_RECIPE
+    return study_dir.said(study_dir.differences(have, want, rel_tol=1e-9))
 
 
 def _kept_with(o, meta):

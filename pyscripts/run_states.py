@@ -16,25 +16,18 @@ and a checkpoint per state. The output directory is one study: a rerun continues
 states is fine), or refuses in one line if it asks for something else (docs/runs.md).
 """
 import os
-import signal
 import sys
 import time
 
-# Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
-# and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
-# crash; cli.guarded gives both signals their meaning for the work when it starts. An MPI worker
-# (a rank other than 0: mpi4py.futures' master is rank 0) ends silently, as it does once loaded
-# (cli.release_start_guard): a Ctrl-C on mpiexec within its first second would print this line once
-# a worker beside the master's.
-_WORKER = next((os.environ[v] for v in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK") if v in os.environ), "0") != "0"
-for _signal in (signal.SIGINT, signal.SIGTERM):
-    signal.signal(_signal, lambda number, _: ((_WORKER or sys.stderr.write("error: interrupted while starting; nothing "
-                                                                           "was done\n")),
-                                              os._exit(128 + number)))
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__)))
+from trueaniso import start_guard  # noqa: E402  (first: Ctrl-C while numpy and the engines load is one line)
+# An MPI worker (a rank other than 0: mpi4py.futures' master is rank 0) ends silently, as it does
+# once loaded (cli.release_start_guard): a Ctrl-C on mpiexec within its first second would print
+# the line once a worker beside the master's.
+start_guard.install(quiet=next((os.environ[v] for v in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK")
+                                if v in os.environ), "0") != "0")
 try:
-    from trueaniso import cli, progress, resources, specimen_file, study, study_dir, triaxial
+    from trueaniso import cli, progress, resources, specimen_file, study, study_dir, study_options, triaxial
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
     sys.stderr.write("error: %s\n" % exc)
     os._exit(2)
@@ -55,42 +48,13 @@ def parser():
     p.add_argument("--sigma-v", help="cross-anisotropic path: the vertical stresses sigma_z in Pa, comma separated "
                                      "(default %s); a state's id is sv<sigma_v in kPa>"
                                      % ",".join("%g" % v for v in triaxial.CROSS_ANISOTROPIC_SIGMA_V))
-    lo, hi = triaxial.GAMMA_RANGE
-    p.add_argument("--gamma", type=cli.finite, default=1e-6,
-                   help="probe size gamma of Eq. 12, in [%g, %g]: above, the probe is no longer elastic; below, "
-                        "its increment nears the stress noise (docs/triaxial.md)" % (lo, hi))
-    p.add_argument("--probes", help="probe axes, each at most once: letters of x, y, z (e.g. zxy), or names separated "
-                                    "by commas, where the shear probes yz, xz, xy (G_ij) may be given too (e.g. "
-                                    "z,x,y,yz,xz,xy; one shear probe alone: xy, with its comma). Default: zxy on "
-                                    "the true-triaxial path, all six on the cross-anisotropic one")
-    p.add_argument("--rotations", choices=("free", "restrained"), default="free",
-                   help="particle rotations during probes")
-    p.add_argument("--skip-detection", action="store_true",
-                   help="no contact detection during probes (nothing slides, the network cannot change)")
-    p.add_argument("--damping", type=cli.finite, default=0.4, help="local non-viscous damping, in (0, 1)")
-    p.add_argument("--mu", type=cli.finite, default=0.5,
-                   help="friction coefficient while states are reached (the paper's 0.5; probes always suppress "
-                        "sliding)")
-    cli.add_path_rate_option(p)
-    cli.add_time_step_option(p, study=True)
-    p.add_argument("--rolling-stiffness", type=cli.non_negative, default=0.0,
-                   help="rolling resistance (not in the paper; docs/rolling.md): beta of the rolling stiffness "
-                        "k_r = beta k_s rbar^2, from the specimen on through states and probes; 0 = off. Give "
-                        "--rolling-friction with it")
-    p.add_argument("--rolling-friction", type=cli.non_negative, default=0.0,
-                   help="rolling resistance: eta_r of the largest rolling moment eta_r rbar N; 0 = off")
-    cli.add_threads_option(p, study=True, mpi=True)
-    p.add_argument("--out", required=True, help="results directory (one study; created if missing)")
-    p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
-                                                       "refusing")
-    p.add_argument("--force-new", action="store_true",
-                   help="start a new study in --out: the old one is moved into --out/superseded/, not deleted")
+    study_options.add_probe_options(p, "zxy on the true-triaxial path, all six on the cross-anisotropic one")
+    study_options.add_servo_options(p)
+    study_options.add_run_options(p, mpi=True)
     p.add_argument("--mpi", action="store_true",
                    help="run the states on MPI workers, one state a task, each loading path in order: start as "
                         "mpiexec -n K /usr/bin/python3 -m mpi4py.futures pyscripts/run_states.py --mpi ... (K-1 "
                         "workers; --threads defaults to 1)")
-    p.add_argument("--progress-every", type=cli.non_negative, default=progress.EVERY,
-                   help="seconds between progress lines of long work (0: after every chunk of steps)")
     return p
 
 
@@ -148,8 +112,8 @@ def validate(o):
             triaxial.validate_path_state(o.path, b, sz)
     except ValueError as exc:
         raise cli.InputError(str(exc)) from None
-    o.probe_axes = probe_axes(o.probes, o.path)
-    check_probe_options(o)
+    o.probe_axes = study_options.probe_axes(o.probes, o.path)
+    study_options.check(o)
     try:
         arrays, meta = specimen_file.read(o.specimen)
     except specimen_file.SpecimenFileError as exc:
@@ -180,58 +144,6 @@ def parse_sigma_v(text):
         return [float(s) for s in items]
     except ValueError:
         raise ValueError("--sigma-v %r: expected stresses in Pa separated by commas, e.g. 60e3,150e3" % text) from None
-
-
-def probe_axes(text, path):
-    """The probe axes as names: letters (zxy) or comma-separated names (z,x,y,yz,xz,xy)."""
-    if text is None:
-        return list(triaxial.AXES) if path == "cross-anisotropic" else ["z", "x", "y"]
-    shear = [n for n in triaxial.AXES if len(n) == 2]
-    if text.strip() in shear:
-        # Read as letters, 'xy' would run the normal probes x and y, not the shear probe the help
-        # and the CSV call xy: two readings, so neither is guessed.
-        n = text.strip()
-        raise cli.InputError("--probes %r is ambiguous: the shear probe %s, or the normal probes %s and %s? Write "
-                             "'%s,' for the shear probe alone, '%s,%s' for the two normal probes"
-                             % (text, n, n[0], n[1], n, n[0], n[1]))
-    if "," in text:
-        names = [s.strip() for s in text.split(",")]
-        if len(names) == 2 and names[0] and not names[1]:  # 'xy,': a list of one name, as a 1-tuple is written
-            names = names[:1]
-    else:
-        names = list(text)
-    unknown = [n for n in names if n not in triaxial.AXES]
-    if not names or unknown:
-        # 'yx,' is not a repeat of anything: it is no name, so it is named as such.
-        named = [repr(n) for n in unknown if n]
-        what = ("%s %s no probe's name" % (", ".join(named), "is" if len(named) == 1 else "are") if named
-                else "an empty item" if names else "no probe given")
-        raise cli.InputError("--probes %r: %s. Give letters of x, y, z (e.g. zxy), or names separated by commas "
-                             "among x, y, z, yz, xz, xy" % (text, what))
-    repeated = sorted({n for n in names if names.count(n) > 1})
-    if repeated:
-        raise cli.InputError("--probes %r names %s more than once; each probe runs once a state"
-                             % (text, " and ".join(repeated)))
-    return names
-
-
-def check_probe_options(o):
-    lo, hi = triaxial.GAMMA_RANGE
-    if not lo <= o.gamma <= hi:
-        raise cli.InputError("--gamma %g is outside [%g, %g]: above, the probe is no longer elastic; below, its "
-                             "increment nears the stress noise of a held state (docs/triaxial.md)" % (o.gamma, lo, hi))
-    if not 0 <= o.damping < 1:
-        raise cli.InputError("--damping must lie in [0, 1)")
-    if o.damping == 0:
-        # The contact law dissipates nothing itself (no viscous damping): without local damping the
-        # kinetic energy stays, and a state never meets the servo's unbalanced-force criterion
-        # (150 spheres, state 5: 2e-4 against 1e-4 after 200,000 steps held).
-        raise cli.InputError("--damping 0: the contact law has no viscous damping, so without local damping nothing "
-                             "dissipates the packing's kinetic energy and no state settles below the servo's "
-                             "unbalanced-force tolerance; give a damping in (0, 1) (default 0.4)")
-    if not o.mu > 0:
-        raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
-    resources.check_threads(o.threads)
 
 
 def mpi_executor(o):
@@ -283,13 +195,9 @@ def main(argv=None):
         from trueaniso import engines
         engines.set_threads(o.threads)
     try:
-        study.run_states(o.specimen, states, o.out, probes=o.probe_axes, gamma=o.gamma, path=o.path,
-                         restrain_rotations=o.rotations == "restrained", skip_detection=o.skip_detection,
-                         damping=o.damping, state_options=dict(friction=o.mu, path_rate=o.path_rate, time_step=o.time_step,
-                                                                rolling_stiffness=o.rolling_stiffness,
-                                                                rolling_friction=o.rolling_friction), wait=o.wait,
-                         force_new=o.force_new, progress_every=o.progress_every,
-                         log=progress.say, executor=executor)
+        path, servo, probe = study_options.objects(o, o.path)
+        study.run_states(o.specimen, states, o.out, path=path, servo=servo, probe=probe, wait=o.wait,
+                         force_new=o.force_new, progress_every=o.progress_every, log=progress.say, executor=executor)
     except triaxial.StateNotReached as exc:
         cli.fail(str(exc), 1)
     finally:

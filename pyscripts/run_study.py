@@ -2,6 +2,7 @@
 
     yade-double -n -x pyscripts/run_study.py [--assembly sphere] [--n 1000] [--seed 1]
                                              [--ids 1,5,9,13,17,21,25,35,39] [--out results/default]
+    /usr/bin/python3 pyscripts/run_study.py --specimen S.npz --rotations restrained --out results/r
 
 1. a specimen (spheres, or clumps with --assembly clump1|clump2) consolidated isotropically to
    100 kPa (docs/specimens.md);
@@ -15,25 +16,19 @@ The output directory is one study (docs/runs.md): a rerun continues it where it 
 after a kill, and may add states (--ids 1,5 then --ids 1,5,9); a rerun that asks for another
 specimen or other settings refuses in one line.
 """
-import os
-import signal
-import sys
-
-# Ctrl-C (or a kill, SIGTERM) while Python loads numpy and the engines (up to a second): one line
-# and nothing written. A KeyboardInterrupt there became a traceback, numpy's ImportError or a
-# crash; cli.guarded gives both signals their meaning for the work when it starts.
-for _signal in (signal.SIGINT, signal.SIGTERM):
-    signal.signal(_signal, lambda number, _: (sys.stderr.write("error: interrupted while starting; nothing was done\n"),
-                                              os._exit(128 + number)))
 import inspect
+import os
+import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
 sys.path.insert(0, HERE)  # this checkout's trueaniso, under yade-double too (it does not put the script's folder first)
+from trueaniso import start_guard  # noqa: E402  (first: Ctrl-C while numpy and the engines load is one line)
+start_guard.install()
 try:
     from trueaniso.analysis import figures, report, zeta_contrast
     from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, resources,
-                           specimen, statics, specimen_file, study, study_dir, triaxial)
+                           specimen, statics, specimen_file, study, study_dir, study_options, triaxial)
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
     sys.stderr.write("error: %s\n" % exc)
     os._exit(2)
@@ -44,26 +39,25 @@ SPECIMEN = "specimen.npz"
 
 def parser():
     p = cli.Parser(description=cli.description(__doc__))
-    p.add_argument("--assembly", type=cli.assembly, default="sphere",
-                   help="sphere, clump1 or clump2 (docs/specimens.md)")
-    p.add_argument("--n", type=cli.at_least(100, "a study specimen"), default=1000,
-                   help="particles in the specimen (>= 100)")
-    p.add_argument("--seed", type=cli.count, default=1, help="seed of the random packing (>= 0)")
-    p.add_argument("--ids", default=DEFAULT_IDS, help="Table C1 states to run, by number")
-    p.add_argument("--mu", type=cli.finite, default=0.5,
-                   help="friction coefficient while states are reached (the paper's 0.5; the specimen is "
-                        "consolidated with 0.5, and probes always suppress sliding)")
-    cli.add_path_rate_option(p)
-    cli.add_time_step_option(p, study=True)
-    cli.add_threads_option(p, study=True)
-    p.add_argument("--out", default="results/default", help="results directory (one study; created if missing)")
-    p.add_argument("--wait", action="store_true", help="if another run is writing --out, wait for it instead of "
-                                                       "refusing")
-    p.add_argument("--force-new", action="store_true",
-                   help="start a new study in --out: the old one is moved into --out/superseded/, not deleted")
-    p.add_argument("--progress-every", type=cli.non_negative, default=progress.EVERY,
-                   help="seconds between progress lines of long work (0: after every chunk of steps)")
+    p.add_argument("--specimen", help="a specimen file (prepare_specimen.py, .npz) to study instead of preparing one "
+                                      "in --out; --n and --seed are then the file's, and --assembly, when given, must "
+                                      "be its assembly")
+    p.add_argument("--assembly", type=cli.assembly,
+                   help="sphere, clump1 or clump2 (docs/specimens.md) (default: sphere)")
+    p.add_argument("--n", type=cli.at_least(100, "a study specimen"),
+                   help="particles in the specimen the study prepares (>= 100) (default: %d)" % DEFAULT_N)
+    p.add_argument("--seed", type=cli.count, help="seed of the random packing (>= 0) (default: %d)" % DEFAULT_SEED)
+    p.add_argument("--ids", help="Table C1 states to run, by number (default: %s)" % DEFAULT_IDS)
+    p.add_argument("--table-c1", action="store_true", help="all 39 states of the paper's Table C1")
+    p.add_argument("--states", help="b:sigma_z pairs, sigma_z in Pa, comma separated (e.g. 0.5:140e3,0:60e3); a "
+                                    "state's id is its Table C1 number, else b<b>_sz<sigma_z>")
+    study_options.add_probe_options(p, "zxy")
+    study_options.add_servo_options(p)
+    study_options.add_run_options(p, out_default="results/default")
     return p
+
+
+DEFAULT_N, DEFAULT_SEED = 1000, 1
 
 
 def validate(o):
@@ -71,9 +65,50 @@ def validate(o):
     if problem:
         raise cli.InputError(problem)
     # A study, or a preparation for one killed before the study began, goes on at its own count.
-    cli.resolve_threads(o, preparation=prep_checkpoint.path_for(os.path.join(o.out, SPECIMEN)))
+    cli.resolve_threads(o, preparation=None if o.specimen else prep_checkpoint.path_for(os.path.join(o.out, SPECIMEN)))
     cli.resolve_path_rate(o)
     cli.resolve_study_time_step(o)
+    if sum(x is not None and x is not False for x in (o.ids, o.table_c1 or None, o.states)) > 1:
+        raise cli.InputError("give at most one of --ids, --table-c1, --states")
+    try:
+        if o.states is not None:
+            states = study.parse_states(o.states)
+        elif o.table_c1:
+            states = study.table_states()
+        else:
+            states = study.table_states(study.parse_ids(o.ids if o.ids is not None else DEFAULT_IDS))
+        for _, b, sz in states:
+            triaxial.validate_path_state("true-triaxial", b, sz)
+    except ValueError as exc:
+        raise cli.InputError("%s: %s" % ("--states" if o.states is not None else "--ids", exc)) from None
+    o.probe_axes = study_options.probe_axes(o.probes, "true-triaxial")
+    study_options.check(o)
+    if o.specimen:
+        given = [name for name, value in (("--n", o.n), ("--seed", o.seed)) if value is not None]
+        if given:
+            raise cli.InputError("%s describe%s the specimen run_study.py prepares; --specimen gives the specimen: "
+                                 "leave %s out" % (" and ".join(given), "" if len(given) > 1 else "s",
+                                                   "them" if len(given) > 1 else "it"))
+        try:
+            arrays, meta = specimen_file.read(o.specimen)
+            assembly = study.assembly_of(meta, arrays["member_begin"])
+        except specimen_file.SpecimenFileError as exc:
+            raise cli.InputError(str(exc)) from None
+        except cli.InputError as exc:
+            raise cli.InputError("%s: %s" % (o.specimen, exc)) from None
+        if o.assembly and assembly != o.assembly:
+            raise cli.InputError("%s is a %s specimen, not %s (--assembly)" % (o.specimen, assembly, o.assembly))
+        o.assembly = assembly
+        problem = triaxial.rolling_problem(o.rolling_stiffness, o.rolling_friction, assembly != "sphere")
+        if problem:
+            raise cli.InputError(problem)
+        return states  # the specimen's checks against the states are the study's own (study.check)
+    o.assembly = o.assembly or "sphere"
+    o.n = DEFAULT_N if o.n is None else o.n
+    o.seed = DEFAULT_SEED if o.seed is None else o.seed
+    problem = triaxial.rolling_problem(o.rolling_stiffness, o.rolling_friction, o.assembly != "sphere")
+    if problem:
+        raise cli.InputError(problem)
     if o.assembly != "sphere":
         try:
             clump_specimen.check_count(o.assembly, o.n)
@@ -83,20 +118,13 @@ def validate(o):
         problem = clump_specimen.layers_problem(o.assembly, o.n, o.seed)
         if problem:
             raise cli.InputError(problem)
-    try:
-        states = study.table_states(study.parse_ids(o.ids))
-    except ValueError as exc:
-        raise cli.InputError("--ids: %s" % exc) from None
-    if not o.mu > 0:
-        raise cli.InputError("--mu must be > 0 (the loading friction; probes suppress sliding themselves)")
-    # Before the specimen is prepared (minutes at 4000 spheres), not after it: the specimen will sit at its preparation pressure within the preparation's stress
-    # tolerance, so the path rate is checked from there now, that far off (study.check checks it
-    # again on the file).
+    # Before the specimen is prepared (minutes at 4000 spheres), not after it: the specimen will sit
+    # at its preparation pressure within the preparation's stress tolerance, so the path rate is
+    # checked from there now, that far off (study.check checks it again on the file).
     defaults = inspect.signature(specimen.prepare_spheres if o.assembly == "sphere"
                                  else clump_specimen.prepare_clumps).parameters
     study.refuse_slow_paths(states, "true-triaxial", (defaults["pressure"].default,) * 3, dict(path_rate=o.path_rate),
                             start_within=defaults["stress_tolerance"].default)
-    resources.check_threads(o.threads)
     check_memory(o)
     return states
 
@@ -142,9 +170,9 @@ def check_recipe(o, log):
         if meta is not None and meta.get("fingerprint", {}).get("recipe") is None:
             # A run_states.py study keeps its specimen where the user had it, not in the directory.
             raise study_dir.StudyMismatch(
-                "%s holds a study of run_states.py (from the specimen %s), which run_study.py does not continue: "
-                "rerun it with run_states.py --specimen SPECIMEN --out %s, or %s"
-                % (o.out, meta.get("specimen", {}).get("path", "?"), o.out,
+                "%s holds a study of the specimen %s, not of one run_study.py prepared in it: continue it with "
+                "--specimen SPECIMEN (run_study.py or run_states.py), or %s"
+                % (o.out, meta.get("specimen", {}).get("path", "?"),
                    study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
         if meta is not None:
             raise study_dir.StudyMismatch("%s holds a study whose %s is missing; %s" % (
@@ -194,9 +222,9 @@ def prepare(o, log):
 def main(argv=None):
     o = cli.parse(parser(), argv)
     states = validate(o)
-    specimen_path = os.path.join(o.out, SPECIMEN)
-    cli.saves_work_in(lambda: study_dir.has_saved_work(o.out) or os.path.exists(specimen_path)
-                      or os.path.exists(prep_checkpoint.path_for(specimen_path)))
+    specimen_path = o.specimen or os.path.join(o.out, SPECIMEN)
+    cli.saves_work_in(lambda: study_dir.has_saved_work(o.out) or (
+        not o.specimen and (os.path.exists(specimen_path) or os.path.exists(prep_checkpoint.path_for(specimen_path)))))
     if o.threads:
         engines.set_threads(o.threads)
 
@@ -205,10 +233,16 @@ def main(argv=None):
     with lock.held(o.out, wait=o.wait, log=log):
         if o.force_new:
             study_dir.supersede(o.out, log)
-        path = os.path.join(o.out, SPECIMEN)
-        options = dict(state_options=dict(friction=o.mu, path_rate=o.path_rate, time_step=o.time_step),
-                       recipe=recipe(o))
-        scene = check_recipe(o, log)  # a refusal changes nothing
+        path = specimen_path
+        walk, servo, probe = study_options.objects(o)
+        options = dict(path=walk, servo=servo, probe=probe, recipe=None if o.specimen else recipe(o))
+        if o.specimen:  # the user's file: checked whole, as run_states.py checks it
+            try:
+                scene = specimen_file.load(path)[0]
+            except specimen_file.SpecimenFileError as exc:
+                raise cli.InputError(str(exc)) from None
+        else:
+            scene = check_recipe(o, log)  # a refusal changes nothing
         if scene is not None:
             study.check(path, states, o.out, **options)  # the whole fingerprint, before anything is written
         study_dir.clean_strays(o.out, log)
@@ -233,16 +267,18 @@ def main(argv=None):
         # The isotropic state, and state 21 (Table B1's second state) when asked: each solve's
         # result line after its own "solving" line, state 21's too.
         sres = None
+        spec_meta = specimen_file.read(path)[1]  # what the records are of (statics.identity)
         for what, state in (("isotropic state", None), ("state 21", "21")):
             if state is not None and state not in {str(sid) for sid, _, _ in states}:
                 continue
-            rec = statics.cached_record(o.out, state, scene=scene if state is None else None, log=log)
+            rec = statics.cached_record(o.out, state, scene=scene if state is None else None, log=log,
+                                        meta=spec_meta if state is None else None)
             sres = sres or rec
             log("statics (%s): E_free = %s MPa, E_blocked = %s MPa, magnitude zeta_h = %s, zeta_v = %s"
                 % (what, [round(e / 1e6, 1) for e in rec["E_free"]], [round(e / 1e6, 1) for e in rec["E_blocked"]],
                    statics.said_zeta(rec["zeta_h"]), statics.said_zeta(rec["zeta_v"])))
         csv_path = os.path.join(o.out, study.CSV_NAME)
-        material = specimen_file.read(path)[1]["material"]
+        material = spec_meta["material"]
         contrast = zeta_contrast.fit(csv_path, material["shear_modulus"], material["poisson"])
         if contrast:
             log("%s; the magnitude zeta above answers another question (docs/statics.md 7.1)"

@@ -5,7 +5,7 @@
 namespace trueaniso {
 
 CellMeasurement CellMeasurement::of(const Scene& s) {
-  const ContactMeasures c = contactMeasures(s);
+  const ContactMeasures c = cellMeasures(s);
   CellMeasurement m;
   m.stress = voigt::fromTensor(c.stress);
   m.deformation = s.cell.deformation();

@@ -13,6 +13,8 @@ struct CellMeasurement {
   Vec6 stiffness = Vec6::Zero();     // affine stiffness per Voigt component (Pa per unit strain)
   Real unbalanced = 0;               // YADE's unbalanced force
 
+  // From the force loop's sums of this step when it made them (an engine that reads this says so,
+  // Engine::readsCellMeasures), else from a pass over the contacts: the same bits (measure/Stress.hpp).
   static CellMeasurement of(const Scene& scene);
 };
 

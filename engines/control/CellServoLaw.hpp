@@ -66,7 +66,22 @@ struct CellServoLaw {
   }
   // The cell's velocity gradient of those rates: symmetric, E_yz = E_zy = rate_yz / 2.
   static Mat3 velocityGradient(const Vec6& rates) { return voigt::gradient(rates); }
+  // The law of a controller whose step is stepScale reference steps (Scene::stepScale): the gain,
+  // a fraction of the error closed per reference step, closes stepScale times that a step (capped
+  // at the whole error), so the error closes at the same rate in time under any time step rule.
+  CellServoLaw perStep(Real stepScale) const {
+    CellServoLaw l = *this;
+    if (stepScale != 1.0) l.gain = std::min(1.0, gain * stepScale);
+    return l;
+  }
 };
+
+// A count of reference steps (a hold, a ramp, a limit) in steps that are stepScale reference steps
+// long: the same time, at least one step. At scale 1 the count itself.
+inline long stepsFor(long referenceSteps, Real stepScale) {
+  return stepScale == 1.0 ? referenceSteps
+                          : std::max(1L, std::lround(static_cast<Real>(referenceSteps) / stepScale));
+}
 
 // The cell's tangent stiffness as a fraction of its affine estimate, per Voigt component, measured
 // on the cell's own response: the stress change it showed against the stress change the affine

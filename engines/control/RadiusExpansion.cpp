@@ -24,7 +24,7 @@ void RadiusExpansion::apply(Scene& s) {
   }
   // Measured before the radii grow: the forces, hence the stress and the unbalanced force, are
   // those of the last force evaluation either way.
-  const ContactMeasures measured = contactMeasures(s);
+  const ContactMeasures measured = cellMeasures(s);
   pressure = measured.stress.trace() / 3.0;
   const Real K = measured.stiffness.head<3>().mean();
   const Vec3 normal = measured.stress.diagonal();

@@ -43,6 +43,7 @@ class RadiusExpansion : public Engine {
 
   void apply(Scene& scene) override;
   std::string name() const override { return "RadiusExpansion"; }
+  bool readsCellMeasures() const override { return true; }
 
  private:
   void growClumps(Scene& scene) const;

@@ -30,6 +30,7 @@ void StressProbe::begin(const Vec6& hold) {
   require(relativeTolerance > 0 && relativeTolerance < 1, "probe tolerance must lie in (0, 1)");
   require(unbalancedTolerance > 0 && rampSteps > 0 && settleSteps >= 1 && maxSteps > 0,
           "probe tolerances and step counts must be > 0");
+  require(std::isfinite(stepScale) && stepScale > 0, "probe: the step scale must be a finite number > 0");
   require(hold.allFinite() && (hold.head<3>().array() > 0).all(),
           "probe: the held normal stresses must be > 0 (compression positive) and every held stress finite");
   law.validate();
@@ -66,6 +67,7 @@ void StressProbe::apply(Scene& s) {
     done = true;
     return;
   }
+  stepScale = s.stepScale();
   s.cell.velGrad = CellServoLaw::velocityGradient(update(CellMeasurement::of(s), s.dt));
 }
 
@@ -93,11 +95,11 @@ Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
     const bool ok = maskedError(stress, holdGoal_, mask) < relativeTolerance * expected &&
                     unbalanced < unbalancedTolerance;
     settled_ = ok ? settled_ + 1 : 0;
-    if (settled_ >= settleSteps) {
+    if (settled_ >= stepsFor(settleSteps, stepScale)) {
       refStress = stress;
       refDeformation = m.deformation;
       target = refStress;
-      rampRate_ = (increment > 0 ? increment : 0.5 * K[axis] * gammaTarget) / rampSteps;
+      rampRate_ = (increment > 0 ? increment : 0.5 * K[axis] * gammaTarget) / stepsFor(rampSteps, stepScale);
       stage = Stage::Ramp;
       settled_ = 0;
     }
@@ -118,7 +120,7 @@ Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
     const Real inc = std::abs(target[axis] - refStress[axis]);
     const bool ok = maskedError(stress, target, mask) < relativeTolerance * inc && unbalanced < unbalancedTolerance;
     settled_ = ok ? settled_ + 1 : 0;
-    if (settled_ >= settleSteps) {
+    if (settled_ >= stepsFor(settleSteps, stepScale)) {
       dStress = stress - refStress;
       dStrain = strainBetween(refDeformation, m.deformation);
       gamma = strainMeasure();
@@ -127,9 +129,10 @@ Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
       return Vec6::Zero();
     }
   }
-  if (steps > maxSteps) {
+  if (steps > stepsFor(maxSteps, stepScale)) {
     std::ostringstream msg;
-    msg << "probe on axis " << kAxisNames[axis] << " did not reach equilibrium within " << maxSteps << " steps";
+    msg << "probe on axis " << kAxisNames[axis] << " did not reach equilibrium within "
+        << stepsFor(maxSteps, stepScale) << " steps";
     message = msg.str();
     stage = Stage::Failed;
     done = true;
@@ -138,7 +141,7 @@ Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
   Vec6 goal = target;
   for (int I = 0; I < 6; ++I)
     if (!(mask >> I & 1u)) goal[I] = 0;  // held strain: rate 0
-  return law.rates(goal, mask, stress, K, dt);
+  return law.perStep(stepScale).rates(goal, mask, stress, K, dt);
 }
 
 }  // namespace trueaniso

@@ -43,6 +43,13 @@ class StressProbe : public Engine {
   // measures 1/S_kk. The two differ by the packing's couplings between components (0.2 % measured
   // between G_yz and C_44 of a 300-sphere packing); the static solve gives both.
   bool holdOtherStrains = false;
+  // The gain and the step counts below are per reference step (Scene::referenceDt), as the
+  // servo's: a step stepScale reference steps long closes stepScale times the error, ramps
+  // stepScale times as far and counts for stepScale steps, so that the probe takes the same time,
+  // and measures the same modulus but by integration error, under any time step rule. apply()
+  // takes stepScale from the scene; a host that calls update() alone (the YADE adapter) leaves it
+  // at 1, its own step being the unit.
+  Real stepScale = 1.0;
   CellServoLaw law{0.03, 1.0};     // gain 0.03: docs/speed-vs-error.md
   long rampSteps = 300;            // the ramp's expected length, sets its rate
   Real relativeTolerance = 2e-3;   // stress error allowed, as a fraction of the increment
@@ -71,6 +78,7 @@ class StressProbe : public Engine {
   void begin(const Vec6& hold);
   Vec6 update(const CellMeasurement& m, Real dt);
   std::string name() const override { return "StressProbe"; }
+  bool readsCellMeasures() const override { return true; }
 
   unsigned stressMask() const {
     if (holdOtherStrains) return 1u << axis;

@@ -29,6 +29,7 @@ class StressServo : public Engine {
   void validate() const;
   void apply(Scene& scene) override;
   std::string name() const override { return "StressServo"; }
+  bool readsCellMeasures() const override { return true; }
 };
 
 }  // namespace trueaniso

@@ -39,9 +39,7 @@ void TrueTriaxialServo::apply(Scene& s) {
   s.cell.velGrad = CellServoLaw::velocityGradient(update(CellMeasurement::of(s), s.dt));
 }
 
-long TrueTriaxialServo::scaled(long n) const {
-  return stepScale == 1.0 ? n : std::max(1L, std::lround(static_cast<Real>(n) / stepScale));
-}
+long TrueTriaxialServo::scaled(long n) const { return stepsFor(n, stepScale); }
 
 Vec6 TrueTriaxialServo::finalStress() const {
   // Fixed-size halves rather than the comma initialiser, whose run-time-sized blocks GCC 12 warned
@@ -132,8 +130,7 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
   for (int k = 0; k < 6; ++k)
     if (!(mask >> k & 1u)) goalNow[k] = 0;  // held shear strains: rate 0
   // The gain closes its fraction of the error per reference step (capped at the whole error).
-  CellServoLaw stepLaw = law;
-  if (stepScale != 1.0) stepLaw.gain = std::min(1.0, law.gain * stepScale);
+  const CellServoLaw stepLaw = law.perStep(stepScale);
   if (!feedForward) return stepLaw.rates(goalNow, mask, stress, m.stiffness, dt);
   // The goal's rate this step: zero while it waits and once it is held.
   const Vec6 goalRate = (target - previousTarget) / dt;

@@ -108,6 +108,7 @@ class TrueTriaxialServo : public Engine {
   // has failed.
   Vec6 update(const CellMeasurement& m, Real dt);
   std::string name() const override { return "TrueTriaxialServo"; }
+  bool readsCellMeasures() const override { return true; }
   // The state's six stresses (Voigt): Eq. (9) on the diagonal, shearGoal off it.
   Vec6 finalStress() const;
   unsigned stressMask() const { return controlShear ? kAllComponents : kNormalComponents; }

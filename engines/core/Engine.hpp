@@ -12,6 +12,10 @@ class Engine {
   virtual ~Engine() = default;
   virtual void apply(Scene& scene) = 0;
   virtual std::string name() const = 0;
+  // True for an engine that reads the cell measures (stress, affine stiffness, unbalanced force:
+  // control/CellMeasurement.hpp) when it runs: in its steps the contact loop sums them while it
+  // computes the forces (measure/CellSums.hpp), and in no other step.
+  virtual bool readsCellMeasures() const { return false; }
   long every = 1;  // run at steps where step % every == 0
   bool dead = false;  // skipped when true (for example contact detection during a probe)
   // Times the simulation applied this engine: lets a protocol show that a switched-off engine

@@ -100,6 +100,7 @@ void Scene::refreshMembers() {
 void Scene::rescale(Real f) {
   require(f > 0 && std::isfinite(f), "rescale factor must be > 0");
   const Real f2 = f * f, f3 = f2 * f;
+  measured.clear();  // the forces and branches scale
   cell.hSize *= f;
   cell.refHSize *= f;
   for (int b = 0; b < bodies.size(); ++b) {

@@ -7,6 +7,7 @@
 #include "core/Cell.hpp"
 #include "core/Contacts.hpp"
 #include "core/Material.hpp"
+#include "measure/CellSums.hpp"
 
 namespace trueaniso {
 struct ClumpTemplate;
@@ -32,6 +33,10 @@ struct Scene {
   // Set whenever something outside the integrator moves bodies, changes radii or the cell,
   // so that the contact detection rebuilds its list before the next force evaluation.
   bool detectionInvalid = true;
+  // The cell measures' sums of the last force evaluation, in the steps an engine reads them
+  // (measure/CellSums.hpp). Whatever changes the bodies' forces after the contact loop (walls, a
+  // rescale, a renumbering) clears them, and the measures are then summed apart.
+  MeasuredSums measured;
 
   // dt in units of referenceDt (1 while referenceDt is unknown).
   Real stepScale() const { return referenceDt > 0 ? dt / referenceDt : 1.0; }

@@ -72,6 +72,7 @@ void reorderBodies(Scene& s, const std::vector<int>& order) {
   std::vector<int> newMember(M.size());
   for (size_t k = 0; k < memberOrder.size(); ++k) newMember[memberOrder[k]] = static_cast<int>(k);
 
+  s.measured.clear();  // per block of bodies and contacts: another numbering, other blocks
   permute(B.pos, order); permute(B.vel, order); permute(B.angVel, order);
   permute(B.force, order); permute(B.torque, order); permute(B.mass, order);
   permute(B.inertia, order); permute(B.volume, order); permute(B.orientation, order);

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/Parallel.hpp"
+#include "measure/Reduce.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -28,19 +29,25 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
 #endif
   forceBuffers_.resize(nthreads);
   torqueBuffers_.resize(nthreads);
+  // The cell measures' sums, in the steps an engine reads them (measure/CellSums.hpp): per block of
+  // kSumBlock pairs and of kSumBlock bodies, each thread filling its own blocks, added in block order below.
+  const bool measure = s.measured.wanted;
+  const int pairBlocks = (nc + kSumBlock - 1) / kSumBlock, bodyBlocks = (nb + kSumBlock - 1) / kSumBlock;
+  if (measure) {
+    pairSums_.resize(pairBlocks);
+    bodySums_.resize(bodyBlocks);
+  }
+  CellSums* const pairSums = pairSums_.data();
+  Real* const bodySums = bodySums_.data();
+  const Real ratio = law.shearToNormal();
   static_assert(!Rolling || (Rotations && !Clumps), "rolling resistance acts on free single spheres only");
   long sliding = 0, rollingAtCap = 0;  // the second is only counted with Rolling
-  // The team may be smaller than asked (OMP_DYNAMIC, nesting): only the buffers of threads that
-  // ran this step hold this step's forces, so only they are summed below.
-  int team = 1;
 
 #pragma omp parallel reduction(+ : sliding) if (worthThreads(nc))
   {
     int t = 0;
 #ifdef _OPENMP
     t = omp_get_thread_num();
-#pragma omp single nowait
-    team = omp_get_num_threads();
 #endif
     Vec3* F;
     Vec3* T;
@@ -77,16 +84,19 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     const Vec3* const vel = B.vel.data();
     const Vec3* const angVel = B.angVel.data();
 
-    // This thread's contacts: the partition of libgomp's schedule(static), which the loop had,
-    // written out so that the loop can walk them in batches (below). Any partition is correct;
-    // this one keeps the bits of earlier runs with several threads.
+    // This thread's contacts: whole blocks of kSumBlock pairs, as even a share of them as blocks
+    // allow (libgomp's schedule(static) of the blocks), so that the measures summed below are
+    // those of the separate pass's blocks. Each thread adds its forces into its own buffer, summed
+    // in thread order after the loop: the partition decides the forces' last bits, so it is the
+    // same whether or not the step measures.
     int threads = 1;
 #ifdef _OPENMP
     threads = omp_get_num_threads();
 #endif
-    const int share = nc / threads, extra = nc % threads;
-    const int lo = t < extra ? t * (share + 1) : t * share + extra;
-    const int hi = lo + share + (t < extra ? 1 : 0);
+    const int share = pairBlocks / threads, extra = pairBlocks % threads;
+    const int firstBlock = t < extra ? t * (share + 1) : t * share + extra;
+    const int lastBlock = firstBlock + share + (t < extra ? 1 : 0);
+    const int lo = std::min(nc, firstBlock * kSumBlock), hi = std::min(nc, lastBlock * kSumBlock);
     // Each thread's pairs in batches of kBatch, in three passes:
     //  1. the distance of every pair, its square root and division two pairs at a time, then the
     //     pairs sorted into touching and not, the touching ones' normal and overlap written
@@ -99,6 +109,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     // bits as that loop (checked on 1 and 2 threads, rotations free and blocked, rolling resistance, clump1 and
     // clump2 preparations; docs/benchmarks.md, "Two contacts at a time", with what it gained).
     constexpr int kBatch = HertzMindlin::Batch::kSize;
+    static_assert(kSumBlock % kBatch == 0, "a batch of pairs lies in one block of the measures' sums");
     // A touching pair's motion, by component like the law's batch: its relative velocity (the
     // bodies' and the affine field's), the spins of its bodies and the lever arms to the contact
     // point. The loops over it that hold no choice run two pairs at a time (see HertzMindlin::Batch).
@@ -116,6 +127,8 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       Real dx[kBatch], dy[kBatch], dz[kBatch], rsum[kBatch], dist2[kBatch], overlap[kBatch], inv[kBatch];
     };
     Gap gap;
+    alignas(64) Real terms[kBatch][kCellTerms];  // the cell measures' terms of the touching pairs (measure/CellSums.hpp)
+    CellSums blockSums;  // the sums of the block of pairs this thread is in
     int pairOf[kBatch];      // the touching pairs of the batch, in pair order
     Vec3 branches[kBatch];   // their branch vectors
     HertzMindlin::Batch q;
@@ -279,26 +292,69 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
           T[b] += Vec3(v.t2x[k], v.t2y[k], v.t2z[k]);
         }
       }
+      if (measure) {
+        // The terms of contactMeasures from the values just stored (F = N n + F_s, the branch, n,
+        // k_n), the batch's contacts side by side, then added to the running sums of their block
+        // (measure/CellSums.hpp) contact after contact in pair order, the loaded ones only: each
+        // sum adds what the separate pass adds, in its order, the sixteen sums side by side.
+        for (int k = 0; k < m; ++k)
+          cellTerms(v.Fx[k], v.Fy[k], v.Fz[k], branches[k].x(), branches[k].y(), branches[k].z(), q.nx[k], q.ny[k],
+                    q.nz[k], HertzMindlin::normalStiffness(q.N[k], q.delta[k]), ratio, terms[k]);
+        for (int k = 0; k < m; ++k)
+          if (q.N[k] > 0) blockSums.add(terms[k]);
+        if (c1 == hi || c1 % kSumBlock == 0) {  // the block's last batch
+          pairSums[c0 / kSumBlock] = blockSums;
+          blockSums = CellSums{};
+        }
+      }
     }
     // Not a reduction clause: that would change the paper's loop (Rolling false) too.
     if constexpr (Rolling) {
 #pragma omp atomic
       rollingAtCap += rollingCappedHere;
     }
+    // The threads' buffers into the bodies' arrays, each body's in thread order, in the same team
+    // (a second parallel region cost a fork and a join a step); with it the bodies' resultants for
+    // the unbalanced force, per block of bodies as its separate pass sums them. The team may be
+    // smaller than asked (OMP_DYNAMIC, nesting): only the buffers of threads that ran this step
+    // hold this step's forces, so only they are summed.
+    int members = 1;
+#ifdef _OPENMP
+    members = omp_get_num_threads();
+#pragma omp barrier
+#endif
+    if (members > 1 || measure || !Rotations) {
+      Vec3* const force = B.force.data();
+      Vec3* const torque = B.torque.data();
+#pragma omp for schedule(static)
+      for (int k = 0; k < bodyBlocks; ++k) {
+        const int end = std::min(nb, (k + 1) * kSumBlock);
+        Real acc = 0;
+        for (int b = k * kSumBlock; b < end; ++b) {
+          for (int u = 1; u < members; ++u) {
+            force[b] += forceBuffers_[u][b];
+            if (Rotations) torque[b] += torqueBuffers_[u][b];
+          }
+          if (!Rotations) torque[b].setZero();
+          if (measure) acc += force[b].norm();
+        }
+        if (measure) bodySums[k] = acc;
+      }
+    }
   }
   slidingContacts = sliding;
   rollingCapped = rollingAtCap;
-  // Thread buffers into the bodies' arrays, in thread order.
-  for (int t = 1; t < team; ++t) {
-    const std::vector<Vec3>& Ft = forceBuffers_[t];
-    const std::vector<Vec3>& Tt = torqueBuffers_[t];
-#pragma omp parallel for schedule(static) if (worthThreads(nb))
-    for (int q = 0; q < nb; ++q) {
-      B.force[q] += Ft[q];
-      if (Rotations) B.torque[q] += Tt[q];
-    }
+  if (measure) {
+    CellSums contacts;
+    for (int k = 0; k < pairBlocks; ++k) contacts += pairSums[k];
+    Real bodies = 0;
+    for (int k = 0; k < bodyBlocks; ++k) bodies += bodySums[k];
+    s.measured.contacts = contacts;
+    s.measured.bodyForce = bodies;
+    s.measured.step = s.step;
+  } else {
+    s.measured.clear();
   }
-  if (!Rotations) std::fill(B.torque.begin(), B.torque.end(), Vec3::Zero());
 }
 
 void ContactForces::apply(Scene& s) {

@@ -25,6 +25,8 @@ class ContactForces : public Engine {
   template <bool Clumps, bool Rotations, bool Sheared, bool Rolling = false>
   void compute(Scene& scene, const HertzMindlin& law);
   std::vector<std::vector<Vec3>> forceBuffers_, torqueBuffers_;  // threads 1..n-1
+  std::vector<CellSums> pairSums_;  // the cell measures' sums per block of pairs (measure/CellSums.hpp)
+  std::vector<Real> bodySums_;      // ... and of bodies
 };
 
 }  // namespace trueaniso

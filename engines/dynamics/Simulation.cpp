@@ -11,10 +11,14 @@ long Simulation::run(long n) {
   scene_->validate();
   for (auto& e : engines_) e->done = false;
   long steps = 0;
+  const auto runs = [&](const Engine& e) { return !e.dead && (e.every <= 1 || scene_->step % e.every == 0); };
   while (steps < n) {
     bool stop = false;
+    bool measures = false;
+    for (auto& e : engines_) measures = measures || (runs(*e) && e->readsCellMeasures());
+    scene_->measured.wanted = measures;
     for (auto& e : engines_) {
-      if (e->dead || (e->every > 1 && scene_->step % e->every != 0)) continue;
+      if (!runs(*e)) continue;
       e->apply(*scene_);
       ++e->applied;
       stop = stop || e->done;

@@ -10,23 +10,32 @@ namespace trueaniso {
 // Love-Weber: F (x) L, F the force on body 2, L the branch from body 1 to body 2.
 inline void addStressTerm(const Vec3& F, const Vec3& L, Mat3& acc) { acc.noalias() += F * L.transpose(); }
 
-// The diagonal of Eq. (32), contact springs only, of a contact of normal stiffness kn > 0 and
-// k_s = ratio k_n, unit normal n and branch L.
+// The diagonal of Eq. (32), contact springs only, of a contact of normal stiffness kn (0: none, all
+// six terms zero) and k_s = ratio k_n, unit normal n and branch L, in Voigt order:
+//  - K_kk = L_k^2 [k_s + (k_n - k_s) n_k^2], the kk kk component of Eq. (32);
+//  - engineering shear gamma_ij: the affine displacement u = (gamma/2)(L_j e_i + L_i e_j), the force
+//    k_s u + (k_n - k_s) n (n.u), the stress sym(dF (x) L)_ij: the ij ij component of Eq. (32)
+//    symmetrised over (ij) and (kl), as the static solve's affine part. With
+//    nu = (n_i L_j + n_j L_i) / 2 it is k_s (L_i^2 + L_j^2) / 4 + (k_n - k_s) nu^2.
+// On scalars, so that a loop over contacts runs it several at a time (dynamics/ContactForces.cpp).
+__attribute__((always_inline)) inline void affineStiffnessTerms(Real kn, Real ratio, Real nx, Real ny, Real nz, Real Lx,
+                                                                Real Ly, Real Lz, Real* k) {
+  const Real ks = ratio * kn, kd = (1.0 - ratio) * kn, quarter = 0.25 * ks;
+  const Real xx = Lx * Lx, yy = Ly * Ly, zz = Lz * Lz;
+  k[0] = xx * (ks + kd * nx * nx);
+  k[1] = yy * (ks + kd * ny * ny);
+  k[2] = zz * (ks + kd * nz * nz);
+  const Real yz = 0.5 * (ny * Lz + nz * Ly), xz = 0.5 * (nx * Lz + nz * Lx), xy = 0.5 * (nx * Ly + ny * Lx);
+  k[3] = quarter * (yy + zz) + kd * yz * yz;
+  k[4] = quarter * (xx + zz) + kd * xz * xz;
+  k[5] = quarter * (xx + yy) + kd * xy * xy;
+}
+
+// The same terms added to acc, for a contact with kn > 0.
 inline void addAffineStiffnessTerm(Real kn, Real ratio, const Vec3& n, const Vec3& L, Vec6& acc) {
-  const Real ks = ratio * kn, kd = (1.0 - ratio) * kn;  // k_n - k_s
-  for (int k = 0; k < 3; ++k) {
-    // K_kk = sum L_k^2 [k_s + (k_n - k_s) n_k^2], the kk kk component of Eq. (32).
-    acc[k] += L[k] * L[k] * (ks + kd * n[k] * n[k]);
-  }
-  for (int I = 3; I < 6; ++I) {
-    // Engineering shear gamma_ij: the affine displacement u = (gamma/2)(L_j e_i + L_i e_j), the
-    // force k_s u + (k_n - k_s) n (n.u), the stress sym(dF (x) L)_ij: the ij ij component of
-    // Eq. (32) symmetrised over (ij) and (kl), as the static solve's affine part.
-    const int i = voigt::kRow[I], j = voigt::kCol[I];
-    const Real nu = 0.5 * (n[i] * L[j] + n[j] * L[i]);
-    const Real dFi = 0.5 * ks * L[j] + kd * n[i] * nu, dFj = 0.5 * ks * L[i] + kd * n[j] * nu;
-    acc[I] += 0.5 * (dFi * L[j] + dFj * L[i]);
-  }
+  Real k[6];
+  affineStiffnessTerms(kn, ratio, n.x(), n.y(), n.z(), L.x(), L.y(), L.z(), k);
+  for (int I = 0; I < 6; ++I) acc[I] += k[I];
 }
 
 }  // namespace trueaniso

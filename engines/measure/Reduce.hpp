@@ -9,21 +9,34 @@
 
 namespace trueaniso {
 
+// The block of every such sum. The force loop gives each thread whole blocks of pairs, so that
+// the measures it accumulates while it computes the forces are these sums to the bit
+// (measure/CellSums.hpp).
+constexpr int kSumBlock = 512;
+
+// `block(begin, end, acc)` adds the items [begin, end) of one block to acc (which starts at `zero`);
+// the blocks' results are added in block order.
 template <class T, class F>
-T blockSum(int n, const T& zero, F&& term) {
-  constexpr int kBlock = 512;
-  const int blocks = (n + kBlock - 1) / kBlock;
+T blockReduce(int n, const T& zero, F&& block) {
+  const int blocks = (n + kSumBlock - 1) / kSumBlock;
   std::vector<T> partial(blocks, zero);
 #pragma omp parallel for schedule(static) if (worthThreads(n))
   for (int k = 0; k < blocks; ++k) {
     T acc = zero;
-    const int end = std::min(n, (k + 1) * kBlock);
-    for (int i = k * kBlock; i < end; ++i) term(i, acc);
+    block(k * kSumBlock, std::min(n, (k + 1) * kSumBlock), acc);
     partial[k] = acc;
   }
   T total = zero;
   for (const T& p : partial) total += p;
   return total;
+}
+
+// `term(i, acc)` adds item i to acc, item after item in each block.
+template <class T, class F>
+T blockSum(int n, const T& zero, F&& term) {
+  return blockReduce<T>(n, zero, [&](int begin, int end, T& acc) {
+    for (int i = begin; i < end; ++i) term(i, acc);
+  });
 }
 
 }  // namespace trueaniso

@@ -6,81 +6,56 @@
 #include <limits>
 
 #include "contact/HertzMindlin.hpp"
-#include "measure/ContactTerms.hpp"
+#include "measure/CellSums.hpp"
 #include "measure/Reduce.hpp"
 
 namespace trueaniso {
 
 namespace {
 
-// One contact's term of each sum. Each measure below and contactMeasures() add the same terms in
-// the same blocks (measure/Reduce.hpp), so the fused pass gives the same bits.
-
-// Love-Weber: F_c (x) L_c.
-inline void addStress(const Contacts& C, int c, Mat3& acc) {
-  if (C.normalForce[c] > 0) addStressTerm(C.force(c), C.branch[c], acc);
+// Mean |resultant force| over bodies over the mean |contact force|: YADE's ratio of the two sums.
+Real unbalancedRatio(Real bodySum, int bodies, Real contactSum, long contacts) {
+  if (contacts == 0 || contactSum == 0) return std::numeric_limits<Real>::quiet_NaN();
+  return (bodySum / bodies) / (contactSum / contacts);
 }
 
-// The mean contact force of the unbalanced force.
-struct ForceMean {
-  Real f = 0;
-  long n = 0;
-  ForceMean& operator+=(const ForceMean& o) { f += o.f; n += o.n; return *this; }
-};
-inline void addContactForce(const Contacts& C, int c, ForceMean& acc) {
-  if (C.normalForce[c] > 0) { acc.f += C.force(c).norm(); ++acc.n; }
-}
-
-// The diagonal of Eq. (32), contact springs only.
-inline void addAffineStiffness(const Contacts& C, const HertzMindlin& law, int c, Vec6& acc) {
-  const Real kn = HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]);
-  if (kn <= 0) return;
-  addAffineStiffnessTerm(kn, law.shearToNormal(), C.normal[c], C.branch[c], acc);
-}
-
-// Mean |resultant force| over bodies over the mean |contact force|.
-Real unbalancedFrom(const Scene& s, const ForceMean& contact) {
+Real bodyForceSum(const Scene& s) {
   const Bodies& B = s.bodies;
-  const Real bodySum = blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.force[b].norm(); });
-  if (contact.n == 0 || contact.f == 0) return std::numeric_limits<Real>::quiet_NaN();
-  return (bodySum / B.size()) / (contact.f / contact.n);
+  return blockSum<Real>(B.size(), 0.0, [&](int b, Real& acc) { acc += B.force[b].norm(); });
+}
+
+// The sums over contacts of every cell measure, per block of pairs, as the force loop sums them
+// (measure/CellSums.hpp): each measure below is read from them, so all agree to the bit with one
+// another and with the force loop's.
+CellSums contactSums(const Scene& s) {
+  const Contacts& C = s.contacts;
+  const Real ratio = HertzMindlin(s.material).shearToNormal();
+  return blockSum<CellSums>(C.size(), CellSums{}, [&](int c, CellSums& acc) {
+    if (C.normalForce[c] > 0)
+      acc.addContact(C.force(c), C.branch[c], C.normal[c], HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]),
+                     ratio);
+  });
+}
+
+ContactMeasures measuresOf(const Scene& s, const CellSums& sum, Real bodySum) {
+  const Real V = s.cell.volume();
+  return {sum.stress() / V, sum.stiffness() / V, unbalancedRatio(bodySum, s.bodies.size(), sum.contactForce(), sum.loaded)};
 }
 
 }  // namespace
 
-Mat3 loveWeberStress(const Scene& s) {
-  const Contacts& C = s.contacts;
-  const Mat3 sum = blockSum<Mat3>(C.size(), Mat3::Zero(), [&](int c, Mat3& acc) { addStress(C, c, acc); });
-  return sum / s.cell.volume();
-}
+Mat3 loveWeberStress(const Scene& s) { return contactSums(s).stress() / s.cell.volume(); }
 
 Real unbalancedForce(const Scene& s) {
-  const Contacts& C = s.contacts;
-  return unbalancedFrom(
-      s, blockSum<ForceMean>(C.size(), ForceMean{}, [&](int c, ForceMean& acc) { addContactForce(C, c, acc); }));
+  const CellSums c = contactSums(s);
+  return unbalancedRatio(bodyForceSum(s), s.bodies.size(), c.contactForce(), c.loaded);
 }
 
-ContactMeasures contactMeasures(const Scene& s) {
-  const Contacts& C = s.contacts;
-  const HertzMindlin law(s.material);
-  struct Sums {
-    Mat3 stress = Mat3::Zero();
-    Vec6 stiffness = Vec6::Zero();
-    ForceMean mean;
-    Sums& operator+=(const Sums& o) {
-      stress += o.stress;
-      stiffness += o.stiffness;
-      mean += o.mean;
-      return *this;
-    }
-  };
-  const Sums sum = blockSum<Sums>(C.size(), Sums{}, [&](int c, Sums& acc) {
-    addStress(C, c, acc.stress);
-    addAffineStiffness(C, law, c, acc.stiffness);
-    addContactForce(C, c, acc.mean);
-  });
-  const Real V = s.cell.volume();
-  return {sum.stress / V, sum.stiffness / V, unbalancedFrom(s, sum.mean)};
+ContactMeasures contactMeasures(const Scene& s) { return measuresOf(s, contactSums(s), bodyForceSum(s)); }
+
+ContactMeasures cellMeasures(const Scene& s) {
+  if (s.measured.current(s.step)) return measuresOf(s, s.measured.contacts, s.measured.bodyForce);
+  return contactMeasures(s);
 }
 
 Real unbalancedTorque(const Scene& s) {
@@ -102,13 +77,7 @@ Real unbalancedTorque(const Scene& s) {
   return (torqueSum / B.size()) / ((contact.f / contact.n) * 0.5 * (contact.arm / contact.n));
 }
 
-Vec6 affineStiffness(const Scene& s) {
-  const Contacts& C = s.contacts;
-  const HertzMindlin law(s.material);
-  const Vec6 sum =
-      blockSum<Vec6>(C.size(), Vec6::Zero(), [&](int c, Vec6& acc) { addAffineStiffness(C, law, c, acc); });
-  return sum / s.cell.volume();
-}
+Vec6 affineStiffness(const Scene& s) { return contactSums(s).stiffness() / s.cell.volume(); }
 
 Vec3 principalStresses(const Mat3& sigma) {
   const Mat3 sym = 0.5 * (sigma + sigma.transpose());

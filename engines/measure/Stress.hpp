@@ -26,15 +26,20 @@ Real unbalancedTorque(const Scene& scene);
 Vec6 affineStiffness(const Scene& scene);
 
 // The stress, the affine stiffness and the unbalanced force that a cell controller reads every
-// step, from one pass over the contacts instead of three: the three passes took 20 % of a
-// 53,004-sphere state's time (perf, docs/benchmarks.md). The same bits as the three functions
-// above: the same terms added in the same blocks and order (tests/cpp/test_dynamics.cpp).
+// step, from one pass over the contacts instead of three. The four functions above and this one
+// add the same terms in the same blocks, lanes and order (measure/CellSums.hpp), so they agree to
+// the bit, and with the sums the force loop makes while it computes the forces (cellMeasures).
 struct ContactMeasures {
   Mat3 stress;      // loveWeberStress
   Vec6 stiffness;   // affineStiffness
   Real unbalanced;  // unbalancedForce
 };
 ContactMeasures contactMeasures(const Scene& scene);
+
+// The same measures, from the sums the force loop made in this step (Scene::measured,
+// measure/CellSums.hpp) when it made them, else from contactMeasures: what the cell controllers
+// read. The same bits either way.
+ContactMeasures cellMeasures(const Scene& scene);
 
 // Principal values of the symmetric part of a stress tensor, largest first.
 Vec3 principalStresses(const Mat3& sigma);

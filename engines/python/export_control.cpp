@@ -247,7 +247,9 @@ void exportControl() {
       .def_readwrite("restrain_rotations", &StressProbe::restrainRotations)
       .add_property("gain", &getGain<StressProbe>, &setGain<StressProbe>)
       .add_property("max_strain_rate", &getRate<StressProbe>, &setRate<StressProbe>)
-      .def_readwrite("ramp_steps", &StressProbe::rampSteps)
+      .def_readwrite("ramp_steps", &StressProbe::rampSteps, "The ramp's length in reference steps (sets its rate).")
+      .def_readwrite("step_scale", &StressProbe::stepScale,
+                     "The step in reference steps, taken from the scene at every step (gain and step counts are per reference step).")
       .def_readwrite("relative_tolerance", &StressProbe::relativeTolerance)
       .def_readwrite("unbalanced_tolerance", &StressProbe::unbalancedTolerance)
       .def_readwrite("settle_steps", &StressProbe::settleSteps)

@@ -6,11 +6,15 @@ this package composes them: specimens, protocols, the YADE bridge, file formats.
 import os
 import sys
 
+if sys.argv[:1] == ["-m"]:  # Python is locating a module of this package to run it as a tool
+    from . import start_guard as _start_guard
+    _start_guard.install()  # cli.guarded takes over when the tool's work starts
+
 # The modules a user's script calls, in the order of a study: the manual's Python API lists them
 # first, each with the functions of its __all__, every one of them with an example that
 # tests/py/test_api_examples.py runs. The other modules serve the scripts and these; the manual
 # lists them after, as internal.
-PUBLIC_MODULES = ("specimen", "clump_specimen", "specimen_file", "triaxial", "fabric", "statics", "zeta",
+PUBLIC_MODULES = ("specimen", "clump_specimen", "specimen_file", "options", "triaxial", "fabric", "statics", "zeta",
                   "study", "dem", "psd", "validate", "yade_bridge", "yade_adapter",
                   "analysis", "analysis.results", "analysis.hyperelastic", "analysis.chain", "analysis.report",
                   "analysis.figures")

@@ -1,7 +1,7 @@
 """The x86-64 level a build of the engines was compiled for (CMake's TRUEANISO_ARCH), checked
 against the processor before the module is loaded.
 
-A build for x86-64-v3 steps 1.2-1.3x faster than the portable baseline (docs/benchmarks.md)
+A build for x86-64-v3 steps faster than the portable baseline (by how much: docs/benchmarks.md)
 and dies of an illegal instruction on a processor without AVX2 and FMA, with no word of why: on a
 cluster whose nodes differ, a module built on one node can be loaded on another. CMake writes the
 level to `_trueaniso.arch` beside the module; `refuse_unsupported` reads it and compares with the

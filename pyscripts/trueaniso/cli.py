@@ -17,7 +17,7 @@ import threading
 from . import param_table
 from .refusal import InputError, Refusal
 
-__all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "release_start_guard", "in_yade",
+__all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "tool", "release_start_guard", "in_yade",
            "description"]
 
 
@@ -122,11 +122,10 @@ def _check_openmp_count():
 
 def add_path_rate_option(parser):
     parser.add_argument("--path-rate", type=positive_or_inf, default=None,
-                        help="servo's path rate while states are reached, in Pa per step of the smallest-inertia time step rule "
-                             "(per unit time: under --time-step per-axis a step moves it further; when not given: the rate "
-                             "of the study --out holds, else 2, every committed study's; 20 reaches a state in "
-                             "2.1-2.3 times fewer steps, with moduli within the probe's own error at 4000 spheres "
-                             "but not at 1000; inf: the whole load at once; docs/state-speed.md)")
+                        help="servo's path rate while states are reached, in Pa per step of the smallest-inertia time "
+                             "step rule (under --time-step per-axis a step moves it further: the same rate in time); "
+                             "inf: the whole load at once; when not given: the rate of the study --out holds, else "
+                             "2 (docs/state-speed.md: what a faster rate changes)")
 
 
 DEFAULT_TIME_STEP = "smallest-inertia"  # the rule of every committed result (dem.TIME_STEP_RULES)
@@ -135,17 +134,15 @@ DEFAULT_TIME_STEP = "smallest-inertia"  # the rule of every committed result (de
 def add_time_step_option(parser, study=False):
     if not study:
         parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=DEFAULT_TIME_STEP,
-                            help="time step rule (docs/time-step.md): smallest-inertia, every committed result's, or "
-                                 "per-axis, steps 1.6 (spheres) to 3 (clumps) times longer at 100 kPa, measured "
-                                 "stable on undamped packings; the preparation's rates are per unit time, so it "
-                                 "takes fewer steps, and makes another packing")
+                            help="time step rule (docs/time-step.md): smallest-inertia, or per-axis, the bound of each "
+                                 "body's stiffest mode, a longer step; the preparation's rates are per unit time, so "
+                                 "per-axis takes fewer steps, and makes another packing")
         return
     parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=None,
                         help="time step rule while states are reached (docs/time-step.md; when not given: the rule "
-                             "of the study --out holds, else smallest-inertia, every committed study's). The path "
-                             "rate, servo gain and step counts are per step of smallest-inertia, so per-axis "
-                             "reaches each state at the same rate in time in 1.6 (spheres) to 3 (clumps) times "
-                             "fewer steps; probes and the static solve take smallest-inertia")
+                             "of the study --out holds, else smallest-inertia). The path rate, servo gain and step "
+                             "counts are per step of smallest-inertia, so per-axis reaches each state at the same "
+                             "rate in time in fewer steps; probes and the static solve take smallest-inertia")
 
 
 def resolve_time_step(o):
@@ -180,11 +177,10 @@ def resolve_study_time_step(o):
 
 def resolve_path_rate(o):
     """--path-rate when not given: the rate of the study --out holds, else the default."""
-    import inspect
-    from . import study_dir, triaxial
+    from . import options, study_dir
     if o.path_rate is not None:
         return o.path_rate
-    default = inspect.signature(triaxial.reach_state).parameters["path_rate"].default  # one home: the servo's
+    default = options.ServoOptions.path_rate  # one home: the servo's options
     held = None if getattr(o, "force_new", False) else study_dir.path_rate_of(o.out)
     return _continue_held(o, "path_rate", held, default, "its study reached its states at %g Pa per step")
 
@@ -224,6 +220,14 @@ def positive_or_inf(text):
         raise argparse.ArgumentTypeError("%r is not a number" % text) from None
     if not x > 0:  # nan and -inf fail too
         raise argparse.ArgumentTypeError("%r is not > 0 (or inf)" % text)
+    return x
+
+
+def poisson_ratio(text):
+    """A particle's Poisson's ratio: a number in (-1, 0.5), the range of an isotropic elastic solid."""
+    x = finite(text)
+    if not -1 < x < 0.5:
+        raise argparse.ArgumentTypeError("%r is not in (-1, 0.5)" % text)
     return x
 
 
@@ -555,6 +559,22 @@ def guarded(main, resumable=False):
         fail(_interrupted_line(what) if resumable else what, 128 + signal.SIGPIPE)
     except OSError as exc:  # a full disk, a file system turned read-only, a permission taken away
         fail(io_error_line(exc, resumable), 1)
+
+
+def tool(main):
+    """Run an analysis tool's main() (python3 -m trueaniso.analysis.X), which returns its exit
+    status (None: 0) and prints its own refusals, under guarded: Ctrl-C, SIGTERM, a closed pipe or
+    an error of the library are one line and their status, as in every script, never a traceback."""
+    def run():
+        status = main()
+        if status:
+            try:
+                sys.stdout.flush()
+            except OSError:
+                pass
+            os._exit(status)
+        work_done()
+    guarded(run)
 
 
 def io_error_line(exc, resumable=False):

@@ -13,6 +13,19 @@ import os
 from . import atomic
 
 
+def state_id(text):
+    """A state's id as every reader of a table takes it: a Table C1 number written '21.0' or ' 21'
+    (a table edited by hand or by a spreadsheet) is '21'; any other id is its text without the
+    spaces around it. Applied once, where a table is read (``read``), so that no later step meets
+    two spellings of one state (a row counted for state '21.0' while the report looks for '21')."""
+    text = str(text).strip()
+    try:
+        value = float(text)
+    except ValueError:
+        return text
+    return str(int(value)) if value.is_integer() and abs(value) < 1e15 else text
+
+
 class TableError(ValueError):
     """A probe table that cannot be read as one (other than a torn last row)."""
 
@@ -50,7 +63,10 @@ def read(path):
         if len(values) != len(header):
             raise TableError("%s line %d has %d fields for %d columns: the file was edited or damaged"
                              % (path, k, len(values), len(header)))
-        rows.append(dict(zip(header, values)))
+        row = dict(zip(header, values))
+        if "state" in row:
+            row["state"] = state_id(row["state"])
+        rows.append(row)
     return Table(path, header, rows, torn)
 
 

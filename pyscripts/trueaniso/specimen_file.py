@@ -237,7 +237,7 @@ def read(path):
             v = np.asarray(data.pop(old))
             data[new] = np.diag(v) if v.shape == (3,) else v  # a wrong shape is named by contents_problem
     problem = (meta_problem(meta) or contents_problem(data) or derived.clump_problem(data, meta)
-               or volumes_problem(data))
+               or derived.recipe_problem(meta) or volumes_problem(data))
     if problem:
         raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     return data, meta
@@ -489,6 +489,9 @@ def load(path):
         raise SpecimenFileError("corrupt specimen file %s (masses disagree with radii and density)" % path)
     from . import dem
     dem.refresh(s)  # contact forces, normals and branches for the loaded positions
+    problem = derived.time_step_problem(s, meta)  # on the refreshed contacts, as a chain derives it
+    if problem:
+        raise SpecimenFileError("invalid specimen file %s (%s)" % (path, problem))
     return s, meta
 
 

@@ -13,7 +13,7 @@ import os
 from . import engines as _e
 
 VOIGT = ("xx", "yy", "zz", "yz", "xz", "xy")
-__all__ = ["static_stiffness", "rotation_factor", "state_record"]
+__all__ = ["static_stiffness", "rotation_factor", "identity", "state_record"]
 
 
 def static_stiffness(scene, rotations=True, max_unbalanced=1e-2, max_residual=1e-8, **solver):
@@ -47,9 +47,11 @@ def static_stiffness(scene, rotations=True, max_unbalanced=1e-2, max_residual=1e
         >>> print("E_z = %.0f MPa, residual below 1e-8: %s" % (r["E"][2] / 1e6, r["residual"] < 1e-8))
         E_z = 278 MPa, residual below 1e-8: True
     """
+    from .options import flag
     if not 0 < max_unbalanced:
         raise ValueError("max_unbalanced must be > 0")
-    r = _e.static_stiffness(scene, rotations=bool(rotations), max_unbalanced=float(max_unbalanced), **solver)
+    r = _e.static_stiffness(scene, rotations=flag("static_stiffness", "rotations", rotations),
+                            max_unbalanced=float(max_unbalanced), **solver)
     if not r["residual"] <= max_residual:
         raise RuntimeError("static stiffness: residual %.3g > %.3g; pinned DOFs %s"
                            % (r["residual"], max_residual, [(p["body"], p["reason"]) for p in r["pinned"]]))
@@ -99,20 +101,67 @@ def summary(result):
     return "\n".join(lines)
 
 
-def state_record(scene):
-    """What a study keeps of a state's static solve (Appendix B, Table B1), as plain numbers (JSON).
+def identity(meta, n, state=None):
+    """What a statics record is of, which a reader checks it against (analysis.b1_checks).
+
+    A record keeps it as ``study``: the report refuses a record in a study directory, or borrowed
+    with --b1-data, whose specimen, material or state is not the study's.
+
+    Args:
+        meta: the specimen file's metadata of the scene solved (`specimen_file.load`); a study's
+            checkpoint names its study's specimen in its parameters.
+        n: the number of particles.
+        state: the state's id of a study's checkpoint, or None for the specimen itself (its
+            isotropic state).
 
     Returns:
-        dict: ``E_free`` and ``E_blocked`` (rotations free and blocked), ``E_kinematic`` (zeta = 1),
-        ``nu_free``, ``zeta_h``, ``zeta_v`` (`rotation_factor`), ``sigma`` (the state's normal
-        stresses), ``residual``, ``rattlers`` (their count) and ``time`` (s).
+        dict: ``specimen`` (the study's specimen checksum), ``n``, ``material`` (``shear_modulus``,
+        ``poisson``, ``density``) and ``state`` (``id``, with ``b``, ``sigma_z`` and ``path`` of a
+        checkpoint's state).
 
     Example:
         >>> from trueaniso import specimen_file, statics
         >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
-        >>> rec = statics.state_record(scene)
+        >>> who = statics.identity(meta, scene.num_bodies)
+        >>> who["specimen"] == meta["sha256"], who["n"], who["material"]["shear_modulus"]
+        (True, 150, 18000000000.0)
+    """
+    p = meta.get("parameters") or {}
+    m = meta["material"]
+    out = dict(specimen=p["specimen"] if state is not None else meta["sha256"], n=int(n),
+               material=dict(shear_modulus=float(m["shear_modulus"]), poisson=float(m["poisson"]),
+                             density=float(m["density"])))
+    if state is None:
+        out["state"] = dict(id="isotropic")
+    else:
+        out["state"] = dict(id=str(state), b=float(p["b"]), sigma_z=float(p["sigma_z"]),
+                            path=p.get("path", "true-triaxial"))
+    return out
+
+
+def state_record(scene, identity=None):
+    """What a study keeps of a state's static solve (Appendix B, Table B1), as plain numbers (JSON).
+
+    Args:
+        scene: the engines' Scene at rest at its state (a study's checkpoint, or a specimen).
+        identity: what the record is of (`identity`: the study's specimen, material, particle count
+            and state), stored as ``study`` so that a reader can refuse a record of another study;
+            None leaves it out.
+
+    Returns:
+        dict: ``E_free`` and ``E_blocked`` (rotations free and blocked), ``E_kinematic`` (zeta = 1),
+        ``nu_free``, ``zeta_h``, ``zeta_v`` (`rotation_factor`), ``sigma`` (the state's normal
+        stresses), ``residual``, ``rattlers`` (their count), ``time`` (s), and ``study`` when
+        `identity` is given.
+
+    Example:
+        >>> from trueaniso import specimen_file, statics
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> rec = statics.state_record(scene, statics.identity(meta, scene.num_bodies))
         >>> print("E_blocked / E_kinematic = %.2f" % (rec["E_blocked"][2] / rec["E_kinematic"][2]))
         E_blocked / E_kinematic = 0.97
+        >>> rec["study"]["n"], rec["study"]["state"]
+        (150, {'id': 'isotropic'})
     """
     free = static_stiffness(scene, rotations=True)
     blocked = static_stiffness(scene, rotations=False)
@@ -123,7 +172,8 @@ def state_record(scene):
                 nu_free=[[None if x != x else float(x) for x in row] for row in free["nu"]],
                 zeta_h=float(zeta["zeta_h"]), zeta_v=float(zeta["zeta_v"]), residual=float(free["residual"]),
                 sigma=[float(s[i, i]) for i in range(3)], rattlers=len(free["rattlers"]),
-                time=free["time"]["total"] + blocked["time"]["total"])
+                time=free["time"]["total"] + blocked["time"]["total"],
+                **({} if identity is None else dict(study=identity)))
 
 
 def said_zeta(z):
@@ -140,20 +190,21 @@ def state_file(out, state):
     return os.path.join(out, "statics_isotropic.json" if state is None else "statics_state-%s.json" % state)
 
 
-def cached_record(out, state=None, scene=None, log=print):
-    """The record of `state` (None: the specimen, given as `scene`) from its file in `out`, or
-    solved from the scene (for a state: its checkpoint states/ID.npz) and written atomically."""
+def cached_record(out, state=None, scene=None, log=print, meta=None):
+    """The record of `state` (None: the specimen, given as `scene` with its file's metadata `meta`)
+    from its file in `out`, or solved from the scene (for a state: its checkpoint states/ID.npz)
+    and written atomically, with its identity."""
     from . import atomic, specimen_file, study_dir
     path = state_file(out, state)
     if not os.path.exists(path):
         if scene is None:
             try:
-                scene, _ = specimen_file.load(study_dir.checkpoint_path(out, state))
+                scene, meta = specimen_file.load(study_dir.checkpoint_path(out, state))
             except specimen_file.SpecimenFileError as exc:
                 # A study's checkpoint, not a specimen: run_study reaches a missing one again.
                 raise specimen_file.SpecimenFileError(study_dir.checkpoint_problem(exc, state)) from None
         log("statics (%s): solving the contact network's stiffness, rotations free and blocked ..."
             % ("isotropic state" if state is None else "state %s" % state))
-        atomic.write_json(path, state_record(scene))
+        atomic.write_json(path, state_record(scene, None if meta is None else identity(meta, scene.num_bodies, state)))
     from . import validate
     return validate.load_json(path, "statics_record")

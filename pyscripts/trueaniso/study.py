@@ -15,7 +15,6 @@ uninterrupted run computes, bit for bit: both start every piece of work from the
 Rows already in probes.csv are not run again.
 """
 import contextlib
-import inspect
 import math
 import os
 import sys
@@ -25,9 +24,9 @@ import numpy as np
 
 from . import (dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_checks, study_dir,
                triaxial, validate)
+from .options import PathOptions, ProbeOptions, ServoOptions, flag
 from .progress import EVERY, Progress, chunk_for, say
 from .refusal import InputError
-from .triaxial import AXES
 
 # A row is also the state's record: its six stresses, the principal values and the largest
 # off-diagonal. E and nu_* are empty in a shear probe's row, G in a normal probe's. `specimen` is
@@ -55,28 +54,38 @@ def read_rows(path):
     Example:
         >>> import tempfile
         >>> from trueaniso import study
+        >>> from trueaniso.options import PathOptions
         >>> out = tempfile.mkdtemp()
-        >>> _ = study.run_states("tests/data/spheres-150-s4.npz", study.table_states([1]), out, probes="z",
-        ...                      log=lambda line: None)
+        >>> _ = study.run_states("tests/data/spheres-150-s4.npz", study.table_states([1]), out,
+        ...                      path=PathOptions(probes=("z",)), log=lambda line: None)
         >>> [(r["state"], r["probe"]) for r in study.read_rows(out + "/probes.csv")]
         [('1', 'z')]
     """
     return results_csv.read(path).rows
 
 
-def _effective(function, options):
-    """The keyword values a protocol really runs with: its defaults, overridden by options, so
-    the metadata states the tolerances (stress, unbalanced force, steps) behind every row."""
-    skip = {"scene", "hold", "axis", "sign", "gamma", "b", "sigma_z", "progress", "restrain_rotations",
-            "skip_detection", "damping", "chunk",  # chunk: changes no result (trueaniso/progress.py)
-            "gain"}  # the servo's gain: no study sets it (the engine's 0.01); bench_state_split.py varies it
-    out = {k: p.default for k, p in inspect.signature(function).parameters.items()
-           if p.default is not inspect.Parameter.empty and k not in skip}
-    out.update(options or {})
-    # metadata.json stays standard JSON (which has no Infinity or NaN; --path-rate inf wrote
-    # "path_rate": Infinity, which JavaScript's and other strict parsers refuse): a non-finite
-    # number is kept as its text, "inf".
-    return {k: repr(v) if isinstance(v, float) and not math.isfinite(v) else v for k, v in out.items()}
+def _recorded(options):
+    """A fingerprint's part as metadata.json stays standard JSON (which has no Infinity or NaN;
+    --path-rate inf wrote "path_rate": Infinity, which JavaScript's and other strict parsers
+    refuse): a non-finite number is kept as its text, "inf"."""
+    return {k: repr(v) if isinstance(v, float) and not math.isfinite(v) else v for k, v in options.items()}
+
+
+def options_of(path=None, servo=None, probe=None, probes=None, gamma=None, restrain_rotations=None,
+               skip_detection=None, damping=None, state_options=None, probe_options=None):
+    """(PathOptions, ServoOptions, ProbeOptions) of a study from the objects and/or the keywords
+    run_states took before them: probes, gamma, restrain_rotations, skip_detection, damping (the
+    servo's and the probes' both), state_options (fields of ServoOptions), probe_options (of
+    ProbeOptions). Each is checked once, here."""
+    if isinstance(path, str):
+        path = PathOptions(path=path)
+    path = PathOptions.of(path, {} if probes is None else dict(probes=tuple(probes)), "run_states")
+    shared = {} if damping is None else dict(damping=damping)
+    servo = ServoOptions.of(servo, dict(state_options or {}, **shared), "run_states (state_options)")
+    given = dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection)
+    probe = ProbeOptions.of(probe, dict(probe_options or {}, **shared, **{k: v for k, v in given.items() if v is not None}),
+                            "run_states (probe_options)")
+    return path, servo, probe
 
 
 ASSEMBLIES = ("sphere", "clump1", "clump2")  # what prepare_specimen.py builds (the paper's three)
@@ -105,25 +114,29 @@ def assembly_of(specimen_meta, member_begin):
 
 def fingerprint(specimen_meta, assembly, gamma, restrain_rotations, skip_detection, damping, state_options=None,
                 probe_options=None, recipe=None, path="true-triaxial"):
+    """What every row and checkpoint of a study depends on (study_dir compares it on reruns), from
+    the keywords of run_states before its option objects (study_fingerprint takes those)."""
+    path, servo, probe = options_of(path, None, None, None, gamma, restrain_rotations, skip_detection, damping,
+                                    state_options, probe_options)
+    return study_fingerprint(specimen_meta, assembly, path, servo, probe, recipe)
+
+
+def study_fingerprint(specimen_meta, assembly, path, servo, probe, recipe=None):
     """What every row and checkpoint of a study depends on (study_dir compares it on reruns); the
     loading path too, which gives a state definition (b, sigma_z) its mean stress."""
     # The assembly is also behind the specimen's checksum; named here so a refusal can say it.
     fp = dict(specimen=specimen_meta["sha256"], assembly=assembly,
-              code=provenance.code_version(), threads=engines.threads(), path=path,
-              state=dict(damping=damping, **_effective(triaxial.reach_state, state_options)),
-              probe=dict(gamma=gamma, rotations="restrained" if restrain_rotations else "free",
-                         detection="off" if skip_detection else "on", damping=damping,
-                         **_effective(triaxial.probe, probe_options)))
+              code=provenance.code_version(), threads=engines.threads(), path=path.path,
+              state=_recorded(dict(damping=servo.damping, **servo.fingerprint())),
+              probe=_recorded(probe.fingerprint()))
     if recipe:
         fp["recipe"] = recipe
     return fp
 
 
-def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping, state_options,
-           probe_options, recipe, path="true-triaxial"):
+def _study(specimen_path, states, path_o, servo, probe, recipe):
     """Every check that needs no work, then (ids, axes, specimen metadata, fingerprint)."""
-    if path not in triaxial.PATHS:
-        raise InputError("unknown path %r: the paths are %s" % (path, ", ".join(triaxial.PATHS)))
+    path = path_o.path
     for i, b, sz in states:
         try:
             triaxial.validate_path_state(path, b, sz)  # every state checked before any work
@@ -141,10 +154,7 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
             raise InputError("states %s and %s are one state: both have principal stresses (%s) Pa; give it once"
                              % (named[key], i, ", ".join("%.12g" % x for x in key)))
         named[key] = i
-    probes = [triaxial.validate_probe(a, gamma) for a in probes]
-    if len(set(probes)) != len(probes):
-        raise InputError("each probe axis may be given once")
-    axes = [AXES[a] for a in probes]
+    axes = list(path_o.probes)
     # The whole load (the scene built, its contacts checked against its positions), not only the
     # file's read: a specimen refused at its load after metadata.json was written left a study
     # behind in a new --out, and --force-new had moved the old study aside for it.
@@ -155,7 +165,7 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
     summary = _summary(specimen_path, spec_meta)
     prepared_with = (spec_meta.get("parameters") or {}).get("time_step", dem.REFERENCE_TIME_STEP)
-    states_with = (state_options or {}).get("time_step", dem.REFERENCE_TIME_STEP)
+    states_with = servo.time_step
     if prepared_with not in (states_with, dem.REFERENCE_TIME_STEP):
         # The rule is in the study's fingerprint (state.time_step), the specimen's in its file: two
         # choices. A specimen prepared with the longer step is another packing, not the same one
@@ -164,12 +174,11 @@ def _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detect
             % (specimen_path, prepared_with, states_with))
     _refuse_unloaded(specimen_path, summary)
     _refuse_exploded(specimen_path, scene, states, path)
-    _refuse_unreachable(states, path, dict(spec_meta, summary=summary), state_options)
-    if spec_meta["block_rotations"] and not restrain_rotations:
+    _refuse_unreachable(states, path, dict(spec_meta, summary=summary), servo.keywords())
+    if spec_meta["block_rotations"] and not probe.restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)
-    fp = fingerprint(spec_meta, assembly, gamma, restrain_rotations, skip_detection, damping, state_options,
-                     probe_options, recipe, path)
+    fp = study_fingerprint(spec_meta, assembly, path_o, servo, probe, recipe)
     return ids, axes, spec_meta, fp
 
 
@@ -261,7 +270,7 @@ def refuse_slow_paths(states, path, start, state_options=None, start_within=0.0)
     refused at rates state 2's checkpoint reaches it at. The ramp must end `settle_steps`
     before max_steps: the servo holds the goal that long before it calls a state reached (a ramp
     ending within them was accepted, then ran out of steps)."""
-    servo = dict(_effective(triaxial.reach_state, None), **(state_options or {}))
+    servo = dict(ServoOptions.defaults(), **(state_options or {}))
     # .get: a stand-in for the servo (a test's) declares no defaults, and so sets no limit
     rate, limit = float(servo.get("path_rate", math.inf)), servo.get("max_steps", math.inf)
     room = limit - engines.TrueTriaxialServo().settle_steps
@@ -305,20 +314,18 @@ def _nearer_states(path, sid, b, sz, asked):
     return ""
 
 
-def check(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False, skip_detection=False,
-          damping=0.4, state_options=None, probe_options=None, recipe=None, path="true-triaxial"):
+def check(specimen_path, states, out, path=None, servo=None, probe=None, recipe=None, **settings):
     """What run_states checks before any work, alone (run_study.py asks before it writes anything):
-    the metadata of the study in `out` (None for a new one), or a refusal. The caller holds the lock."""
+    the metadata of the study in `out` (None for a new one), or a refusal. The caller holds the
+    lock. The options as run_states takes them."""
     assert lock.is_held(out)
-    _, _, _, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection, damping,
-                         state_options, probe_options, recipe, path)
+    path, servo, probe = options_of(path, servo, probe, **settings)
+    _, _, _, fp = _study(specimen_path, states, path, servo, probe, recipe)
     return study_dir.check(out, fp, states)
 
 
-def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrain_rotations=False,
-               skip_detection=False, damping=0.4, log=print, state_options=None, probe_options=None,
-               wait=False, force_new=False, progress_every=EVERY, recipe=None, path="true-triaxial", executor=None,
-               checkpoints=()):
+def run_states(specimen_path, states, out, path=None, servo=None, probe=None, log=print, wait=False, force_new=False,
+               progress_every=EVERY, recipe=None, executor=None, checkpoints=(), **settings):
     """Run true-triaxial states and their probes on a specimen, writing each result as it comes (module doc).
 
     The results directory `out` is one study: a rerun continues it where it stopped (after a kill
@@ -331,45 +338,51 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         states: (id, b, sigma_z) per state (`table_states`, `parse_states`,
             `triaxial.cross_anisotropic_states`); ids name the rows and the checkpoints.
         out: the results directory (made if missing).
-        probes: the probe axes, 0-5 or "x", "y", "z", "yz", "xz", "xy"; z, x, y by default.
-        gamma: the strain invariant each probe stops at (Eq. 12).
-        restrain_rotations: block particle rotations during the probes.
-        skip_detection: keep the contact list during a probe.
-        damping: YADE's local non-viscous damping of the loading and the probes.
+        path: `options.PathOptions` (the loading path, which sets each state's mean stress, and the
+            probe axes), or the path's name (one of `triaxial.PATHS`); None: the true-triaxial path,
+            probes z, x, y.
+        servo: `options.ServoOptions`, how the states are reached and held (None: the defaults).
+        probe: `options.ProbeOptions`, how they are probed (None: the defaults).
         log: called with each line the run says (print by default).
-        state_options: other arguments of `triaxial.reach_state` (e.g. ``{"path_rate": 4.0}``).
-        probe_options: other arguments of `triaxial.probe`.
-        wait: wait for another run that holds the study's lock instead of refusing.
-        force_new: move an existing study in `out` into out/superseded/ and start a new one.
+        wait: True waits for another run that holds the study's lock instead of refusing.
+        force_new: True moves an existing study in `out` into out/superseded/ and starts a new one.
         progress_every: seconds between progress lines.
         recipe: a description of the specimen's recipe, recorded in the study's fingerprint.
-        path: the loading path, one of `triaxial.PATHS` (it sets each state's mean stress).
         executor: a concurrent.futures executor (e.g. mpi4py.futures.MPIPoolExecutor) whose workers
             each walk whole loading paths and hand their rows back; the values equal a serial run's,
             the rows come in the order the paths end.
         checkpoints: ids of states whose checkpoint must exist when the run ends even if their probes
             are all done; a missing one is reached again along its path, which reproduces its bytes.
+        **settings: the keywords run_states took before the option objects, on top of them
+            (`options_of`): ``probes`` (axes 0-5 or "x", "y", "z", "yz", "xz", "xy"), ``gamma``,
+            ``restrain_rotations``, ``skip_detection``, ``damping`` (the servo's and the probes'),
+            ``state_options`` (fields of ServoOptions), ``probe_options`` (fields of ProbeOptions).
 
     Returns:
         list: the complete rows of probes.csv after the run, one dict of text per state and probe
         (columns: `COLUMNS`, reference/formats/probes-csv).
 
     Raises:
-        trueaniso.refusal.InputError: a specimen, state, option or study directory that does not fit,
-            before any work.
+        trueaniso.refusal.InputError: a specimen, state, option or study directory that does not fit
+            (an option of the wrong type too: ``wait="no"``), before any work.
+        TypeError: a keyword that is no option.
         trueaniso.study_dir.StudyMismatch: a rerun that asks for other settings than the study's.
 
     Example:
         >>> import tempfile
         >>> from trueaniso import study
+        >>> from trueaniso.options import PathOptions, ProbeOptions
         >>> out = tempfile.mkdtemp()
         >>> rows = study.run_states("tests/data/spheres-150-s4.npz", study.table_states([1]), out,
+        ...                         path=PathOptions(probes=("z", "x", "y")), probe=ProbeOptions(gamma=1e-6),
         ...                         log=lambda line: None)
         >>> [(r["state"], r["probe"], "%.0f MPa" % (float(r["E"]) / 1e6)) for r in rows]
         [('1', 'z', '278 MPa'), ('1', 'x', '278 MPa'), ('1', 'y', '288 MPa')]
     """
-    ids, axes, spec_meta, fp = _study(specimen_path, states, probes, gamma, restrain_rotations, skip_detection,
-                                      damping, state_options, probe_options, recipe, path)
+    path_o, servo, probe = options_of(path, servo, probe, **settings)
+    wait, force_new = flag("run_states", "wait", wait), flag("run_states", "force_new", force_new)
+    path = path_o.path
+    ids, axes, spec_meta, fp = _study(specimen_path, states, path_o, servo, probe, recipe)
     record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),
                   states=ids, probes=axes,
                   versions=provenance.versions(),
@@ -381,7 +394,7 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
         log("note: %s is the checkpoint of state %s of a study, not a specimen at its preparation pressure; "
             "this study's states are reached from that state" % (specimen_path, made_as))
     had = (spec_meta.get("material") or {}).get("rolling_stiffness", 0.0)
-    if had and not (state_options or {}).get("rolling_stiffness", 0.0):
+    if had and not servo.rolling_stiffness:
         # A state's checkpoint keeps its rolling resistance; the options of this run set the law.
         log("note: %s was made with rolling resistance (beta %g), which this run turns off; give "
             "--rolling-stiffness and --rolling-friction to keep it (docs/rolling.md)" % (specimen_path, had))
@@ -407,9 +420,7 @@ def run_states(specimen_path, states, out, probes=(2, 0, 1), gamma=1e-6, restrai
                                           % (csv_path, ", ".join(strange),
                                              study_dir.WAY_OUT % os.path.join(out, study_dir.SUPERSEDED)))
         run = _Run(specimen_path, spec_meta, out, fp, axes, csv_path, table, log, progress_every, path,
-                   dict(gamma=gamma, restrain_rotations=restrain_rotations, skip_detection=skip_detection,
-                        damping=damping, **(probe_options or {})),
-                   dict(damping=damping, **(state_options or {})), keep=checkpoints, asked=ids)
+                   probe.keywords(), servo.keywords(), keep=checkpoints, asked=ids)
         # The paths run over the states asked and the states earlier runs defined: a state is
         # reached from the nearest one before it on its path, so adding states to a study in path
         # order gives the rows of asking them all at once (paths of the states asked alone would

@@ -13,57 +13,15 @@ import time
 import numpy as np
 
 from . import dem, engines
+from .options import ProbeOptions, ServoOptions
 from .refusal import InputError
+
+# Table C1, Eqs. 8-9 and the loading paths' mean stress live in stress_states (no engines: the
+# readers of result files check rows against them); their names stay importable here.
+from .stress_states import PATHS, SIGMA_H, TABLE_C1, b_of, path_mean_stress, table_c1_states  # noqa: F401
 
 __all__ = ["table_c1_states", "b_of", "path_stresses", "reach_state", "stress_as_held", "probe", "probe_state",
            "cross_anisotropic_states", "StateNotReached"]
-
-# Table C1: (ID, sigma_x, sigma_y, sigma_z, q) in kPa, as printed (rounded to 0.1 kPa).
-TABLE_C1 = [
-    (1, 100, 100, 100, 0), (2, 95, 95, 110, 15), (3, 90, 90, 120, 30), (4, 85, 85, 130, 45),
-    (5, 80, 80, 140, 60), (6, 105, 105, 90, -15), (7, 110, 110, 80, -30), (8, 115, 115, 70, -45),
-    (9, 120, 120, 60, -60), (10, 97.1, 92.9, 110, 15.5), (11, 94.3, 85.7, 120, 30.9),
-    (12, 91.4, 78.6, 130, 46.4), (13, 88.6, 71.4, 140, 61.8), (14, 102.9, 107.1, 90, -15.5),
-    (15, 105.7, 114.3, 80, -30.9), (16, 108.6, 121.4, 70, -46.4), (17, 111.4, 128.6, 60, -61.8),
-    (18, 100, 90, 110, 17.3), (19, 100, 80, 120, 34.6), (20, 100, 70, 130, 52.0),
-    (21, 100, 60, 140, 69.3), (22, 100, 110, 90, -17.3), (23, 100, 120, 80, -34.6),
-    (24, 100, 130, 70, -52.0), (25, 100, 140, 60, -69.3), (26, 104, 86, 110, 21.6),
-    (27, 108, 72, 120, 43.3), (28, 112, 58, 130, 64.9), (29, 96, 114, 90, -21.6),
-    (30, 92, 128, 80, -43.3), (31, 88, 142, 70, -64.9), (32, 105, 90, 105, 15),
-    (33, 110, 80, 110, 30), (34, 115, 70, 115, 45), (35, 120, 60, 120, 60),
-    (36, 95, 110, 95, -15), (37, 90, 120, 90, -30), (38, 85, 130, 85, -45), (39, 80, 140, 80, -60),
-]
-
-
-def b_of(sx, sy, sz):
-    """b of Eq. (8) from the three principal stresses, (sigma_x - sigma_y) / (sigma_z - sigma_y).
-
-    The isotropic state has no b: 0 is returned (every path of Table C1 passes through it).
-
-    Example:
-        >>> from trueaniso import triaxial
-        >>> triaxial.b_of(100e3, 60e3, 140e3)
-        0.5
-    """
-    return 0.0 if abs(sz - sy) < 1e-12 else (sx - sy) / (sz - sy)
-
-
-def table_c1_states():
-    """The 39 states of the paper's Table C1, b rounded to the paper's five values (0, 0.25, 0.5, 0.75, 1).
-
-    Returns:
-        list: (id, b, sigma_z in Pa) per state, by id.
-
-    Example:
-        >>> from trueaniso import triaxial
-        >>> triaxial.table_c1_states()[20]
-        (21, 0.5, 140000.0)
-    """
-    out = []
-    for i, sx, sy, sz, _ in TABLE_C1:
-        b = min((0.0, 0.25, 0.5, 0.75, 1.0), key=lambda v: abs(v - b_of(sx, sy, sz)))
-        out.append((i, b, sz * 1e3))
-    return out
 
 
 def paths(states):
@@ -136,49 +94,27 @@ def set_rolling(scene, stiffness, friction):
         raise InputError(str(exc)) from None
 
 
-def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0,
-                unbalanced=1e-4, path_rate=2.0, max_strain=0.05, max_steps=3_000_000,
-                stall_steps=100_000, hold_steps=200_000, friction=0.5, chunk=5000, progress=None,
-                control_shear=True, shear=(0.0, 0.0, 0.0), rolling_stiffness=0.0, rolling_friction=0.0,
-                gain=None, feed_forward=False, time_step="smallest-inertia"):
+def reach_state(scene, b, sigma_z, p=100e3, servo=None, chunk=5000, progress=None, **settings):
     """Drive the scene to a true-triaxial state at constant mean stress and hold it there (Eqs. 8-9).
 
     The servo moves its goal along the straight stress path from where the scene is to the state,
-    as fast as the specimen follows, and holds until every principal stress is within `tolerance` of
-    Eq. (9), every shear stress within `tolerance` of `shear` and the unbalanced force is below
-    `unbalanced`. The scene is left at rest at the state, its forces evaluated there.
+    as fast as the specimen follows, and holds until every principal stress is within the servo's
+    `tolerance` of Eq. (9), every shear stress within it of `shear` and the unbalanced force is
+    below `unbalanced`. The scene is left at rest at the state, its forces evaluated there.
 
     Args:
         scene: the engines' Scene (a specimen, or a state reached before).
         b: intermediate principal stress coefficient of Eq. (8), in [0, 1].
         sigma_z: the vertical stress of the state, Pa.
         p: the mean stress held along the path, Pa (the paper's 100 kPa).
-        damping: YADE's local non-viscous damping.
-        inertial_number: caps the cell's strain rate (quasi-static below 1e-3).
-        tolerance: stress tolerance of the state, Pa.
-        unbalanced: unbalanced force of the state.
-        path_rate: fastest motion of the goal along the path, Pa per step of the reference time step
-            rule (docs/state-speed.md).
-        max_strain: the specimen fails beyond this cell strain.
-        max_steps: the servo gives up after this many steps.
-        stall_steps: ... or after this many steps in a row without following the path.
-        hold_steps: ... or after this many steps held at the state without settling.
-        friction: friction coefficient while loading (the paper's 0.5).
-        chunk: steps between calls of `progress` (changes no result).
+        servo: `options.ServoOptions`, how the state is reached and held: damping, inertial number,
+            tolerances, path rate, when the servo gives up, the loading friction, the shear held,
+            rolling resistance, gain, feed-forward and time step rule (each field's meaning and
+            default: its class). None: the defaults, the paper's protocol.
+        chunk: steps between calls of `progress` (changes no result), an integer >= 1.
         progress: called with the engines' TrueTriaxialServo after every chunk, or None.
-        control_shear: True holds the shear stresses (the cell's axes are the principal axes); False
-            holds the cell's shear strains instead (the orthorhombic servo; a non-zero `shear` is
-            then refused).
-        shear: the shear stresses held (sigma_yz, sigma_xz, sigma_xy), Pa.
-        rolling_stiffness: beta of the optional rolling resistance (docs/rolling.md); 0 with
-            `rolling_friction` 0 (the paper) turns it off. Set on the scene, so its probes run with it.
-        rolling_friction: eta_r of the rolling resistance.
-        gain: fraction of the stress error the servo closes a step (None: the engine's 0.01).
-        feed_forward: feed the path's rate forward through the cell's measured tangent stiffness, so
-            that the stresses keep pace with the goal (docs/triaxial.md).
-        time_step: the time step rule (`dem.TIME_STEP_RULES`, docs/time-step.md). Path rate, gain and
-            step counts are per step of the reference rule, so a rule with a longer step reaches the
-            state at the same rate in time, in fewer steps.
+        **settings: fields of ServoOptions given as keywords instead, or on top of `servo`
+            (``reach_state(scene, b, sz, path_rate=4.0)``).
 
     Returns:
         dict: ``status`` ("reached"), ``steps``, ``wall_time``, ``stress`` (the six Voigt stresses
@@ -186,6 +122,9 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
         stress record (principal values, the largest shear stress).
 
     Raises:
+        trueaniso.refusal.InputError: a setting of the wrong type or out of range
+            (``feed_forward="no"``), before any step.
+        TypeError: a keyword that is no field of ServoOptions.
         ValueError: b outside [0, 1] or a principal stress <= 0, or bad rolling parameters, before
             any step.
         StateNotReached: the specimen cannot get there: it stops following the path for
@@ -196,32 +135,35 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
         State 2 of Table C1 (b = 0, sigma_z = 110 kPa) from the 150-sphere specimen:
 
         >>> from trueaniso import specimen_file, triaxial
+        >>> from trueaniso.options import ServoOptions
         >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
-        >>> info = triaxial.reach_state(scene, b=0.0, sigma_z=110e3)
+        >>> info = triaxial.reach_state(scene, b=0.0, sigma_z=110e3, servo=ServoOptions(tolerance=100.0))
         >>> info["status"], ["%.1f kPa" % (s / 1e3) for s in info["goal"][:3]]
         ('reached', ['95.0 kPa', '95.0 kPa', '110.0 kPa'])
     """
+    o = ServoOptions.of(servo, settings, "reach_state")
+    chunk = _chunk(chunk, "reach_state")
     validate_state(b, sigma_z, p)
-    set_rolling(scene, rolling_stiffness, rolling_friction)
+    set_rolling(scene, o.rolling_stiffness, o.rolling_friction)
     servo = engines.TrueTriaxialServo()
     servo.set_goal(b, sigma_z, p)
-    servo.control_shear = bool(control_shear)
-    servo.shear_goal = np.asarray(shear, dtype=float)
+    servo.control_shear = o.control_shear
+    servo.shear_goal = np.asarray(o.shear, dtype=float)
     servo.validate()  # shear goals on a path that holds the shear strains: refused before any work
-    servo.path_rate = path_rate
-    if gain is not None:
-        servo.gain = gain
-    servo.feed_forward = bool(feed_forward)
-    servo.stress_tolerance = tolerance
-    servo.unbalanced_tolerance = unbalanced
-    servo.max_strain = max_strain
-    servo.max_steps = max_steps
-    servo.stall_steps = stall_steps
-    servo.hold_steps = hold_steps
-    servo.loading_friction = friction  # the servo sets it on the scene (a scene may carry 1e23)
+    servo.path_rate = o.path_rate
+    if o.gain is not None:
+        servo.gain = o.gain
+    servo.feed_forward = o.feed_forward
+    servo.stress_tolerance = o.tolerance
+    servo.unbalanced_tolerance = o.unbalanced
+    servo.max_strain = o.max_strain
+    servo.max_steps = o.max_steps
+    servo.stall_steps = o.stall_steps
+    servo.hold_steps = o.hold_steps
+    servo.loading_friction = o.friction  # the servo sets it on the scene (a scene may carry 1e23)
     d50 = 2.0 * float(np.median(scene.radii))
-    servo.max_strain_rate = dem.strain_rate_for_inertial_number(inertial_number, d50, scene.density, p)
-    chain = dem.Chain(scene, damping=damping, controllers=[servo], rule=time_step)
+    servo.max_strain_rate = dem.strain_rate_for_inertial_number(o.inertial_number, d50, scene.density, p)
+    chain = dem.Chain(scene, damping=o.damping, controllers=[servo], rule=o.time_step)
     servo.start(scene)
     t0 = time.time()
     while servo.status not in ("reached", "failed"):
@@ -235,12 +177,18 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     info = dict(status=servo.status, steps=int(servo.steps), wall_time=time.time() - t0,
                 stress=servo.stress.tolist(), unbalanced=float(servo.unbalanced), message=servo.message,
                 overshoot=servo.overshoot.tolist(), goal=servo.final_stress.tolist(),
-                friction=float(scene.friction), hold_steps=int(servo.holding), control_shear=bool(control_shear),
+                friction=float(scene.friction), hold_steps=int(servo.holding), control_shear=o.control_shear,
                 waited_steps=int(servo.waited))
     info.update(stress_record(scene, servo.final_stress))
     if servo.status == "failed":
         raise StateNotReached(servo.message)
     return info
+
+
+def _chunk(chunk, owner):
+    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise InputError("%s: chunk must be an integer >= 1 (steps between progress calls), not %r" % (owner, chunk))
+    return int(chunk)
 
 
 def stress_as_held(scene):
@@ -327,14 +275,12 @@ def check_held_state(scene, hold):
                             100 * HOLD_MISMATCH))
 
 
-def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False,
-          skip_detection=False, damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5,
-          settle_steps=100, ramp_steps=300, max_steps=2_000_000, chunk=500, control_shear=True,
-          hold_other_strains=False, progress=None):
+def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **settings):
     """One directional stress probe at a held state (Eqs. 10-12); the scene is restored afterwards.
 
     From the held state, sliding is suppressed (friction 1e23), the scene relaxes, and the stress on
-    `axis` rises until the strain invariant gamma reaches `gamma` while the other stresses are held.
+    `axis` rises until the strain invariant gamma reaches the options' `gamma` while the other stresses are
+    held.
 
     Args:
         scene: the engines' Scene at a held state (`reach_state`, or a specimen).
@@ -343,23 +289,15 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
         axis: "x", "y", "z" (a normal stress: E_i, nu_ij) or "yz", "xz", "xy" (a shear stress: G_ij);
             or 0-5.
         sign: +1 loads, -1 unloads.
-        gamma: the strain invariant of Eq. (12) the probe stops at.
-        increment: a fixed stress increment instead (Pa; 0: by `gamma`).
-        restrain_rotations: block particle rotations during the probe.
-        skip_detection: keep the contact list of the start (nothing moves beyond about 1e-6 strain).
-        damping: YADE's local non-viscous damping.
-        gain: gain of the probe's servo.
-        relative_tolerance: stress tolerance of the held components, relative to the increment.
-        unbalanced: unbalanced force at which the relaxation ends.
-        settle_steps: steps in a row within tolerance that end a stage.
-        ramp_steps: steps of the ramp of the stress increment.
-        max_steps: the probe gives up after this many steps.
-        chunk: steps between calls of `progress` (changes no result).
-        control_shear: False holds the cell's shear strains instead of the shear stresses (the
-            orthorhombic probe; normal axes only).
-        hold_other_strains: True holds the five other strains at zero instead of their stresses: the
-            modulus is then the stiffness C_kk (the static solve's C), not 1/S_kk (docs/cell.md).
+        options: `options.ProbeOptions`, how the state is probed: gamma (the strain invariant of
+            Eq. 12 the probe stops at), a fixed stress increment instead, restrained rotations,
+            contact detection, damping, the probe servo's gain and tolerances, its stages' steps,
+            held shear stresses or strains, held other strains (each field's meaning and default:
+            its class). None: the defaults, the paper's probe.
+        chunk: steps between calls of `progress` (changes no result), an integer >= 1.
         progress: called with the engines' StressProbe after every chunk, or None.
+        **settings: fields of ProbeOptions given as keywords instead, or on top of `options`
+            (``probe(scene, hold, "z", gamma=1e-6)``).
 
     Returns:
         dict: ``modulus`` and ``E`` (Eq. 10) with ``nu_ij`` (Eq. 11) of a normal probe, or ``G`` of a
@@ -369,25 +307,36 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     Raises:
         ValueError: an unknown axis, a gamma <= 0, a scene without bodies, or held stresses that are
             not the scene's, before any step.
-        StateNotReached: the probe did not converge within `max_steps`.
+        trueaniso.refusal.InputError: a setting of the wrong type or out of range
+            (``restrain_rotations="no"``), before any step.
+        TypeError: a keyword that is no field of ProbeOptions.
+        StateNotReached: the probe did not converge within the options' `max_steps`.
 
     Example:
         >>> from trueaniso import specimen_file, triaxial
+        >>> from trueaniso.options import ProbeOptions
         >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
-        >>> r = triaxial.probe(scene, [100e3, 100e3, 100e3], "z")
+        >>> r = triaxial.probe(scene, [100e3, 100e3, 100e3], "z", options=ProbeOptions(gamma=1e-6))
         >>> print("E_z = %.0f MPa, nu_zx = %.3f" % (r["E"] / 1e6, r["nu_zx"]))
         E_z = 278 MPa, nu_zx = 0.150
     """
-    axis = validate_probe(axis, gamma)
+    gamma = settings.get("gamma", options.gamma if isinstance(options, ProbeOptions) else ProbeOptions.gamma)
+    axis = validate_probe(axis, gamma)  # its own message for an axis or a gamma that is none
+    if sign not in (1, -1) or isinstance(sign, bool):
+        raise InputError("probe: sign must be 1 or -1, not %r" % (sign,))
+    o = ProbeOptions.of(options, settings, "probe")
+    chunk = _chunk(chunk, "probe")
+    gamma, increment, restrain_rotations, skip_detection = o.gamma, o.increment, o.restrain_rotations, o.skip_detection
+    damping, control_shear, hold_other_strains = o.damping, o.control_shear, o.hold_other_strains
     if scene.num_bodies == 0:
         raise ValueError("probe: the scene has no bodies (a stress probe needs a loaded packing)")
     p = engines.StressProbe()
     p.axis, p.sign, p.gamma_target, p.increment = axis, sign, gamma, increment
-    p.control_shear = bool(control_shear)
-    p.hold_other_strains = bool(hold_other_strains)
+    p.control_shear = control_shear
+    p.hold_other_strains = hold_other_strains
     p.restrain_rotations = restrain_rotations
-    p.gain, p.relative_tolerance, p.unbalanced_tolerance = gain, relative_tolerance, unbalanced
-    p.settle_steps, p.ramp_steps, p.max_steps = settle_steps, ramp_steps, max_steps
+    p.gain, p.relative_tolerance, p.unbalanced_tolerance = o.gain, o.relative_tolerance, o.unbalanced
+    p.settle_steps, p.ramp_steps, p.max_steps = o.settle_steps, o.ramp_steps, o.max_steps
     # The cap only matters in the relax stage; probes move strains of ~1e-6.
     p.max_strain_rate = 10.0
     chain = dem.Chain(scene, damping=damping, controllers=[p])
@@ -435,7 +384,7 @@ def probe_state(scene, hold, axes=(2, 0, 1), **kw):
         scene: the engines' Scene at a held state.
         hold: the state's stresses, as `probe` takes them.
         axes: the axes, z, x, y by default (as the study probes).
-        **kw: the other arguments of `probe`.
+        **kw: the other arguments of `probe` (``options``, a ProbeOptions, or its fields).
 
     Returns:
         list: one `probe` result per axis, in their order.
@@ -449,27 +398,10 @@ def probe_state(scene, hold, axes=(2, 0, 1), **kw):
     return [probe(scene, hold, a, **kw) for a in axes]
 
 
-# Loading paths a study can follow (run_states.py --path). "true-triaxial": the paper's Table C1
-# paths, constant b and p = 100 kPa (Eqs. 8-9). "cross-anisotropic": its Fig. 16 (after Zhou et
-# al. 2026c), sigma_h = sigma_x = sigma_y held at SIGMA_H while sigma_v = sigma_z varies.
-PATHS = ("true-triaxial", "cross-anisotropic")
-SIGMA_H = 100e3
 # The sigma_v of a cross-anisotropic study when none are given (Pa): stress ratios sigma_v/sigma_h
 # from 0.5 to 2.5 on both sides of the isotropic state. The paper does not list the states of
 # Fig. 16's source; this choice spans the ratios of Table C1's extreme states (sigma_1/sigma_3 up to 3).
 CROSS_ANISOTROPIC_SIGMA_V = (50e3, 60e3, 70e3, 80e3, 90e3, 100e3, 120e3, 140e3, 160e3, 180e3, 200e3, 250e3)
-
-
-def path_mean_stress(path, b, sigma_z):
-    """The mean stress p of the state (b, sigma_z) on a path: 100 kPa on the true-triaxial paths;
-    on the cross-anisotropic path (b = 0 there) (2 sigma_h + sigma_v) / 3, which makes Eq. (9)
-    give sigma_x = sigma_y = sigma_h for any sigma_v, so the servo's straight stress path from the
-    isotropic state keeps sigma_h at 100 kPa all the way."""
-    if path == "true-triaxial":
-        return 100e3
-    if path == "cross-anisotropic":
-        return (2.0 * SIGMA_H + sigma_z) / 3.0
-    raise ValueError("unknown path %r: the paths are %s" % (path, ", ".join(PATHS)))
 
 
 def validate_path_state(path, b, sigma_z):

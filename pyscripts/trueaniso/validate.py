@@ -144,7 +144,8 @@ def problem(instance, name, required=True):
         >>> validate.problem({"E_kinematic": [4.0e8, 3.3e8, 4.5e8]}, "statics_record")
         ('E_blocked', 'missing')
     """
-    errors = list(_validator(name, required).iter_errors(instance))
+    from .options import flag
+    errors = list(_validator(name, flag("validate.problem", "required", required)).iter_errors(instance))
     if not errors:
         return None
     e = jsonschema.exceptions.best_match(errors)

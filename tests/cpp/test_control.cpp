@@ -374,14 +374,16 @@ TEST(TrueTriaxialServo, StartSetsTheLoadingFriction) {
 
 namespace {
 
-StressProbe runProbe(int axis, bool controlShear, int sign = 1) {
+StressProbe runProbe(int axis, bool controlShear, int sign = 1, Real stepScale = 1.0) {
   LinearCell cell;
+  cell.dt *= stepScale;  // the same motion in time: the cell's rates are per second
   StressProbe probe;
   probe.axis = axis;
   probe.sign = sign;
   probe.controlShear = controlShear;
   probe.relativeTolerance = 1e-6;
   probe.law = CellServoLaw{0.05, 1e3};
+  probe.stepScale = stepScale;
   probe.begin(cell.sigma0);
   long n = 0;
   while (probe.stage != StressProbe::Stage::Done && probe.stage != StressProbe::Stage::Failed && n < 200000) {
@@ -418,6 +420,21 @@ TEST(StressProbe, MeasuresTheComplianceOfALinearCell) {
         EXPECT_NEAR(probe.poissonRatio(j), moduli.nu(axis, j), 1e-5) << axis << j;
       }
   }
+}
+
+// The probe's gain, ramp and settle counts are per reference step, as the servo's: a probe whose
+// step is 1.6 reference steps (the per-axis rule on spheres) ramps 1.6 times as far a step and
+// settles in 1.6 times fewer steps, and measures the same modulus (to the probe's 1e-5 here).
+TEST(StressProbe, PerStepSettingsAreInReferenceSteps) {
+  const StressProbe a = runProbe(2, true, 1, 1.0), b = runProbe(2, true, 1, 1.6);
+  ASSERT_EQ(a.stage, StressProbe::Stage::Done) << a.message;
+  ASSERT_EQ(b.stage, StressProbe::Stage::Done) << b.message;
+  EXPECT_NEAR(b.modulus() / a.modulus(), 1.0, 2e-5);
+  EXPECT_NEAR(static_cast<Real>(a.rampStepsDone) / b.rampStepsDone, 1.6, 0.05);
+  EXPECT_NEAR(static_cast<Real>(a.steps) / b.steps, 1.6, 0.1);
+  StressProbe bad;
+  bad.stepScale = 0;
+  EXPECT_THROW(bad.begin(LinearCell().sigma0), InputError);
 }
 
 // With controlShear off, the probe holds the cell's shear strains instead (the orthorhombic

@@ -448,7 +448,8 @@ def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path
     """A named variant of a clump recipe (clump_recipes.VARIANTS) is a set of prepare_clumps keywords:
     each one a recipe parameter or a keyword of prepare_clumps (a misspelt one would change nothing),
     given as a copy; prepare_specimen.py --recipe takes its settings as the assembly's defaults (an
-    option given still wins), records its name, and refuses a name the assembly does not have."""
+    option that contradicts one is refused), records its name, and refuses a name the assembly does
+    not have."""
     import inspect
     from trueaniso import clump_recipes, clump_specimen, cli, specimen
     keywords = set(inspect.signature(clump_specimen.prepare_clumps).parameters) - {"overrides"}
@@ -479,7 +480,9 @@ def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path
     assert "recipe" not in prepare_specimen.settings(default)  # a default preparation's checkpoint is bound as before
     o = validated("--recipe", "frictionless")
     assert o.mu_prep == 0.0 and prepare_specimen.settings(o)["recipe"] == "frictionless"
-    assert validated("--recipe", "frictionless", "--mu-prep", "0.003").mu_prep == 0.003
+    assert validated("--recipe", "frictionless", "--mu-prep", "0").mu_prep == 0.0  # the recipe's own value
+    with pytest.raises(cli.InputError, match="--mu-prep 0.003 contradicts --recipe frictionless"):
+        validated("--recipe", "frictionless", "--mu-prep", "0.003")  # a file would name a recipe it is not
     with pytest.raises(cli.InputError, match="--recipe: clump1 has no recipe variant"):
         prepare_specimen.validate(prepare_specimen.options(["--assembly", "clump1", "--recipe", "frictionless",
                                                             "--out", out]))

@@ -160,10 +160,15 @@ def test_a_state_with_two_horizontal_stresses_is_not_fig16(tmp_path):
     src = os.path.join(REPO, "docs", "data", "fig16-spheres-4000-s1", "probes.csv")
     with open(src, newline="") as f:
         rows = list(_csv.DictReader(f))
+    # The first state made state 21 of Table C1, its rows consistent with that definition (the
+    # table's reader refuses a row whose stresses are not its state's: test_derived_checks), so that
+    # only the Fig. 16 analysis can refuse it.
     first = rows[0]["state"]
     for r in rows:
         if r["state"] == first:
-            r["sigma_y"] = str(0.6 * float(r["sigma_x"]))
+            r.update(path="true-triaxial", state="21", b="0.5", sigma_z_goal="140000.0", sigma_x="100000.0",
+                     sigma_y="60000.0", sigma_z="140000.0")
+    first = "21"
     path = tmp_path / "probes.csv"
     with open(path, "w", newline="") as f:
         w = _csv.DictWriter(f, fieldnames=list(rows[0]))

@@ -450,9 +450,8 @@ def test_overlap_estimate_bounds_a_prepared_specimen(specimen_100):
 def test_probe_names(text, names):
     """Letters, or names with commas; one name alone with its comma ('yz,' is the shear probe by
     itself, 'yz' would be y and z)."""
-    sys.path.insert(0, SCRIPTS)
-    import run_states
-    assert run_states.probe_axes(text, "true-triaxial") == names
+    from trueaniso import study_options
+    assert study_options.probe_axes(text, "true-triaxial") == names
 
 
 def test_a_specimen_that_carries_no_stress_is_refused_before_work(tmp_path):

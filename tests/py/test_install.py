@@ -89,8 +89,10 @@ def test_setup_links_the_checkout_for_python3_and_yade(tmp_path):
     (site / "trueaniso.pth").write_text("/elsewhere/pyscripts\n")
     moved = subprocess.run([link], env=env, capture_output=True, text=True, check=True)
     assert "now import trueaniso from" in moved.stdout and "(was /elsewhere/pyscripts)" in moved.stdout
-    probe = ("import site, sys; site.addsitedir(%r); import trueaniso.analysis.report as r; "
-             "print(r.__file__)" % str(site))
+    # the machine's own site directory may hold a trueaniso.pth of another checkout (the one set up
+    # last, on a shared machine): it is left out, so that what is read is the test's own link
+    probe = ("import site, sys; sys.path[:] = [p for p in sys.path if not p.endswith('/pyscripts')]; "
+             "site.addsitedir(%r); import trueaniso.analysis.report as r; print(r.__file__)" % str(site))
     out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == os.path.join(REPO, "pyscripts", "trueaniso", "analysis", "report.py")

@@ -192,7 +192,7 @@ def test_the_benchmark_tables_are_where_the_scripts_write_them():
             checked += 1
     assert checked >= 3
     reproduced = 0
-    for page in glob.glob(os.path.join(DOCS, "*.md")):
+    for page in glob.glob(os.path.join(DOCS, "*.md")) + glob.glob(os.path.join(DOCS, "studies", "*.md")):
         with open(page) as f:
             text = f.read()
         for command in re.findall(r"Reproduce: `([^`]*bench/[^`]*--doc [^`]*)`", text):

@@ -292,6 +292,10 @@ def test_table_b1_says_when_no_study_has_state_21(tmp_path):
     meta = json.loads((second / "metadata.json").read_text())
     meta["specimen"]["summary"]["n"] = 2000
     (second / "metadata.json").write_text(json.dumps(meta))
+    for sid in ("1", "21"):  # its records name their study's size too (b1_checks refuses a record of another)
+        rec = json.loads((second / ("statics_state-%s.json" % sid)).read_text())
+        rec["study"]["n"] = 2000
+        (second / ("statics_state-%s.json" % sid)).write_text(json.dumps(rec))
     assert report.study_size(str(second)) == "2000 clump2 clumps"
     text = "\n".join(report.table_b1(study, paper, "4000 clump2 clumps", [B1_OTHER, str(second)]))
     assert text.count("| paper predicted (zeta = 1) |") == 2  # isotropic and state 21
@@ -307,6 +311,7 @@ def test_b1_data_is_refused_before_anything_is_written(tmp_path):
     no21 = tmp_path / "no21"
     no21.mkdir()
     shutil.copy(os.path.join(B1_OTHER, "statics_state-1.json"), no21)
+    shutil.copy(os.path.join(B1_OTHER, "metadata.json"), no21)
     for args, words in (([os.path.join(REPO, "docs", "data", "clump2-4000-s1"), "--b1-data", str(no21)],
                          ("no statics record of state 21",)),
                         ([os.path.join(REPO, "docs", "data", "clump1-4000-s1"), "--b1-data", B1_OTHER],
@@ -402,7 +407,7 @@ def test_bad_optional_inputs_are_refused_before_anything_is_written(small_table,
                         (["--fig16", small_table], ("lacks the columns", "G")),
                         # argparse's choices printed the whole usage, and 'sphere' (the study
                         # scripts' word) was among the refused
-                        (["--assembly", "clump3"], ("--assembly clump3", "clump1, clump2, spheres"))):
+                        (["--assembly", "clump3"], ("--assembly", "clump3", "clump1, clump2, spheres"))):
         out = tmp_path / "rep"
         proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", small_table, "--out", str(out), *args],
                               cwd=REPO, capture_output=True, text=True, timeout=300)
@@ -600,7 +605,7 @@ def _set_E(value):
 @pytest.mark.parametrize("edit,words", [
     (lambda rows: rows.extend(rows[1:3]), ["state 1 probe z", "lines 2 and 8", "one row a probe"]),
     # the same state written '1.0' (by hand, or a spreadsheet) is the same state, not another
-    (_restate(1, "1.0"), ["state 1.0 probe z", "lines 2 and 8", "one row a probe"]),
+    (_restate(1, "1.0"), ["state 1 probe z", "lines 2 and 8", "one row a probe"]),
     (_set_E("nan"), ["E = 'nan', not a positive number (line 3)"]),
     (_set_E("-1e8"), ["E = '-1e8', not a positive number"]),
     (_set_E("inf"), ["not a positive number"]),
@@ -661,13 +666,15 @@ def test_an_os_error_is_said_by_its_file_and_reason(tmp_path):
     blocker.write_text("")
     proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.figures", SMALL_TABLE, "--out", str(blocker / "figs")],
                           capture_output=True, text=True, cwd=REPO, timeout=120)
-    assert proc.returncode == 2 and proc.stderr == "error: %s: Not a directory\n" % (blocker / "figs"), proc.stderr
+    # (checked before any work, by the scripts' --out check)
+    assert proc.returncode == 2 and proc.stderr == "error: --out %s: %s is a file, not a directory\n" % (
+        blocker / "figs", blocker), proc.stderr
 
 
 def test_zeta_contrast_runs_as_a_command_on_a_committed_study(tmp_path):
     """`python3 -m trueaniso.analysis.zeta_contrast DIR` ran nothing and exited 0, --help included (an outside
     check). It prints run_study.py's line, the material from the study's metadata; the committed
-    4000-sphere study gives the values docs/path-fidelity.md quotes (zeta 0.116 and 0.111)."""
+    4000-sphere study gives the values its report quotes (docs/report-spheres: zeta 0.116 and 0.111)."""
     def tool(*args):
         return subprocess.run([sys.executable, "-m", "trueaniso.analysis.zeta_contrast", *args], capture_output=True,
                               text=True, cwd=REPO, timeout=120)
@@ -724,8 +731,8 @@ def test_report_says_in_itself_that_a_torn_row_was_left_out(tmp_path):
 def test_a_refused_material_leaves_no_output_directory(tmp_path):
     """--shear-modulus -1 is refused before report/ is made: the material is checked first, so no
     empty directory stays behind."""
-    for args, words in ((["--shear-modulus", "-1"], "--shear-modulus must be > 0"),
-                        (["--poisson", "0.7"], "--poisson must lie in")):
+    for args, words in ((["--shear-modulus", "-1"], "argument --shear-modulus: '-1' is not > 0"),
+                        (["--poisson", "0.7"], "argument --poisson: '0.7' is not in (-1, 0.5)")):
         out = tmp_path / "out"
         proc = subprocess.run([sys.executable, "-m", "trueaniso.analysis.report", os.path.join("docs", "data", "spheres-4000-s1"),
                                "--out", str(out), *args], capture_output=True, text=True, cwd=REPO, timeout=120)

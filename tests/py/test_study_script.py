@@ -187,11 +187,34 @@ def test_metadata_stays_standard_json_with_an_infinite_path_rate(small_specimen,
 
 
 def test_run_study_on_a_study_of_run_states_says_whose_it_is(finished, small_specimen, tmp_path):
-    """run_study.py pointed at a run_states.py study names the script that continues it and its
-    specimen, instead of calling the specimen file (which such a study never held) missing."""
+    """run_study.py pointed at a run_states.py study without --specimen names the specimen and the
+    option that continues it, instead of calling the specimen file (which such a study never held)
+    missing."""
     out = tmp_path / "W"
     shutil.copytree(finished, out)
     before = sorted(p.name for p in out.iterdir())
     proc = run("--n", "150", "--seed", "6", "--out", str(out), script=os.path.join(REPO, "pyscripts", "run_study.py"))
-    one_line_error(proc, "a study of run_states.py", str(small_specimen), "run_states.py --specimen")
+    one_line_error(proc, "a study of the specimen", str(small_specimen), "--specimen SPECIMEN")
     assert sorted(p.name for p in out.iterdir()) == before
+
+
+def test_run_study_takes_the_options_of_run_states(finished, small_specimen, tmp_path):
+    """run_study.py continues a run_states.py study given its specimen and the same options (one
+    option set: --specimen, --probes and the rest), adds the statics and the report, and refuses
+    --n with --specimen."""
+    out = tmp_path / "W"
+    shutil.copytree(finished, out)
+    script = os.path.join(REPO, "pyscripts", "run_study.py")
+    proc = run("--specimen", str(small_specimen), "--n", "150", "--ids", "1,2", "--probes", "zx", "--out", str(out),
+               script=script)
+    one_line_error(proc, "--n describes the specimen run_study.py prepares")
+    before = rows(out)
+    proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--out", str(out), script=script)
+    assert proc.returncode == 0, proc.stderr
+    assert rows(out) == before  # continued, nothing run again
+    assert (out / "statics_isotropic.json").exists() and (out / "report" / "report.md").exists()
+    record = json.loads((out / "statics_isotropic.json").read_text())
+    assert record["study"]["specimen"] == specimen_file.read(str(small_specimen))[1]["sha256"]
+    proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--rotations", "restrained",
+               "--out", str(out), script=script)
+    one_line_error(proc, "another study", "rotations")

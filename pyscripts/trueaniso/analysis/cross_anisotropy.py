@@ -10,7 +10,6 @@ with G_vv = G a_v^4 that ratio would be (a_h^2 / a_v^2)^2, so it is read as G_hh
 (docs/cell.md). The micromechanical prediction a_h^2 / a_v^2 is (mic_E_h / mic_E_v)^0.5 of the
 fabric columns (Eqs. 35-37 with the row's zeta, then Eq. 25).
 """
-import argparse
 import math
 import os
 import sys
@@ -133,12 +132,13 @@ def figure(rows, path, predictions=None):
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    from trueaniso import cli
+    p = cli.Parser(prog="python3 -m trueaniso.analysis.cross_anisotropy", description=cli.description(__doc__))
     p.add_argument("probes", help="probes.csv of a cross-anisotropic study")
     p.add_argument("--out", help="JSON file for the per-state measures")
     p.add_argument("--figure", help="PNG of the ratios against sigma_v / sigma_h")
     o = p.parse_args(argv)
-    from trueaniso import atomic, cli
+    from trueaniso import atomic
     try:
         # Where the outputs go, checked before any work: a missing directory is refused at once, not at the end.
         for option, path in (("--out", o.out), ("--figure", o.figure)):
@@ -161,4 +161,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from trueaniso import cli
+    cli.tool(main)

@@ -2,7 +2,6 @@
 
     /usr/bin/python3 -m trueaniso.analysis.figures results/x/probes.csv --out docs/figures
 """
-import argparse
 import os
 import sys
 
@@ -233,12 +232,16 @@ def fabric_vs_stress(rows, path, name):
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(description="figures from a probes.csv")
+    from trueaniso import cli
+    p = cli.Parser(prog="python3 -m trueaniso.analysis.figures", description="figures from a probes.csv")
     p.add_argument("csv", help="probe table of run_states.py or run_study.py")
     p.add_argument("--out", required=True, help="directory for the PNG files")
     p.add_argument("--title", default="sphere assembly", help="assembly named in the titles")
     o = p.parse_args(argv)
     try:
+        problem = cli.output_problem(o.out)  # before any work: a refusal at the end would lose it
+        if problem:
+            raise ResultsError(problem)
         rows = read_probes(o.csv, need=("state", "probe", "E", "sigma_x", "sigma_y", "sigma_z", "Zm", "b", "q",
                                         "nu_1", "nu_2", "nu_1_name", "nu_2_name"))
         # The figures are of the normal probes (E, Poisson ratios); a shear probe's row (yz, xz, xy:
@@ -256,11 +259,13 @@ def main(argv=None):
         fits = scalar_moduli_vs_zm(rows, os.path.join(o.out, "K_G_vs_Zm.png"))
     except (ResultsError, OSError, ValueError) as exc:
         sys.stderr.write("error: %s\n" % said(exc))
-        sys.exit(2)
+        return 2
     # No fit (fewer than three complete states with distinct Zm) is said in words: 'K, G fits: None'.
     print("figures in %s; K, G fits: %s" % (o.out, fits if fits else "none (Fig. 11 needs 3 states probed on x, y "
                                                                     "and z with distinct Zm; no K_G_vs_Zm.png)"))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    from trueaniso import cli
+    cli.tool(main)

@@ -191,4 +191,5 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    from trueaniso import cli
+    cli.tool(lambda: main(sys.argv[1:]))

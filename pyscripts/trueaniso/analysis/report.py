@@ -20,9 +20,10 @@ import time
 
 import numpy as np
 
-from . import chain, figures, hyperelastic, zeta_contrast
+from . import b1_checks, chain, figures, hyperelastic, zeta_contrast
 from .results import ResultsError, read_metadata, read_probes, said, table_path
 from trueaniso import validate  # noqa: E402 (results put pyscripts/ on the path)
+from trueaniso.options import flag  # noqa: E402
 
 __all__ = ["build"]
 
@@ -507,7 +508,7 @@ def study_assembly(results):
 
 
 def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, log=print, fig16=None,
-          clumps=None, statics=False, b1_data=None):
+          clumps=None, statics=False, b1_data=None, b1_other_material=False):
     """Write a study's report.md and its figures, every table and figure beside the paper's (module doc).
 
     Args:
@@ -517,20 +518,23 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
             study's own).
         shear_modulus: the particles' shear modulus, Pa, for a table without its study's metadata
             (None: the metadata's, else the paper's); checked against the table's micromechanical
-            moduli.
+            moduli, and the bounds every row's moduli are held to.
         poisson: the particles' Poisson's ratio, likewise.
         log: called with each line the build says.
         fig16: a cross-anisotropic study (or its JSON) for the Fig. 16 section.
         clumps: the JSON of bench/anisotropy_clumps.py for the clump section.
         statics: solve Table B1's states from the study's checkpoints first.
         b1_data: directories of statics records of other studies, whose state 21 Table B1 shows where
-            the study has none.
+            the study has none; each needs its metadata.json and the report's material.
+        b1_other_material: True takes `b1_data` of another material too, marked so in Table B1.
 
     Returns:
         (path, numbers): the report's path, and the numbers it shows by rotations setting.
 
     Raises:
-        ResultsError: results that cannot be analysed, in one line, before anything is written.
+        ResultsError: results that cannot be analysed (a row that disagrees with its state's
+            definition or the material's bounds, a metadata.json that cannot be read, a statics
+            record of another study), in one line, before anything is written.
 
     Example:
         >>> import tempfile
@@ -539,6 +543,8 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         >>> print(open(path).readline().strip())
         # Report: spheres
     """
+    statics = flag("report.build", "statics", statics)  # bool('no') would solve the statics
+    b1_other_material = flag("report.build", "b1_other_material", b1_other_material)
     csv_path = table_path(results)
     out = out or (os.path.join(results, "report") if os.path.isdir(results) else os.path.dirname(csv_path) or ".")
     # A study's probes.csv given as the file: its directory's metadata (assembly, material, the
@@ -565,22 +571,31 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     # Inputs of the optional sections are read and checked before anything is written.
     f16_rows = fig16_rows(fig16) if fig16 else None
     clump_rows = clump_entries(clumps) if clumps else None
-    b1_data = [b1_data] if isinstance(b1_data, str) else list(b1_data or ())
-    for d in b1_data:
-        if "21" not in b1_records(d):
-            raise ResultsError("%s: no statics record of state 21 (statics_state-21.json) for Table B1" % d)
-        if study_assembly(d) != assembly:
-            raise ResultsError("%s is of %s, not %s: Table B1 compares one assembly with the paper's"
-                               % (d, study_assembly(d) or "no recorded assembly", assembly))
-    if statics:
-        solve_statics(results, log=log)
     material, where = _material(results)
     if shear_modulus is not None or poisson is not None or material is None:
         material = dict(shear_modulus=shear_modulus or DEFAULT_MATERIAL["shear_modulus"],
                         poisson=poisson if poisson is not None else DEFAULT_MATERIAL["poisson"])
         where = "the command line" if (shear_modulus or poisson is not None) else "the paper's default"
+    b1_data = [b1_data] if isinstance(b1_data, str) else list(b1_data or ())
+    other_material = {}
+    for d in b1_data:
+        meta = read_metadata(d, required=True)  # what the records are of: refused without it
+        if "21" not in b1_records(d):
+            raise ResultsError("%s: no statics record of state 21 (statics_state-21.json) for Table B1" % d)
+        if study_assembly(d) != assembly:
+            raise ResultsError("%s is of %s, not %s: Table B1 compares one assembly with the paper's"
+                               % (d, study_assembly(d) or "no recorded assembly", assembly))
+        problem = b1_checks.borrowed_material_problem(d, meta, material, where)
+        if problem and not (b1_other_material and meta.get("specimen", {}).get("material")):
+            raise ResultsError(problem)
+        if problem:
+            other_material[d] = meta["specimen"]["material"]
+    if statics:
+        solve_statics(results, log=log)
     rows = read_probes(csv_path, need=zeta_contrast.NEEDED + ["Zm", "b", "q", "nu_1", "nu_2", "nu_1_name",
-                                                            "nu_2_name"])
+                                                            "nu_2_name"], material=material)
+    if os.path.isdir(results):
+        b1_records(results)  # the study's own records, checked (after its table) before anything is written
     paper = chain.PAPER[assembly]
     lines = ["# Report: %s" % assembly, "",
              "Made by `pyscripts/trueaniso/analysis/report.py` from `%s` on %s. Material: G = %.4g Pa, nu = %.3g (%s; checked "
@@ -743,7 +758,7 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                             E_rel_rmse={l: p["E_rel_rmse"] for l, p in preds}, m=exp["m"] if exp else None,
                             m_vertical=exp_v["m"] if exp_v else None, r2_vertical=exp_v["r2"] if exp_v else None,
                             zeta_spearman=rho)
-    lines += table_b1(results, paper, own_size, b1_data)
+    lines += table_b1(results, paper, own_size, b1_data, other_material)
     if not fig16:
         lines += ["## Fig. 16: one anisotropy in G, E and nu", "",
                   "The paper's Fig. 16 covers spheres (16a) and clump2 (16b) only." if assembly == "clump1" else
@@ -792,15 +807,19 @@ def _b1_cells(E):
 def b1_records(directory):
     """{"isotropic": record, "21": record} of the statics records a study directory keeps
     (trueaniso.statics.cached_record: run_study.py writes them, `--statics` solves them from the
-    checkpoints), each checked; empty for a bare table."""
+    checkpoints), each checked against its schema and against the study of the directory
+    (b1_checks); empty for a bare table."""
     from trueaniso import statics
-    found = {}
+    found, paths = {}, {}
     if os.path.isdir(directory):
         for label, candidates in (("isotropic", (None, "1")), ("21", ("21",))):
             path = next((statics.state_file(directory, c) for c in candidates
                          if os.path.exists(statics.state_file(directory, c))), None)
             if path:
                 found[label] = validate.load_json(path, "statics_record", ResultsError)
+                paths[label] = path
+    if found:
+        b1_checks.check(directory, {label: (paths[label], found[label]) for label in found}, read_metadata(directory))
     return found
 
 
@@ -832,14 +851,16 @@ def _b1_ratios(found, paper, size):
                              ", ".join("%.3f" % r for r in theirs)))
 
 
-def table_b1(results, paper, own_size=None, others=()):
+def table_b1(results, paper, own_size=None, others=(), other_material=None):
     """Appendix B / Table B1 at the isotropic state and at state 21: the exact static solve with
     rotations blocked (what a restrained probe measures) against the unmodified (zeta = 1)
     kinematic prediction, from the study's statics records (b1_records). Each E_i with its a_i^2
     (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i. `others`: directories
     of other studies (another size, or another specimen) whose records stand for state 21 where
     the study has none, each shown with its own isotropic state (a ratio between states holds
-    within one specimen)."""
+    within one specimen). `other_material`: {directory: material} of those whose particles are not
+    the study's (shown, marked, at the user's word: report --b1-other-material)."""
+    other_material = other_material or {}
     out = ["## Table B1: rotations restrained, E_i (MPa) and a_i^2", ""]
     found = b1_records(results) if os.path.isdir(results) else {}
     others = [others] if isinstance(others, str) else list(others or ())
@@ -860,6 +881,10 @@ def table_b1(results, paper, own_size=None, others=()):
         summary = ((read_metadata(d) or {}).get("specimen") or {}).get("summary") or {}
         state = ": e %.4f, Zm %.3f as prepared" % (summary["void_ratio"], summary["Zm"]) \
             if "void_ratio" in summary and "Zm" in summary else ""
+        if d in other_material:
+            note += (" Its particles are of another material (%s; this study's: see above), shown at the user's word "
+                     "(--b1-other-material): its moduli are not comparable with this study's."
+                     % b1_checks._said_material(other_material[d]))
         said.append("%s `%s`%s, beside that specimen's own isotropic state%s.%s" % (
             "This study has no record of state 21: it comes from" if len(sizes) == 1 else "State 21 also from", d,
             " (%s%s)" % (size or "size not recorded", state), " (a ratio between states holds within one specimen "
@@ -871,9 +896,11 @@ def table_b1(results, paper, own_size=None, others=()):
     shown = set(found)
     for label, st in found.items():
         out += _b1_rows(label, st, paper)
-    for (_, recs), size in zip(borrowed, sizes):
+    for (d, recs), size in zip(borrowed, sizes):
+        mark = ", other material: G = %.4g GPa, nu = %.3g" % (other_material[d]["shear_modulus"] / 1e9,
+                                                               other_material[d]["poisson"]) if d in other_material else ""
         for label, st in recs.items():
-            out += _b1_rows(label, st, paper, ", %s" % size if size else "", with_paper=label not in shown)
+            out += _b1_rows(label, st, paper, (", %s" % size if size else "") + mark, with_paper=label not in shown)
             shown.add(label)
     ratios = [_b1_ratios(f, paper, s) for f, s in [(found, own_size)] + [(r, s) for (_, r), s in zip(borrowed, sizes)]
               if len(f) == 2]
@@ -914,53 +941,67 @@ def solve_statics(results, log=print):
         raise ResultsError("%s: no checkpoint of state 1 or 21 (states/1.npz, states/21.npz)" % results)
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("results", help="a results directory (with probes.csv) or a probe table")
-    p.add_argument("--out", help="directory for report.md and its figures (default: RESULTS/report, or beside the table)")
+def _paper_assembly(text):
     # The study scripts say "sphere" (prepare_specimen.py --assembly sphere), the paper's tables
-    # "spheres": both are taken, and anything else is refused in one line (argparse's choices
-    # printed the whole usage).
-    p.add_argument("--assembly", default=None, type=lambda v: {"sphere": "spheres"}.get(v, v),
-                   help="the paper's assembly to compare with: %s (sphere, as the scripts spell it, is "
-                        "spheres; default: the study's own, from its metadata.json; spheres for a bare table)"
+    # "spheres": both are taken, and anything else is refused in one line.
+    name = {"sphere": "spheres"}.get(text, text)
+    if name not in chain.PAPER:
+        raise argparse.ArgumentTypeError("%s: the paper's assemblies are %s" % (text, ", ".join(sorted(chain.PAPER))))
+    return name
+
+
+def parser():
+    from trueaniso import cli
+    p = cli.Parser(prog="python3 -m trueaniso.analysis.report", description=cli.description(__doc__))
+    p.add_argument("results", help="a results directory (with probes.csv) or a probe table")
+    p.add_argument("--out", help="directory for report.md and its figures (when not given: RESULTS/report, or "
+                                 "beside the table)")
+    p.add_argument("--assembly", default=None, type=_paper_assembly,
+                   help="the paper's assembly to compare with: %s (sphere, as the scripts spell it, is spheres; when "
+                        "not given: the study's own, from its metadata.json; spheres for a bare table)"
                         % ", ".join(sorted(chain.PAPER)))
-    p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
-    p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
+    p.add_argument("--shear-modulus", type=cli.positive,
+                   help="particle shear modulus (Pa) if not in the study's metadata")
+    p.add_argument("--poisson", type=cli.poisson_ratio,
+                   help="particle Poisson's ratio if not in the study's metadata")
     p.add_argument("--fig16", help="a cross-anisotropic study (run_states.py --path cross-anisotropic: its directory "
-                                    "or probes.csv, or the JSON of pyscripts/trueaniso/analysis/cross_anisotropy.py --out) for Fig. 16")
+                                   "or probes.csv, or the JSON of python3 -m trueaniso.analysis.cross_anisotropy "
+                                   "--out) for Fig. 16")
     p.add_argument("--clumps", help="the JSON of bench/anisotropy_clumps.py --json (clump1, clump2 at "
-                                     "their isotropic state) for the clump section")
+                                    "their isotropic state) for the clump section")
     p.add_argument("--statics", action="store_true",
                    help="solve the static stiffness of the isotropic state and of state 21 from the study's "
                         "checkpoints (states/1.npz, states/21.npz) where no record exists yet (Table B1)")
     p.add_argument("--b1-data", metavar="DIR", action="append",
                    help="a directory of statics records (statics_state-1.json, statics_state-21.json) and the "
                         "metadata.json of another study, e.g. of another size: Table B1 shows its state 21, "
-                        "beside its own isotropic state, where the study has no record of state 21 (repeatable)")
-    o = p.parse_args(argv)
-    if o.assembly is not None and o.assembly not in chain.PAPER:
-        sys.stderr.write("error: --assembly %s: the paper's assemblies are %s\n"
-                         % (o.assembly, ", ".join(sorted(chain.PAPER))))
-        sys.exit(2)
-    # Before the output directory is made, so that a refusal leaves no empty directory behind.
-    import math
-    if o.shear_modulus is not None and not (math.isfinite(o.shear_modulus) and o.shear_modulus > 0):
-        sys.stderr.write("error: --shear-modulus must be > 0 (Pa), not %r\n" % o.shear_modulus)
-        sys.exit(2)
-    if o.poisson is not None and not -1 < o.poisson < 0.5:
-        sys.stderr.write("error: --poisson must lie in (-1, 0.5), not %r\n" % o.poisson)
-        sys.exit(2)
+                        "beside its own isotropic state, where the study has no record of state 21 (repeatable); "
+                        "its records must be its study's and its particles this study's material")
+    p.add_argument("--b1-other-material", action="store_true",
+                   help="show --b1-data of particles of another material than this study's, marked so in Table "
+                        "B1, instead of refusing it")
+    return p
+
+
+def main(argv=None):
+    from trueaniso import cli
+    o = parser().parse_args(argv)
+    # Where the report goes, checked before any work: a refusal leaves no empty directory behind.
+    out = o.out or (os.path.join(o.results, "report") if os.path.isdir(o.results)
+                    else os.path.dirname(table_path(o.results)) or ".")
+    problem = cli.output_problem(out, option="--out" if o.out else "the report's directory")
+    if problem:
+        raise ResultsError(problem)
     try:
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,
                         log=lambda m: sys.stderr.write(m + "\n"), fig16=o.fig16, clumps=o.clumps,
-                        statics=o.statics, b1_data=o.b1_data)
-    except (ResultsError, OSError, ValueError, RuntimeError) as exc:
-        sys.stderr.write("error: %s\n" % said(exc))
-        sys.exit(2)
+                        statics=o.statics, b1_data=o.b1_data, b1_other_material=o.b1_other_material)
+    except (OSError, RuntimeError) as exc:  # a file unreadable, a disk full, a static solve that failed
+        raise ResultsError(said(exc)) from None
+    cli.work_done()
     print("report: %s" % path)
 
 
 if __name__ == "__main__":
-    main()
+    from trueaniso import cli
+    cli.guarded(main)

@@ -9,7 +9,13 @@ import os
 
 from trueaniso import results_csv, study_checks, validate
 
+from . import row_checks
+
 __all__ = ["read_probes", "read_metadata", "ResultsError"]
+
+# The paper's particles (section 2.1): the material a table's moduli are bounded with when no
+# metadata.json says its own.
+PAPER_MATERIAL = dict(shear_modulus=18e9, poisson=0.15)
 
 
 class ResultsError(ValueError):
@@ -45,23 +51,13 @@ def table_path(path):
     return path
 
 
-def _state_key(text):
-    """A state's text as one key: a Table C1 number written '1.0' or ' 1' (a table edited by hand or
-    by a spreadsheet) is state 1, so its second row is found as a repeat."""
-    try:
-        value = float(text)
-    except (TypeError, ValueError):
-        return text
-    return str(int(value)) if value.is_integer() else text
-
-
 def _check_rows(path, rows, columns):
     """One row a probe, and its modulus a positive number: a table appended twice was analysed as
     it came, and a NaN or negative E changed the fits and the reversals without a word (an outside
     try); the report alone refused them, and named no row."""
     seen = {}
     for line, r in enumerate(rows, start=2):  # line 1 is the header
-        key = (r.get("rotations"), _state_key(r.get("state")), r.get("probe"), r.get("sign"))
+        key = (r.get("rotations"), r.get("state"), r.get("probe"), r.get("sign"))
         if key in seen:
             raise ResultsError("%s: state %s probe %s (rotations %s) is in lines %d and %d: one row a probe "
                                "(a table appended twice?)" % (path, r.get("state"), r.get("probe"),
@@ -88,20 +84,28 @@ def _check_rows(path, rows, columns):
                                        % (path, r.get("state"), r.get("probe"), ratio, r[ratio], line))
 
 
-def read_probes(path, need=("state", "probe", "E")):
+def read_probes(path, need=("state", "probe", "E"), material=None):
     """The rows of a study's probe table, checked, for analysis (module doc).
+
+    Each row is checked against what it says of itself (`row_checks`: its stresses against its
+    state's definition by Eq. 9, its moduli against the material's bounds, each state's
+    reciprocity), not only against the table's schema.
 
     Args:
         path: the table (probes.csv) or a study directory holding it.
         need: columns the table must have.
+        material: dict with ``shear_modulus`` (Pa) and ``poisson`` of the particles, whose bounds the
+            moduli are held to (None: the study's metadata.json's, else the paper's particles).
 
     Returns:
-        Probes: a list of rows, each a dict of text by column (reference/formats/probes-csv); its
-        ``note`` says what was left out (a row cut short, rows with a NaN cell), or is None.
+        Probes: a list of rows, each a dict of text by column (reference/formats/probes-csv), state
+        ids normalised (``21.0`` is ``21``); its ``note`` says what was left out (a row cut short,
+        rows with a NaN cell), or is None.
 
     Raises:
         ResultsError: a missing or unreadable table, a missing column, a probe in two rows, a modulus
-            that is not a positive number, rows of another specimen than the study's; in one line.
+            that is not a positive number, rows of another specimen than the study's, a row that
+            disagrees with its state or the material; in one line naming file, line and field.
 
     Example:
         >>> from trueaniso.analysis import results
@@ -121,6 +125,7 @@ def read_probes(path, need=("state", "probe", "E")):
     if missing:
         raise ResultsError("%s lacks the columns %s" % (path, ", ".join(missing[:6]) + (" ..." if len(missing) > 6 else "")))
     _check_rows(path, table.rows, table.columns)
+    meta = None
     if os.path.basename(path) == "probes.csv":  # a study's table: its rows are the study's states
         meta = read_metadata(os.path.dirname(os.path.abspath(path)))
         problem = meta and study_checks.rows_problem(meta, table.rows)
@@ -130,6 +135,11 @@ def read_probes(path, need=("state", "probe", "E")):
     mixed = study_checks.mixed_specimens_problem(table.rows)
     if mixed:
         raise ResultsError("%s: %s" % (path, mixed))
+    if material is None:
+        material = ((meta or {}).get("specimen") or {}).get("material") or PAPER_MATERIAL
+    problem = row_checks.table_problem(table.rows, material)
+    if problem:
+        raise ResultsError("%s: %s" % (path, problem))
     kept, notes = _fitting_rows(path, table.rows)
     out = Probes(kept)
     if table.torn is not None:
@@ -175,12 +185,19 @@ def _fitting_rows(path, rows):
 def read_metadata(results, required=False):
     """The metadata.json of a study directory (its fingerprint, states, specimen, runs), checked.
 
+    One that is there but cannot be read (empty, truncated, not JSON) is refused always, as
+    run_states.py refuses it: it holds what the study is (its assembly, material, states), and taken
+    as absent it would make a clump1 study a bare table of spheres.
+
     Args:
         results: the study directory.
         required: raise `ResultsError` instead of returning None when there is none.
 
     Returns:
-        dict or None: None for a directory without a readable one.
+        dict or None: None for a directory without one.
+
+    Raises:
+        ResultsError: a metadata.json that cannot be read, or none with `required`.
 
     Example:
         >>> from trueaniso.analysis import results
@@ -189,14 +206,20 @@ def read_metadata(results, required=False):
         ('sphere', 39)
     """
     import json
+    from trueaniso.options import flag
+    required = flag("read_metadata", "required", required)
     path = os.path.join(results, "metadata.json")
+    if not os.path.exists(path):
+        if required:
+            raise ResultsError("%s: no metadata.json (a study's, written by run_states.py or run_study.py)" % results)
+        return None
     try:
         with open(path) as f:
             meta = json.load(f)
     except (OSError, ValueError) as exc:
-        if required:
-            raise ResultsError("%s: no readable metadata.json (%s)" % (results, exc)) from None
-        return None
+        raise ResultsError("%s is unreadable (%s): what the study is (its assembly, material and states) cannot be "
+                           "read; restore it from the run that wrote it, or analyse probes.csv copied elsewhere as a "
+                           "bare table" % (path, exc)) from None
     # A metadata.json that parses but does not fit its schema is refused, not taken for a bare
     # table: its states and specimen are what the rows are checked against. Each field is taken
     # as optional here: the analysis uses what is there.

@@ -129,13 +129,15 @@ def said(contrast):
 def main(argv=None):
     """python3 -m trueaniso.analysis.zeta_contrast DIR: the fit of a study (its directory or probes.csv), the
     material from its metadata.json unless given."""
-    import argparse
     import sys
+    from trueaniso import cli
     from .results import read_metadata, said as said_error, table_path
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = cli.Parser(prog="python3 -m trueaniso.analysis.zeta_contrast", description=cli.description(__doc__))
     p.add_argument("results", help="a study's directory (with probes.csv) or its probe table")
-    p.add_argument("--shear-modulus", type=float, help="particle shear modulus (Pa) if not in the study's metadata")
-    p.add_argument("--poisson", type=float, help="particle Poisson's ratio if not in the study's metadata")
+    p.add_argument("--shear-modulus", type=cli.positive,
+                   help="particle shear modulus (Pa) if not in the study's metadata")
+    p.add_argument("--poisson", type=cli.poisson_ratio,
+                   help="particle Poisson's ratio if not in the study's metadata")
     p.add_argument("--rotations", choices=("free", "restrained"),
                    help="the rows to fit in a table that holds both (one fit a rotations setting)")
     o = p.parse_args(argv)
@@ -163,4 +165,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from trueaniso import cli
+    cli.tool(main)
