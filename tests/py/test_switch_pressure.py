@@ -133,7 +133,8 @@ def test_a_specimen_of_another_recipe_is_not_kept(tmp_path, grown_to_switch, gro
     for the default's; asked with its own variant it is kept."""
     for (scene, log), name in ((grown_to_target, "grown-to-target"), (grown_to_switch, "grown-to-switch")):
         out = tmp_path / ("%s.npz" % name)
-        specimen_file.save(str(out), scene, seed=SEED, parameters=dict(log, threads=1), summary=specimen.state(scene))
+        specimen_file.save(str(out), scene, seed=SEED, parameters=dict(log, threads=1, recipe=name),
+                           summary=specimen.state(scene))  # as prepare_specimen.py --recipe NAME records it
         args = ("--n", N, "--seed", SEED, "--threads", 1, "--unbalanced", "1e-2", "--out", out)
         one_line_error(run_script("prepare_specimen.py", *args), "prepared with other settings")
         kept = run_script("prepare_specimen.py", *args, "--recipe", name)
