@@ -57,9 +57,10 @@ targets="${*:-}"
 # (a stale module from an earlier build must never pass for a fresh one).
 mkdir -p build
 log=build/build.log
-# TRUEANISO_ARCH=x86-64-v3 ./setup.sh (or ./main.sh, ./test.sh) builds for that x86-64 level, faster
-# (docs/benchmarks.md) and different in the last bits (CMakeLists.txt); unset, the build keeps the level it
-# was configured with (the portable baseline unless asked), TRUEANISO_ARCH= returns to the baseline.
+# The default build makes the engines' module for the portable baseline and for x86-64-v3, and the
+# package loads the fastest the processor runs (CMakeLists.txt, docs/howto/build-options.md).
+# TRUEANISO_ARCH=x86-64-v3 ./setup.sh (or ./main.sh, ./test.sh; x86-64, -v2, -v4 likewise) builds for
+# that level alone; unset, the build keeps what it was configured with, TRUEANISO_ARCH= returns to both.
 # A new build directory uses Ninja (a fresh build is faster than with make); one configured before
 # keeps its generator, as CMake requires.
 generator=()
@@ -89,10 +90,11 @@ if ! cmake --build build -j"$(nproc)" ${targets:+--target $targets} >>"$log" 2>&
   finish_plugin
   exit 1
 fi
-# The level of the module just linked (written beside it when it is linked), not CMake's cache.
+# The level of the module just linked (written beside it when it is linked), not CMake's cache; a
+# build for one level alone has no folder of other levels beside it.
 level=$(cat build/python/_trueaniso.arch 2>/dev/null || true)
-if [ -n "$level" ] && [ "$level" != x86-64 ]; then  # sticky: say so on every run
-  echo "setup: the engines are built for $level (TRUEANISO_ARCH; TRUEANISO_ARCH= ./setup.sh returns to the portable baseline)"
+if [ -n "$level" ] && [ ! -d build/python/_trueaniso_levels ]; then  # sticky: say so on every run
+  echo "setup: the engines are built for $level alone (TRUEANISO_ARCH; TRUEANISO_ARCH= ./setup.sh returns to the baseline and x86-64-v3, chosen at load)"
 fi
 grep -E "warning:" "$log" || true
 cmake/link_package.sh

@@ -100,9 +100,13 @@ def tiled(scene, k):
     return t
 
 
-def run(tree, specimen, tile, steps, mode, threads, callgrind=False):
-    """One worker: its answer (wall time), or with callgrind the instructions it executed."""
+def run(tree, specimen, tile, steps, mode, threads, callgrind=False, level=None):
+    """One worker: its answer (wall time), or with callgrind the instructions it executed. level:
+    TRUEANISO_LEVEL for the worker (None: the level its package chooses)."""
     env = dict(os.environ, OMP_NUM_THREADS=str(threads), TRUEANISO_BUILD=os.path.join(tree, "build"))
+    env.pop("TRUEANISO_LEVEL", None)
+    if level:
+        env["TRUEANISO_LEVEL"] = level
     cmd = ["/usr/bin/python3", "-c", WORKER, tree, specimen, str(tile), str(steps), mode, HERE]
     if callgrind:
         cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null"] + cmd
@@ -127,6 +131,9 @@ def options():
     p.add_argument("--tree", action="append", default=None,
                    help="a built source tree to time (default: this one); give it again for another")
     p.add_argument("--label", action="append", default=None, help="the name of each --tree in the table")
+    p.add_argument("--level", action="append", default=None,
+                   help="TRUEANISO_LEVEL of each --tree's runs ('-': the level its package chooses); a tree may be "
+                        "given twice with two levels")
     p.add_argument("--threads", default="1", help="thread counts, comma separated")
     p.add_argument("--steps", type=int, default=2000, help="timed steps a run")
     p.add_argument("--repeats", type=int, default=5, help="rounds")
@@ -138,6 +145,10 @@ def options():
     o.labels = o.label or [os.path.basename(t) for t in o.trees]
     if len(o.labels) != len(o.trees):
         cli.fail("--label: one for each --tree")
+    o.levels = [None if lv in ("-", "") else lv for lv in (o.level or ["-"] * len(o.trees))]
+    if len(o.levels) != len(o.trees):
+        cli.fail("--level: one for each --tree")
+    o.runs = list(zip(o.trees, o.labels, o.levels))
     for t in o.trees:
         if not os.path.isdir(os.path.join(t, "build", "python")):
             cli.fail("--tree %s: no build/python in it (./setup.sh builds it)" % t)
@@ -165,29 +176,31 @@ def specimen_line(path, tile):
 
 def timed(o):
     rows = []
+    o.loaded = {}
     settings = [(sp, k, th) for sp in o.specimen for k in o.tiles for th in o.thread_counts]
     results = {}
     for r in range(o.repeats):
         for sp, k, th in settings:
-            runs = [(tree, mode) for tree in o.trees for mode in MODES]
+            runs = [(tree, mode) for tree in o.runs for mode in MODES]
             if r % 2:
                 runs.reverse()
             for tree, mode in runs:
-                a = run(tree, sp, k, o.steps, mode, th)
+                a = run(tree[0], sp, k, o.steps, mode, th, level=tree[2])
+                o.loaded[tree] = a["level"]
                 # One thread: CPU time, which other jobs on the machine disturb least; a team's
                 # CPU time counts its waits at barriers, so two threads are timed on the wall.
                 seconds = a["cpu"] if th == 1 else a["wall"]
                 results.setdefault((sp, k, th, tree, mode), []).append(a["n"] * a["steps"] / seconds / 1e6)
                 print("round %d: %s x%d, %d thread(s), %s %s: %.3f M particle-steps/s"
-                      % (r + 1, os.path.basename(sp), k, th, os.path.basename(tree), mode,
+                      % (r + 1, os.path.basename(sp), k, th, tree[1], mode,
                          results[(sp, k, th, tree, mode)][-1]), flush=True)
     for sp, k, th in settings:
         assembly, n = specimen_line(sp, k)
-        for tree, label in zip(o.trees, o.labels):
+        for tree in o.runs:
             bare, servo = results[(sp, k, th, tree, "bare")], results[(sp, k, th, tree, "servo")]
             ratio = [b / s for b, s in zip(bare, servo)]  # time of a servo step over a bare one
-            rows.append("| %s | %d | %d | %s | %.2f | %.2f | %.2f (%.2f-%.2f) |"
-                        % (assembly, n, th, label, statistics.median(bare), statistics.median(servo),
+            rows.append("| %s | %d | %d | %s (%s) | %.2f | %.2f | %.2f (%.2f-%.2f) |"
+                        % (assembly, n, th, tree[1], o.loaded[tree], statistics.median(bare), statistics.median(servo),
                            statistics.median(ratio), min(ratio), max(ratio)))
     head = ("| assembly | particles | threads | code | bare step (M particle-steps/s) | servo step | servo step / bare step "
             "(median, range) |\n|---|---|---|---|---|---|---|")
@@ -201,16 +214,16 @@ def counted(o):
     for sp in o.specimen:
         for k in o.tiles:
             assembly, n = specimen_line(sp, k)
-            for tree, label in zip(o.trees, o.labels):
+            for tree, label, level in o.runs:
                 per = {}
                 for mode in MODES:
-                    a = run(tree, sp, k, short, mode, 1, callgrind=True)
-                    b = run(tree, sp, k, o.steps, mode, 1, callgrind=True)
+                    a = run(tree, sp, k, short, mode, 1, callgrind=True, level=level)
+                    b = run(tree, sp, k, o.steps, mode, 1, callgrind=True, level=level)
                     per[mode] = (b["instructions"] - a["instructions"]) / (o.steps - short)
-                    print("%s x%d, %s %s: %.4g instructions a step" % (os.path.basename(sp), k, label, mode, per[mode]),
-                          flush=True)
-                rows.append("| %s | %d | %s | %.4g | %.4g | %.3f |" % (assembly, n, label, per["bare"], per["servo"],
-                                                                      per["servo"] / per["bare"]))
+                    print("%s x%d, %s (%s) %s: %.4g instructions a step" % (os.path.basename(sp), k, label, b["level"],
+                                                                            mode, per[mode]), flush=True)
+                rows.append("| %s | %d | %s (%s) | %.4g | %.4g | %.3f |" % (
+                    assembly, n, label, b["level"], per["bare"], per["servo"], per["servo"] / per["bare"]))
     head = ("| assembly | particles | code | bare step (instructions) | servo step | servo step / bare step |\n"
             "|---|---|---|---|---|---|")
     return head + "\n" + "\n".join(rows), "instructions a step (callgrind), the difference of runs of %d and %d steps" % (

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "control/CellServoLaw.hpp"
 #include "core/Parallel.hpp"
 #include "measure/Stress.hpp"
 
@@ -29,10 +30,12 @@ void RadiusExpansion::apply(Scene& s) {
   const Real K = measured.stiffness.head<3>().mean();
   const Vec3 normal = measured.stress.diagonal();
   deviator = (normal.array() - pressure).abs().maxCoeff();
-  if (holdDeviator) s.cell.velGrad = deviatorGradient(normal, measured.stiffness.head<3>(), s.dt);
+  const Real stepScale = s.stepScale();
+  if (holdDeviator) s.cell.velGrad = deviatorGradient(normal, measured.stiffness.head<3>(), s.dt, stepScale);
   const Real err = targetPressure - pressure;
   // Growing radii by d ln r is, for the contacts, an isotropic affine compression of d ln r.
-  Real rate = K > 0 ? gain * err / (K * s.dt) : (err > 0 ? maxGrowthRate : -maxGrowthRate);
+  const Real stepGain = CellServoLaw{gain, maxGrowthRate}.perStep(stepScale).gain;
+  Real rate = K > 0 ? stepGain * err / (K * s.dt) : (err > 0 ? maxGrowthRate : -maxGrowthRate);
   rate = std::clamp(rate, -maxGrowthRate, maxGrowthRate);
   const Real grow = 1.0 + rate * s.dt;
   scale *= grow;
@@ -55,14 +58,15 @@ void RadiusExpansion::apply(Scene& s) {
 
 namespace trueaniso {
 
-Mat3 RadiusExpansion::deviatorGradient(const Vec3& normal, const Vec3& stiffness, Real dt) const {
+Mat3 RadiusExpansion::deviatorGradient(const Vec3& normal, const Vec3& stiffness, Real dt, Real stepScale) const {
   // Before the network carries load along every axis there is no stiffness to turn an error into
   // a strain (CellServoLaw would then strain at its cap): the cell waits.
   if (!(stiffness.minCoeff() > 0)) return Mat3::Zero();
   const Real p = normal.mean();
+  const Real stepGain = CellServoLaw{deviatorGain, maxGrowthRate}.perStep(stepScale).gain;
   Vec3 rate;
   for (int k = 0; k < 3; ++k)  // compression positive: an axis above the mean extends
-    rate[k] = std::clamp(deviatorGain * (normal[k] - p) / (stiffness[k] * dt), -maxGrowthRate, maxGrowthRate);
+    rate[k] = std::clamp(stepGain * (normal[k] - p) / (stiffness[k] * dt), -maxGrowthRate, maxGrowthRate);
   Mat3 L = Mat3::Zero();
   L.diagonal() = rate.array() - rate.mean();
   return L;

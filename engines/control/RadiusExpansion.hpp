@@ -26,13 +26,17 @@ namespace trueaniso {
 class RadiusExpansion : public Engine {
  public:
   Real targetPressure = 100e3;   // Pa
+  // Fractions of the stress errors closed per reference step (Scene::referenceDt), as the servos'
+  // gains: a step stepScale reference steps long closes stepScale times as much (capped at the
+  // whole error), so that the growth proceeds at the same rate in time under any time step rule
+  // and grows the same packing, but for integration error, in fewer steps.
   Real gain = 0.01;
   Real maxGrowthRate = 1.0;      // d ln r / dt cap (1/s)
   Real stressTolerance = 100.0;  // Pa
   Real unbalancedTolerance = 1e-3;
   bool stopWhenReached = false;
   bool holdDeviator = false;
-  Real deviatorGain = 0.05;
+  Real deviatorGain = 0.05;      // per reference step too
 
   Real scale = 1.0;              // current radius / base radius
   Real pressure = 0, unbalanced = 0;
@@ -48,7 +52,7 @@ class RadiusExpansion : public Engine {
  private:
   void growClumps(Scene& scene) const;
   // The cell's velocity gradient that holds the normal stresses at their mean (holdDeviator).
-  Mat3 deviatorGradient(const Vec3& normal, const Vec3& stiffness, Real dt) const;
+  Mat3 deviatorGradient(const Vec3& normal, const Vec3& stiffness, Real dt, Real stepScale) const;
   std::vector<Real> base_;       // member radii when attached
   // Clumps when attached: member offsets, body mass, inertia and volume.
   std::vector<Vec3> baseOffset_, baseInertia_;

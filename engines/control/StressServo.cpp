@@ -21,7 +21,8 @@ void StressServo::apply(Scene& s) {
   validate();
   const CellMeasurement m = CellMeasurement::of(s);
   stress = m.stress;
-  s.cell.velGrad = CellServoLaw::velocityGradient(law.rates(goal, stressMask, m.stress, m.stiffness, s.dt));
+  s.cell.velGrad =
+      CellServoLaw::velocityGradient(law.perStep(s.stepScale()).rates(goal, stressMask, m.stress, m.stiffness, s.dt));
   unbalanced = m.unbalanced;
   gap = stressGap(stress, goal, stressMask);
   reached = gap.error() < stressTolerance && unbalanced < unbalancedTolerance;

@@ -15,7 +15,7 @@ class StressServo : public Engine {
   // components in stressMask, engineering strain rates (1/s, extension > 0) for the others.
   Vec6 goal = (Vec6() << 100e3, 100e3, 100e3, 0, 0, 0).finished();
   unsigned stressMask = kAllComponents;
-  CellServoLaw law;
+  CellServoLaw law;  // its gain per reference step, as the other controllers' (Scene::stepScale)
   Real stressTolerance = 100.0; // Pa: principal and off-diagonal errors below it count as reached
   Real unbalancedTolerance = 1e-3;
   bool stopWhenReached = false;

@@ -6,6 +6,7 @@
 #include <omp.h>
 #endif
 
+#include "core/Level.hpp"
 #include "core/Parallel.hpp"
 #include "dynamics/ContactDetection.hpp"
 #include "dynamics/ContactForces.hpp"
@@ -62,9 +63,10 @@ void exportEngines() {
           "The trueaniso version (pyscripts/trueaniso/VERSION), as trueaniso.__version__ gives it.");
   bp::def("source_hash", +[]() { return std::string(kEngineSourceHash); },
           "SHA-256 of the engine sources this module was compiled from (cmake/EngineSourceHash.cmake).");
-  bp::def("build_arch", +[]() { return std::string(TRUEANISO_ARCH_NAME); },
-          "The x86-64 level the module was compiled for: x86-64 (the portable baseline) or TRUEANISO_ARCH "
-          "(x86-64-v2, -v3, -v4), whose results differ in the last bits (CMakeLists.txt).");
+  bp::def("build_arch", +[]() { return std::string(kernelLevel()); },
+          "The x86-64 level the module's engines were compiled for: x86-64 (the portable baseline), x86-64-v3 "
+          "(the dispatch build's second module) or TRUEANISO_ARCH's; results differ between levels in the last "
+          "bits (CMakeLists.txt).");
   bp::def("set_threads", &setThreads, "Set the OpenMP threads of the engines (OMP_NUM_THREADS is read only at start).");
   bp::def("parallel_minimum", &parallelMinimum,
           "Loops shorter than this many items (contacts, bodies) run on one thread (core/Parallel.hpp).");

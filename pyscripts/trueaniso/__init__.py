@@ -42,6 +42,13 @@ def _find_extension():
     from . import buildarch
     found = importlib.util.find_spec("_trueaniso")
     if found is not None and found.origin:
+        # The build's module for this processor (buildarch.choose): first on the path, so that the
+        # import below takes it.
+        chosen = buildarch.choose(os.path.dirname(found.origin), buildarch.cpu_flags(),
+                                  os.environ.get(buildarch.LEVEL_ENV))
+        if chosen != os.path.dirname(found.origin):
+            sys.path.insert(0, chosen)
+            found = importlib.util.find_spec("_trueaniso")
         buildarch.refuse_unsupported(os.path.dirname(found.origin))
     try:
         import _trueaniso  # noqa: F401

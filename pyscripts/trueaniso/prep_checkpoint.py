@@ -171,8 +171,9 @@ class Checkpoints:
             built = self.saved_recipe().get("build")
             rebuild = ""
             if built is not None and built != self.recipe.get("build"):  # named: two hashes alone say nothing
-                rebuild = (" (it was made by engines built for %s, this run's are for %s: %s builds them so, "
-                           "README)" % (built, self.recipe.get("build"), buildarch.setup_command(built)))
+                rebuild = (" (it was made by engines built for %s, this run's are for %s; to run at %s: %s)"
+                           % (built, self.recipe.get("build"), built,
+                              buildarch.how_to_run_at(built, os.path.dirname(engines.__file__))))
             raise CheckpointMismatch(
                 "the preparation checkpoint %s was made with other settings (%s); this run cannot go on "
                 "from it. Use the same options (and code%s) to resume, or %s to prepare from the start"

@@ -305,8 +305,8 @@ def check(out, fingerprint, states):
             built = (meta.get("versions") or {}).get("build", buildarch.BASELINE)
             if built != engines.build_arch():
                 more = " (its engines were built for %s, this run's for %s)" % (built, engines.build_arch()) + more
-                way = "continue it with a build for %s (%s, README), or %s" % (
-                    built, buildarch.setup_command(built), way)
+                way = "continue it at %s: %s, or %s" % (
+                    built, buildarch.how_to_run_at(built, os.path.dirname(engines.__file__)), way)
         raise StudyMismatch("%s holds another study: %s is %s there, %s in this run%s; %s"
                             % (out, LABELS.get(field, field), _show(there), _show(here), more, way))
     have = meta.get("states", {})

@@ -13,6 +13,12 @@ sys.path.insert(0, os.path.join(REPO, "pyscripts"))
 # checkout's package, whichever checkout setup.sh linked for the machine.
 os.environ["PYTHONPATH"] = os.pathsep.join([os.path.join(REPO, "pyscripts")]
                                            + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
+# The engines' baseline module (trueaniso/buildarch.py), in this process and every process it
+# starts, unless TRUEANISO_LEVEL says otherwise: the committed fixtures and the numbers the tests
+# compare with are the baseline's, which every x86-64 processor runs to the same bits, so the suite
+# passes or fails alike on a processor with x86-64-v3 and on one without (docs/runs.md, "Across
+# machines"). The other levels are tested in processes of their own (test_buildarch.py).
+os.environ.setdefault("TRUEANISO_LEVEL", "x86-64")
 
 
 # The files of the most CPU time first (largest first), the others after them in their order:

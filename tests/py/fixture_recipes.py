@@ -1,7 +1,8 @@
 """How the specimens committed in tests/data were made. The tests load those files (through
 specimen_file.load, which checks their checksum and fields) instead of preparing them each run; a
 test marked long runs the recipe itself where the recipe's outcome is part of what is checked.
-Regenerate a file (with the baseline build, one engine thread) by
+Regenerate a file (by the baseline module, which this script loads unless TRUEANISO_LEVEL says
+otherwise, one engine thread) by
 
     OMP_NUM_THREADS=1 /usr/bin/python3 tests/py/fixture_recipes.py NAME.npz
 
@@ -14,6 +15,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
 DATA = os.path.join(REPO, "tests", "data")
 sys.path.insert(0, os.path.join(REPO, "pyscripts"))
+# The baseline module (trueaniso/buildarch.py): every file in tests/data is its (tests/data/README.md).
+os.environ.setdefault("TRUEANISO_LEVEL", "x86-64")
 
 from trueaniso import clump_recipes, clump_specimen, engines, specimen, specimen_file, triaxial  # noqa: E402
 

@@ -412,9 +412,12 @@ def test_a_checkpoint_of_another_build_level_says_which_build_continues_it(tmp_p
                                  checkpoints=prep_checkpoint.Checkpoints(path, dict(seed=7, code="src-v3", build="x86-64-v3"),
                                                                          20_000))
     here = prep_checkpoint.Checkpoints(path, dict(seed=7, code="src-base", build="x86-64"), 20_000)
+    import re
+    from trueaniso import buildarch
+    how = buildarch.how_to_run_at("x86-64-v3", os.path.dirname(engines.__file__))  # TRUEANISO_LEVEL, or a build
     with pytest.raises(prep_checkpoint.CheckpointMismatch,
-                       match=r"made by engines built for x86-64-v3, this run's are for x86-64: TRUEANISO_ARCH=x86-64-v3 "
-                             r"\./setup\.sh"):
+                       match=re.escape("made by engines built for x86-64-v3, this run's are for x86-64; to run at "
+                                       "x86-64-v3: %s" % how)):
         specimen.prepare_spheres(100, seed=7, checkpoints=here)
     same = prep_checkpoint.Checkpoints(path, dict(seed=8, code="src-v3", build="x86-64-v3"), 20_000)
     with pytest.raises(prep_checkpoint.CheckpointMismatch) as refused:  # same level: no word of builds

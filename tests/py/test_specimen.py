@@ -26,11 +26,6 @@ def small():
     return scene, log
 
 
-def _baseline_build():
-    if engines.build_arch() != buildarch.BASELINE:
-        pytest.skip("the pinned bits are the baseline build's; a %s build makes another packing" % engines.build_arch())
-
-
 def test_consolidated_state(small):
     scene, log = small
     st = specimen.state(scene)
@@ -107,7 +102,11 @@ def test_recipe_keeps_its_committed_bits(small):
     sum's order, a time step rule, a default) ends in another packing, and every documented specimen
     (docs/specimens.md) then stops reproducing. A change meant to move the packing regenerates the
     file (tests/data/README.md) and the documented numbers with it; one not meant to fails here."""
-    _baseline_build()
+    if engines.build_arch() != buildarch.BASELINE:  # this process runs another level: the baseline's, apart
+        from test_processor_bits import _baseline_build as has_baseline, assert_same_bits, remade
+        has_baseline()
+        assert_same_bits(remade("spheres", (150, 5), {}), "spheres-150-s5.npz")
+        return
     scene, log = small
     committed, meta = specimen_file.load(os.path.join(REPO, "tests", "data", "spheres-150-s5.npz"))
     for name in ("positions", "radii", "cell", "orientations"):
@@ -141,13 +140,18 @@ def test_the_default_specimen_keeps_its_contacts_to_state_21(small, tmp_path):
 
 @pytest.mark.long
 def test_documented_1000_sphere_specimen(tmp_path):
-    """The command docs/specimens.md gives for the 1000-sphere specimen, seed 1, one thread, makes
-    the e, Zm and step counts it gives (at the digits it gives them). Long (2-3 min on one core)."""
-    _baseline_build()
+    """The command docs/specimens.md gives for the 1000-sphere specimen, seed 1, one thread, under the
+    time step rule it was made with (smallest-inertia, the default before per-axis), by the
+    baseline's module, makes the e, Zm and step counts it gives (at the digits it gives them). Long
+    (2-3 min on one core)."""
+    from test_processor_bits import _baseline_build as has_baseline
+    has_baseline()
     out = tmp_path / "s.npz"
     proc = subprocess.run([sys.executable, os.path.join(REPO, "pyscripts", "prepare_specimen.py"), "--n", "1000",
-                           "--seed", "1", "--threads", "1", "--checkpoint-every", "0", "--quiet", "--out", str(out)],
-                          env=dict(os.environ, OMP_NUM_THREADS="1"), capture_output=True, text=True, timeout=1800)
+                           "--seed", "1", "--threads", "1", "--checkpoint-every", "0", "--time-step", "smallest-inertia",
+                           "--quiet", "--out", str(out)],
+                          env=dict(os.environ, OMP_NUM_THREADS="1", TRUEANISO_LEVEL=buildarch.BASELINE),
+                          capture_output=True, text=True, timeout=1800)
     assert proc.returncode == 0, proc.stderr
     _, meta = specimen_file.load(str(out))
     st, p = meta["summary"], meta["parameters"]
