@@ -1,6 +1,6 @@
 """The cost of a study's step, with the true-triaxial servo in the chain, against a bare step.
 
-    /usr/bin/python3 bench/bench_servo_step.py --specimen S.npz [--tile K] [--tree DIR ...] [--doc docs/benchmarks.md]
+    /usr/bin/python3 bench/bench_servo_step.py --specimen S.npz [--tile K] [--tree DIR ...] [--doc docs/studies/benchmarks.md]
 
 A bare step is contact detection, contact forces and the integrator at a fixed time step; a servo
 step adds a TrueTriaxialServo loading the cell along state 21's path (b = 0.5, sigma_z 140 kPa,
