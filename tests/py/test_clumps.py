@@ -54,7 +54,8 @@ def test_template_from_python_matches_lens_and_rejects_bad_members():
 
 @pytest.mark.parametrize("centres,radii", [
     ([[0, 0, 0], [0.7, 0.1, 0.05], [1.2, 0.6, 0.2]], [1.0, 0.8, 0.6]),  # asymmetric trimer: every axis a test
-    (clump_shapes.SHAPES["trimer-2.0"][0], clump_shapes.SHAPES["trimer-2.0"][1]),  # clump1's shape
+    (clump_shapes.SHAPES["trimer-2.0"][0], clump_shapes.SHAPES["trimer-2.0"][1]),  # clump1's before the unloading
+    (clump_shapes.SHAPES["pentamer-2.0"][0], clump_shapes.SHAPES["pentamer-2.0"][1]),  # clump1's shape
 ])
 def test_template_mass_properties_match_monte_carlo(centres, radii):
     """Volume, mass, centre and inertia tensor of the CGAL template against plain Monte Carlo
@@ -450,18 +451,20 @@ def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path
     option that contradicts one is refused), records its name, and refuses a name the assembly does
     not have."""
     import inspect
-    from trueaniso import clump_recipes, clump_specimen, cli
+    from trueaniso import clump_recipes, clump_specimen, cli, specimen
     keywords = set(inspect.signature(clump_specimen.prepare_clumps).parameters) - {"overrides"}
     for assembly, named in clump_recipes.VARIANTS.items():
+        allowed = (set(inspect.signature(specimen.prepare_spheres).parameters) if assembly == "sphere" else
+                   set(clump_recipes.RECIPES[assembly]) | keywords)
         for name, settings in named.items():
-            assert settings and set(settings) <= set(clump_recipes.RECIPES[assembly]) | keywords, (assembly, name)
+            assert settings and set(settings) <= allowed, (assembly, name)
     v = clump_recipes.variant("clump2", "frictionless")
     assert v == {"mu_prep": 0.0}
     v["mu_prep"] = 1.0
     assert clump_recipes.variant("clump2", "frictionless") == {"mu_prep": 0.0}
     with pytest.raises(ValueError, match="clump1 has no recipe variant 'frictionless'"):
         clump_recipes.variant("clump1", "frictionless")
-    with pytest.raises(ValueError, match="unknown clump assembly"):
+    with pytest.raises(ValueError, match="unknown assembly 'clump9'"):
         clump_recipes.variant("clump9", "frictionless")
 
     sys.path.insert(0, os.path.join(REPO, "pyscripts"))

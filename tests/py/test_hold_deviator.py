@@ -117,7 +117,7 @@ def test_the_variant_is_clump1s_and_is_refused_elsewhere(tmp_path):
     one_line_error(run_script("prepare_specimen.py", "--assembly", "clump2", "--n", 100, "--recipe", "hold-deviator",
                               "--out", out), "--recipe", "clump2 has no recipe variant 'hold-deviator'")
     one_line_error(run_script("prepare_specimen.py", "--n", 100, "--recipe", "hold-deviator", "--out", out),
-                   "--recipe", "unknown clump assembly")
+                   "--recipe", "sphere has no recipe variant 'hold-deviator'")
     assert not os.path.exists(out)
 
 
