@@ -1,4 +1,4 @@
-"""The seed studies of docs/specimens.md ("Seeds"): the default study (run_study.py, what ./main.sh
+"""The seed studies of docs/studies/specimens.md ("Seeds"): the default study (run_study.py, what ./main.sh
 runs) of one assembly on several seeds, or their data collected for the manual.
 
     /usr/bin/python3 bench/seed_studies.py --assembly sphere --n 1000 --seeds 1,2,3 --ids 1-39

@@ -489,7 +489,7 @@ def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path
 
 
 def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
-    """docs/clumps.md's clump2 variant and state-21 tables are what clump_recipe_variants.py --doc
+    """docs/studies/clumps.md's clump2 variant and state-21 tables are what clump_recipe_variants.py --doc
     writes from docs/data/clump-recipes (no number typed by hand), and a state-21 ratio there is
     E at state 21 over E at state 1 of the run's probes.csv (read here with the csv module: the
     frictionless seed-1 run's x probe, 309.8 / 387.0 MPa in its log)."""
@@ -498,9 +498,9 @@ def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
     import clump_recipe_variants as crv
     data = os.path.join(REPO, "docs", "data", "clump-recipes")
     doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "clumps.md"), doc)
+    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
     crv.write_doc(str(doc), data)
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "clumps.md")).read()
+    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
     with open(os.path.join(data, "state21-frictionless-s1", "probes.csv")) as f:
         E = {(r["state"], r["probe"]): float(r["E"]) for r in csv.DictReader(f)}
     ratio = E[("21", "x")] / E[("1", "x")]

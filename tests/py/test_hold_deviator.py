@@ -155,14 +155,14 @@ def test_prepare_specimen_takes_clump1s_variants(tmp_path, name, keyword):
 
 
 def test_the_clump1_preparation_table_is_that_of_its_data(tmp_path):
-    """docs/clumps.md's clump1 preparation table is what clump1_prep.py --doc writes from
+    """docs/studies/clumps.md's clump1 preparation table is what clump1_prep.py --doc writes from
     docs/data/clump1-prep (no number typed by hand)."""
     import shutil
     sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump1_prep
     doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "clumps.md"), doc)
+    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
     import _bench
     _bench.replace_block(str(doc), "clump1-prep", clump1_prep.table(clump1_prep.rows_of(
         os.path.join(REPO, "docs", "data", "clump1-prep"))))
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "clumps.md")).read()
+    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()

@@ -3,7 +3,7 @@
     /usr/bin/python3 -m trueaniso.analysis.seeds STUDY_DIR [STUDY_DIR ...]
     /usr/bin/python3 -m trueaniso.analysis.seeds --label "new recipe" DIR DIR DIR --label "old recipe" DIR DIR
 
-The first form prints one row per study; the second the table of the manual (docs/specimens.md,
+The first form prints one row per study; the second the table of the manual (docs/studies/specimens.md,
 "Old and new recipes"): one column per label, each number the mean +/- sample standard deviation
 over that label's studies (one seed: its value, and the count says so), the paper's value beside.
 
