@@ -172,10 +172,11 @@ def grid_rows(scene):
 
 
 def tiled(scene, k):
-    """The specimen's packing repeated k times along each axis of its (nearly orthorhombic) cell:
-    reduced coordinates kept, the cell's diagonal times k (its shear terms, ~1e-6 of the edge,
-    dropped). A periodic packing tiled is a packing of k^3 times the particles at the same stress,
-    void ratio and Zm; the contacts are found anew, without their shear history. Spheres only."""
+    """The packing repeated k times along each axis of its (nearly orthorhombic) cell, spheres or
+    clumps (each body with its members, mass, inertia, volume and orientation): reduced
+    coordinates kept, the cell's diagonal times k (its shear terms, ~1e-6 of the edge, dropped). A
+    periodic packing tiled is a packing of k^3 times the particles at the same stress, void ratio
+    and Zm; the contacts are found anew, without their shear history."""
     import numpy as np
     from trueaniso import engines
     h = np.array(scene.cell)
@@ -185,5 +186,15 @@ def tiled(scene, k):
     t.shear_modulus, t.poisson, t.density, t.friction = scene.shear_modulus, scene.poisson, scene.density, scene.friction
     t.cell_size = t.cell_ref_size = edge * k
     shifts = [np.array([i, j, l]) for i in range(k) for j in range(k) for l in range(k)]
-    t.add_spheres(np.vstack([(reduced + s) * edge for s in shifts]), np.tile(np.array(scene.radii), len(shifts)))
+    if not scene.has_clumps:
+        t.add_spheres(np.vstack([(reduced + s) * edge for s in shifts]), np.tile(np.array(scene.radii), len(shifts)))
+        return t
+    mb, q = np.array(scene.member_begin), np.array(scene.orientations)
+    offsets, radii = np.array(scene.member_offsets), np.array(scene.radii)
+    masses, inertia, volumes = np.array(scene.masses), np.array(scene.inertia), np.array(scene.volumes)
+    for s in shifts:
+        for b in range(scene.num_bodies):
+            m = slice(mb[b], mb[b + 1])
+            t.add_clump((reduced[b] + s) * edge, q[b], offsets[m], radii[m], float(masses[b]), inertia[b],
+                        float(volumes[b]))
     return t

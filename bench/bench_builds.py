@@ -1,6 +1,6 @@
 """One stepper change measured: the same packing stepped by two builds of trueaniso, before and after.
 
-    /usr/bin/python3 bench/bench_builds.py --before TREE --after TREE --specimen S.npz [--tiles 1,2] [--doc docs/benchmarks.md]
+    /usr/bin/python3 bench/bench_builds.py --before TREE --after TREE --specimen S.npz [--tiles 1,2] [--doc docs/studies/benchmarks.md]
 
 TREE is a checkout of trueaniso, built (./setup.sh), e.g. `git worktree add ../before HEAD~1`.
 Each run is a process of its own that imports that tree's engines and steps the specimen (tiled
@@ -189,7 +189,7 @@ def options():
     if not (math.isfinite(o.particle_steps) and o.particle_steps > 0):
         cli.fail("--particle-steps must be a number > 0, not %r" % o.particle_steps)
     if not os.path.isfile(o.specimen):
-        cli.fail("no specimen file %s (prepare it first, docs/benchmarks.md)" % o.specimen)
+        cli.fail("no specimen file %s (prepare it first, docs/studies/benchmarks.md)" % o.specimen)
     o.spheres = _bench.sphere_specimen(o.specimen)
     if o.state is not None:
         from trueaniso import triaxial

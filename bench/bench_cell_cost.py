@@ -2,7 +2,7 @@
 detection against the orthorhombic fast path on the same packing, and the steps to reach a state
 with six-component control against three (from docs/data/cell-states-*.csv, bench_cell_states.py).
 
-    /usr/bin/python3 bench/bench_cell_cost.py --specimen specimens/spheres-4000-s1.npz --doc docs/benchmarks.md
+    /usr/bin/python3 bench/bench_cell_cost.py --specimen specimens/spheres-4000-s1.npz --doc docs/studies/benchmarks.md
 
 The sheared scene is the specimen as prepared (its consolidation sheared the cell by ~1e-5, so
 hSize has off-diagonal terms and every step takes the sheared path); the orthorhombic scene is the
@@ -112,7 +112,7 @@ def main(argv=None):
         lines += ["", "Steps to reach a state (bench_cell_states.py, the isotropic state and the 39 of Table C1, "
                       "1 thread): six controlled components (shear stresses to zero) against three (shear strains "
                       "held, the orthorhombic servo).", ""] + steps
-    lines += ["", "Reproduce: `/usr/bin/python3 bench/bench_cell_cost.py --specimen %s --doc docs/benchmarks.md`"
+    lines += ["", "Reproduce: `/usr/bin/python3 bench/bench_cell_cost.py --specimen %s --doc docs/studies/benchmarks.md`"
               % os.path.relpath(o.specimen)]
     table = "\n".join(lines)
     print(table)

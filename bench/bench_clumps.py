@@ -2,7 +2,7 @@
 the preparation time of each assembly.
 
     /usr/bin/python3 bench/bench_clumps.py --specimen specimens/clump1-4000-s1.npz \
-        --specimen specimens/clump2-4000-s1.npz [--doc docs/benchmarks.md]
+        --specimen specimens/clump2-4000-s1.npz [--doc docs/studies/benchmarks.md]
 
 Both codes run the same clump scene (periodic cell, contact history), the same fixed time step,
 local damping 0.2, rotations free, the simplified Hertz-Mindlin law between member spheres (ours:
@@ -98,7 +98,7 @@ def main():
                 os.path.basename(path), par.get("assembly", "?"), s.num_bodies, s.num_members,
                 engines.void_ratio(s), prep, th, ours / 1e6, yade / 1e6, ours / yade))
     lines += ["", "Reproduce: `OMP_NUM_THREADS=1 /usr/bin/python3 bench/bench_clumps.py %s --threads %s "
-              "--repeats %d%s --doc docs/benchmarks.md`"
+              "--repeats %d%s --doc docs/studies/benchmarks.md`"
               % (" ".join("--specimen %s" % os.path.relpath(p) for p in o.specimen), o.threads, o.repeats,
                  " --shared" if o.shared else "")]
     table = "\n".join(lines)

@@ -1,6 +1,6 @@
 """The cost of a study's step, with the true-triaxial servo in the chain, against a bare step.
 
-    /usr/bin/python3 bench/bench_servo_step.py --specimen S.npz [--tile K] [--tree DIR ...] [--doc docs/benchmarks.md]
+    /usr/bin/python3 bench/bench_servo_step.py --specimen S.npz [--tile K] [--tree DIR ...] [--doc docs/studies/benchmarks.md]
 
 A bare step is contact detection, contact forces and the integrator at a fixed time step; a servo
 step adds a TrueTriaxialServo loading the cell along state 21's path (b = 0.5, sigma_z 140 kPa,
@@ -73,31 +73,7 @@ print("BENCH " + json.dumps(dict(n=s.num_bodies, steps=steps, wall=wall, cpu=cpu
 MODES = ("bare", "servo")
 
 
-def tiled(scene, k):
-    """The packing repeated k times along each axis of its (nearly orthorhombic) cell, spheres or
-    clumps (each body with its members, mass, inertia, volume and orientation): reduced
-    coordinates kept, the cell's diagonal times k, its shear terms dropped; contacts found anew."""
-    import numpy as np
-    from trueaniso import engines
-    h = np.array(scene.cell)
-    edge = np.diag(h).copy()
-    reduced = np.linalg.solve(h, np.array(scene.positions).T).T % 1.0
-    t = engines.Scene()
-    t.shear_modulus, t.poisson, t.density, t.friction = scene.shear_modulus, scene.poisson, scene.density, scene.friction
-    t.cell_size = t.cell_ref_size = edge * k
-    shifts = [np.array([i, j, l]) for i in range(k) for j in range(k) for l in range(k)]
-    if not scene.has_clumps:
-        t.add_spheres(np.vstack([(reduced + s) * edge for s in shifts]), np.tile(np.array(scene.radii), len(shifts)))
-        return t
-    mb, q = np.array(scene.member_begin), np.array(scene.orientations)
-    offsets, radii = np.array(scene.member_offsets), np.array(scene.radii)
-    masses, inertia, volumes = np.array(scene.masses), np.array(scene.inertia), np.array(scene.volumes)
-    for s in shifts:
-        for b in range(scene.num_bodies):
-            m = slice(mb[b], mb[b + 1])
-            t.add_clump((reduced[b] + s) * edge, q[b], offsets[m], radii[m], float(masses[b]), inertia[b],
-                        float(volumes[b]))
-    return t
+tiled = _bench.tiled  # spheres or clumps; the workers call it by this module's name
 
 
 def run(tree, specimen, tile, steps, mode, threads, callgrind=False, level=None):

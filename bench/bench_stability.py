@@ -2,7 +2,7 @@
 
     OMP_NUM_THREADS=1 /usr/bin/python3 bench/bench_stability.py \
         --specimen spheres=S.npz --specimen clump1=C1.npz [--factors 0.5,1,1.5] [--steps 100000] \
-        [--csv docs/data/stability.csv] [--figure docs/figures/time-step-stability.png] [--doc docs/time-step.md]
+        [--csv docs/data/stability.csv] [--figure docs/figures/time-step-stability.png] [--doc docs/studies/time-step.md]
 
 Each specimen is taken as it is (contact history included), its cell held (no strain rate), the
 damping off and the friction made unreachable (the probe's 1e23: nothing slides, nothing dissipates),

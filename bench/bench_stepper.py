@@ -47,7 +47,7 @@ def load(o):
         return _bench.orthorhombic(s)
     s = _bench.tiled(s, o.tile)
     # In the order a prepared specimen of that size has (grid rows, _bench.grid_rows): the Morton
-    # curve steps ours 6-10 % slower than rows (docs/benchmarks.md, "Stepper changes").
+    # curve steps ours 6-10 % slower than rows (docs/studies/benchmarks.md, "Stepper changes").
     s.reorder_bodies(_bench.grid_rows(s))
     dem.refresh(s)
     return s

@@ -1,6 +1,6 @@
 """What each stepper change bought, measured on our own stepper alone.
 
-    /usr/bin/python3 bench/bench_stepper_changes.py --specimen S.npz [--small T.npz] [--doc docs/benchmarks.md]
+    /usr/bin/python3 bench/bench_stepper_changes.py --specimen S.npz [--small T.npz] [--doc docs/studies/benchmarks.md]
 
 1. Body order. The specimen is tiled K x K x K times (a periodic packing tiled is a packing: 4000
    spheres give 32,000 at K = 2, 108,000 at K = 3) and stepped with its bodies in a random order,
@@ -78,7 +78,7 @@ def options():
     o.tiles = _bench.tile_counts(o.tiles)
     for path in [o.specimen] + ([o.small] if o.small else []):
         if not os.path.isfile(path):
-            cli.fail("no specimen file %s (prepare it first, docs/benchmarks.md)" % path)
+            cli.fail("no specimen file %s (prepare it first, docs/studies/benchmarks.md)" % path)
     if o.repeats < 1 or min(o.tiles) < 1 or max(o.tiles) > 4:
         cli.fail("--repeats must be >= 1 and --tiles between 1 and 4 (4^3 x the specimen is already large)")
     return o

@@ -1,7 +1,7 @@
 """Steps to reach a state under each time step rule, and what the rule changes in the state reached.
 
     /usr/bin/python3 bench/bench_time_step_states.py --specimen S.npz [--ids 1,21,39] \
-        [--rules smallest-inertia,per-axis] [--doc docs/time-step.md]
+        [--rules smallest-inertia,per-axis] [--doc docs/studies/time-step.md]
 
 Every state of Table C1 asked for is reached from the specimen itself once per time step rule
 (dem.TIME_STEP_RULES; docs/time-step.md), with everything else at the study's defaults. The path

@@ -7,7 +7,7 @@ solve, rotations restrained and free). One JSON object a run, appended to --json
     OMP_NUM_THREADS=1 /usr/bin/python3 bench/clump1_prep.py --n 1000 --seed 1 \
         [--recipe hold-deviator] [--time-step per-axis] --out /tmp/c1.npz --json docs/data/clump1-prep/runs.jsonl
 
-    /usr/bin/python3 bench/clump1_prep.py --doc docs/clumps.md   # the table, from the data
+    /usr/bin/python3 bench/clump1_prep.py --doc docs/studies/clumps.md   # the table, from the data
 """
 import json
 import math

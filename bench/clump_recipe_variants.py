@@ -60,7 +60,7 @@ def measure_states(study, ids=("1", "21")):
 
 
 def variants_table(rows):
-    """The Markdown table of docs/clumps.md ("clump2 recipe variants") from the JSON-lines rows."""
+    """The Markdown table of docs/studies/clumps.md ("clump2 recipe variants") from the JSON-lines rows."""
     out = ["| variant | seed | e | Zm | rattlers | E_z/E_x restrained | free | E_x, E_y, E_z restrained (MPa) "
            "| steps (expansion + consolidation) | wall |", "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -154,7 +154,7 @@ def main():
     p.add_argument("--out", help="specimen file (.npz)")
     p.add_argument("--study", help="a run_states.py study of states 1 and 21: measure those instead")
     p.add_argument("--json", help="JSON-lines file a row is appended to (with --study: written)")
-    p.add_argument("--doc", help="rewrite the tables of this Markdown file (docs/clumps.md) from --data instead")
+    p.add_argument("--doc", help="rewrite the tables of this Markdown file (docs/studies/clumps.md) from --data instead")
     p.add_argument("--data", default="docs/data/clump-recipes", help="the measurements the tables are made of")
     o = cli.parse(p)
     if o.doc:

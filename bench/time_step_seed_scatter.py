@@ -1,7 +1,7 @@
 """What the per-axis time step changes in the states reached, against what another seed changes.
 
     /usr/bin/python3 bench/time_step_seed_scatter.py --specimens s1.npz,s2.npz,s3.npz \
-        [--ids 1,5,9,21,39] [--json out.json] [--doc docs/time-step.md --block B]
+        [--ids 1,5,9,21,39] [--json out.json] [--doc docs/studies/time-step.md --block B]
 
 Each specimen (one seed each, the same recipe) is taken to every state asked for, from the
 specimen itself, once under the reference rule (smallest-inertia) and once under per-axis, as

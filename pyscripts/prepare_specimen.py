@@ -55,12 +55,12 @@ def options(argv=None):
     p.add_argument("--mu-prep", type=cli.finite, help="friction while radii grow; default per assembly")
     p.add_argument("--mu", type=cli.finite, default=0.5, help="friction of the consolidated state")
     p.add_argument("--switch-pressure", type=cli.finite, default=None,
-                   help="spheres: mean stress (Pa) at which the radii stop growing and the friction becomes --mu; "
-                        "the cell servo then compresses the packing to --pressure at --mu (a specimen consolidated "
-                        "at the final friction from a denser start; docs/path-fidelity.md). Default: --pressure "
-                        "(the friction is switched at the final stress)")
-    p.add_argument("--recipe", help="a named variant of a clump assembly's recipe, whose settings replace the "
-                                    "defaults that depend on the assembly (docs/clumps.md, section 5b): %s"
+                   help="spheres: mean stress (Pa) to which the packing grown at --mu-prep is unloaded, where the "
+                        "friction becomes --mu and the cell servo compresses it to --pressure (a specimen "
+                        "consolidated at the final friction; docs/specimens.md). Default: %g of --pressure (20 kPa "
+                        "at 100 kPa)" % specimen.SWITCH_FRACTION)
+    p.add_argument("--recipe", help="a named variant of an assembly's recipe, whose settings replace the defaults "
+                                    "that depend on the assembly (docs/specimens.md; docs/clumps.md, section 5b): %s"
                                     % "; ".join("%s: %s" % (a, ", ".join(v))
                                                 for a, v in clump_recipes.VARIANTS.items()))
     p.add_argument("--phi-cell", type=cli.finite,
@@ -108,6 +108,7 @@ def validate(o):
     for k, v in assembly_defaults(o.assembly, o.recipe).items():
         if getattr(o, k) is None:
             setattr(o, k, v)
+    resolve_switch(o)
     if o.assembly != "sphere":
         try:
             clump_specimen.check_count(o.assembly, o.n)
@@ -129,8 +130,6 @@ def validate(o):
     if o.mu_prep < 0 or o.mu < 0:
         raise cli.InputError("friction coefficients must be >= 0")
     if o.switch_pressure is not None:
-        if o.assembly != "sphere":
-            raise cli.InputError("--switch-pressure is for spheres: the clump recipes have their own stages")
         problem = switched_below(o) and specimen.switch_pressure_problem(o.switch_pressure, o.pressure,
                                                                          name="--switch-pressure")
         if problem:
@@ -212,6 +211,25 @@ def main():
         prepare(o, dist)
 
 
+def resolve_switch(o):
+    """--switch-pressure when not given (the recipe's share of --pressure, specimen.default_switch_pressure),
+    and whether the packing is unloaded to it (o.unload: the recipe's; the sphere variant
+    grown-to-switch grows its radii to it instead). A --switch-pressure that a recipe switching the
+    friction at --pressure (grown-to-target) would ignore is refused."""
+    named = clump_recipes.variant(o.assembly, o.recipe) if o.recipe else {}
+    o.unload = named.get("unload", True)
+    if o.assembly == "sphere":
+        fraction = named.get("switch_fraction", specimen.SWITCH_FRACTION)
+    else:
+        fraction = clump_specimen.recipe(o.assembly, switch_fraction=named.get("switch_fraction"))["switch_fraction"]
+    if o.switch_pressure is None:
+        o.switch_pressure = specimen.default_switch_pressure(o.pressure, fraction)
+    elif fraction >= 1.0 and o.switch_pressure != o.pressure:
+        raise cli.InputError("%s switches the friction at --pressure: --switch-pressure %g would change nothing it "
+                             "does" % ("--recipe %s" % o.recipe if o.recipe else "the %s recipe" % o.assembly,
+                                       o.switch_pressure))
+
+
 def settings(o):
     """Every option that makes the specimen (what its preparation checkpoint is bound to). The time
     step rule only when it is not the one every earlier file was made with (which records none)."""
@@ -227,10 +245,15 @@ def settings(o):
     return made
 
 
+def unloaded(o):
+    """Whether this run's packing is grown to --pressure and unloaded to the switch pressure."""
+    return switched_below(o) and o.unload
+
+
 def switched_below(o):
-    """Whether the friction is switched below the final pressure (--switch-pressure given and lower):
-    only then is the switch a setting, recorded and compared; at the final pressure it is the recipe
-    of every file made before the option."""
+    """Whether the friction is switched below the final pressure: only then is the switch a setting,
+    recorded and compared; at the final pressure it is the recipe of every file made before the
+    option (the variant grown-to-target)."""
     return o.switch_pressure is not None and o.switch_pressure != o.pressure
 
 
@@ -260,9 +283,9 @@ def differences(o, meta):
     p = meta.get("parameters", {})
     have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"),
                 time_step=p.get("time_step", cli.DEFAULT_TIME_STEP),
-                switch_pressure=p.get("switch_pressure", p.get("pressure")))
+                switch_pressure=p.get("switch_pressure", p.get("pressure")), unloaded="unloaded_from" in p)
     want = dict(settings(o), time_step=o.time_step,
-                switch_pressure=o.switch_pressure if switched_below(o) else o.pressure)
+                switch_pressure=o.switch_pressure if switched_below(o) else o.pressure, unloaded=unloaded(o))
     want = {k: v for k, v in want.items() if have.get(k) is not None and k != "recipe"}
     recipe, defaults = recipe_settings(o)
     recipe = {k: v for k, v in recipe.items() if k in p or defaults[k] is None}
@@ -371,12 +394,13 @@ def prepare(o, dist):
                 o.n, seed=o.seed, size_distribution=dist, pressure=o.pressure, mu_prep=o.mu_prep,
                 mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
                 unbalanced=o.unbalanced, progress=None if o.quiet else bar.preparation, checkpoints=checkpoints,
-                switch_pressure=o.switch_pressure if switched_below(o) else None)
+                switch_pressure=o.switch_pressure, unload=o.unload)
         else:
             scene, log = clump_specimen.prepare_clumps(
                 o.assembly, o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu, mu_prep=o.mu_prep,
                 mu_final=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number, unbalanced=o.unbalanced,
                 progress=None if o.quiet else bar.preparation, checkpoints=checkpoints,
+                switch_pressure=o.switch_pressure,
                 **{k: v for k, v in (clump_recipes.variant(o.assembly, o.recipe) if o.recipe else {}).items()
                    if k not in assembly_defaults(o.assembly)})
     except (ValueError, specimen.PreparationError, clump_specimen.PreparationError) as exc:

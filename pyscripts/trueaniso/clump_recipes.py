@@ -1,14 +1,16 @@
 """The recipes of the clump assemblies clump1 and clump2 (clump_specimen.py says how each is
 prepared): their template shape, size distribution, orientation weights, layers and stage
-settings. Data only, so that the checks of a specimen file (derived.py) can read them without
-the preparation's imports.
+settings; and the named variants of every assembly's recipe, the spheres' too. Data only, so that
+the checks of a specimen file (derived.py) can read them without the preparation's imports.
 """
 
 RECIPES = {
-    "clump1": dict(shape="trimer-2.0", d50=0.195e-3, cu=1.25, orientation_weights=(1.0, 1.0, 10.0), layers=1,
-                   stage1_rotations="blocked", stage1_pressure=10e3, mu_prep=0.002, mu_final=0.5, phi_cell=0.62),
+    "clump1": dict(shape="pentamer-2.0", d50=0.195e-3, cu=1.25, orientation_weights=(1.0, 1.0, 10.0), layers=1,
+                   stage1_rotations="blocked", stage1_pressure=10e3, mu_prep=0.002, mu_free=None, mu_final=0.5,
+                   phi_cell=0.62, switch_fraction=0.05),
     "clump2": dict(shape="dimer-1.5", d50=0.216e-3, cu=1.43, orientation_weights=(1.0, 1.0, 0.5), layers=4,
-                   stage1_rotations="blocked", stage1_pressure=100e3, mu_prep=0.01, mu_final=0.5, phi_cell=0.55),
+                   stage1_rotations="blocked", stage1_pressure=100e3, mu_prep=0.01, mu_free=None, mu_final=0.5,
+                   phi_cell=0.55, switch_fraction=1.0),
 }
 
 
@@ -28,9 +30,17 @@ def recipe(assembly, **overrides):
     return r
 
 
-# Named variants of a recipe: settings of prepare_clumps (recipe parameters or its own keywords)
-# that differ from the assembly's defaults (docs/clumps.md, section 5b, has their measurements).
+# Named variants of a recipe: settings of prepare_spheres or prepare_clumps (recipe parameters or
+# their own keywords) that differ from the assembly's defaults (docs/specimens.md; docs/clumps.md,
+# section 5b, has the clumps' measurements).
 VARIANTS = {
+    # spheres: the friction switched to 0.5 at the final pressure, the radii grown there at 0.015 (the
+    # default until the unloading: it loses 0.34 of Zm along the Table C1 paths); the radii grown at
+    # 0.015 to 5 kPa only, without the unloading (700,000 steps at 1000 and 4000 spheres, its creep
+    # to 5 kPa); and the default unloaded to 5 kPa instead of 20 (denser: e 0.572, Zm 5.89 at 1000
+    # spheres) (docs/specimens.md, "Old and new recipes").
+    "sphere": {"grown-to-target": dict(switch_fraction=1.0), "grown-to-switch": dict(unload=False, switch_fraction=0.05),
+               "unloaded-to-5kPa": dict(switch_fraction=0.05)},
     # clump2 with its radii grown frictionless (mu_prep 0): fewer rattlers and a higher Zm at 1000 clumps,
     # e 0.01 below the paper's 0.636 instead of 0.01 above it.
     "clump2": {"frictionless": dict(mu_prep=0.0)},
@@ -41,14 +51,18 @@ VARIANTS = {
     # too): p is reached 5 times sooner, and the packing's densification at friction 0.002, which
     # the stage waits out, then sets the steps. With --time-step per-axis, 2.1-4.0 times fewer steps
     # at 300 clumps, e and E_z/E_x within the recipe's scatter between seeds (docs/clumps.md, 5c).
-    "clump1": {"hold-deviator": dict(hold_deviator=0.05), "fast-growth": dict(gain=0.1)},
+    # clump1 as it was made before the unloading: three balls (trimer-2.0, e 0.470 at 4000 clumps,
+    # where the smoother pentamer-2.0 packs to 0.439 at 300), the friction switched at the target.
+    "clump1": {"hold-deviator": dict(hold_deviator=0.05), "fast-growth": dict(gain=0.1),
+               "grown-to-target": dict(shape="trimer-2.0", switch_fraction=1.0)},
 }
 
 
 def variant(assembly, name):
-    """The settings of the named variant of an assembly's recipe (a dict of prepare_clumps keywords)."""
-    if assembly not in RECIPES:
-        raise ValueError("unknown clump assembly %r (available: %s)" % (assembly, ", ".join(RECIPES)))
+    """The settings of the named variant of an assembly's recipe (a dict of prepare_spheres or
+    prepare_clumps keywords)."""
+    if assembly not in RECIPES and assembly != "sphere":
+        raise ValueError("unknown assembly %r (available: sphere, %s)" % (assembly, ", ".join(RECIPES)))
     own = VARIANTS.get(assembly, {})
     if name not in own:
         raise ValueError("%s has no recipe variant %r (variants: %s)" % (assembly, name, ", ".join(own) or "none"))

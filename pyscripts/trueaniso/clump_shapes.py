@@ -25,6 +25,9 @@ SHAPES = {
     "trimer-2.0": ([[-1.0, 0, 0], [0, 0, 0], [1.0, 0, 0]], [1.0, 1.0, 1.0]),
     # the same with neighbours 0.8 radius apart: aspect ratio 1.8
     "trimer-1.8": ([[-0.8, 0, 0], [0, 0, 0], [0.8, 0, 0]], [1.0, 1.0, 1.0]),
+    # five equal balls in a row, neighbours half a radius apart: the trimer's length and aspect
+    # ratio 2 with shallower waists, nearer a spherocylinder (docs/specimens.md, clump1's void ratio)
+    "pentamer-2.0": ([[-1.0, 0, 0], [-0.5, 0, 0], [0, 0, 0], [0.5, 0, 0], [1.0, 0, 0]], [1.0] * 5),
 }
 
 _cache = {}

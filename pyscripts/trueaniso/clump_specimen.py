@@ -257,7 +257,7 @@ def check_count(assembly, n):
 
 def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_number=1e-2, prep_unbalanced=1e-2,
                    unbalanced=1e-3, stress_tolerance=100.0, gain=0.002, max_steps=5_000_000, progress=None,
-                   checkpoints=None, hold_deviator=None, **overrides):
+                   checkpoints=None, hold_deviator=None, switch_pressure=None, **overrides):
     """A clump specimen consolidated isotropically to `pressure` (module doc; docs/specimens.md).
 
     The final state is in force and moment balance below `unbalanced`, so a probe or a static solve
@@ -279,6 +279,10 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         checkpoints: as in `specimen.prepare_spheres`: an interrupted preparation resumes.
         hold_deviator: a gain in (0, 1]: while the radii grow, the cell holds the normal stresses at
             their mean at constant volume with that gain; None: the growth is at a fixed cell.
+        switch_pressure: the mean stress to which the packing grown to `pressure` is unloaded (rotations
+            as the growth left them, its friction), where the friction becomes mu_final and the cell
+            servo compresses it to `pressure`. None: the recipe's ``switch_fraction`` of `pressure`
+            (`specimen.default_switch_pressure`); `pressure`: no unloading (every recipe before it).
         **overrides: any parameter of the recipe (`clump_recipes.RECIPES`), e.g. ``mu_prep``.
 
     Returns:
@@ -287,7 +291,7 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
 
     Raises:
         ValueError: an unknown assembly or parameter, a count the layers cannot hold, a pressure
-            <= 0, a negative friction.
+            <= 0, a negative friction, a switch pressure out of range.
         PreparationError: a stage did not converge within `max_steps`.
 
     Example:
@@ -296,15 +300,21 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         >>> s = specimen.state(scene)
         >>> print("%d clumps of %d spheres, p = %.0f kPa" % (scene.num_bodies, scene.num_members // scene.num_bodies,
         ...                                                   s["p"] / 1e3))
-        20 clumps of 3 spheres, p = 100 kPa
+        20 clumps of 5 spheres, p = 100 kPa
     """
     if hold_deviator is not None and not 0 < hold_deviator <= 1:
         raise ValueError("hold_deviator %r: the deviator hold's gain must lie in (0, 1]" % (hold_deviator,))
     if pressure <= 0:
         raise ValueError("pressure must be > 0")
     r = recipe(assembly, **overrides)
-    if r["mu_prep"] < 0 or r["mu_final"] < 0:
+    if r["mu_prep"] < 0 or r["mu_final"] < 0 or (r["mu_free"] or 0.0) < 0:
         raise ValueError("friction coefficients must be >= 0")
+    switch = switch_pressure
+    if switch is None:
+        switch = specimen.default_switch_pressure(pressure, r["switch_fraction"], stress_tolerance)
+    problem = switch != pressure and specimen.switch_pressure_problem(switch, pressure, stress_tolerance)
+    if problem:
+        raise ValueError(problem)
     t0 = time.time()
     tmpl = clump_shapes.template(r["shape"])
     resumed = checkpoints.resume() if checkpoints is not None else None
@@ -326,14 +336,21 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         # Stage 1: compaction by radius expansion, rotations blocked or free.
         scene.block_rotations = r["stage1_rotations"] == "blocked"
         # The growth scale so far multiplies the controllers' own (one per run between checkpoints).
+        final = scene_at(1.0)
         place = dict(stage="gas", steps={}, start_scale=start, grown_scale=1.0, generation_time=time.time() - t0,
-                     max_dt=dem.reference_time_step(scene_at(1.0), pressure))
+                     max_dt=dem.reference_time_step(final, pressure))
+        if switch < pressure:  # the unloaded packing's cap, as the spheres' (specimen.prepare_spheres)
+            place["unloading_max_dt"] = dem.reference_time_step(final, switch)
         place["elapsed"] = time.time() - t0
     rate = dem.strain_rate_for_inertial_number(inertial_number, r["d50"], scene.density, pressure)
     expanding = ("gas", "stage 1", "expansion")
 
     def build(st):
-        if st.place["stage"] in expanding:
+        if st.at("unloading"):
+            st.controller = specimen.expansion(switch, gain, rate, stress_tolerance, prep_unbalanced)
+            st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller],
+                                 max_dt=st.place["unloading_max_dt"])
+        elif st.place["stage"] in expanding:
             # The loose start (solid fraction 0.2) carries no stress: grow 10 times faster until the
             # contact network takes 1 % of the target pressure (the rate cap only matters under load).
             st.controller = specimen.expansion(pressure, gain, 10.0 * rate if st.at("gas") else rate,
@@ -347,7 +364,7 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
             st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller])
 
     def fold(st):
-        if st.place["stage"] in expanding:
+        if st.place["stage"] in expanding + ("unloading",):
             st.place["grown_scale"] *= st.controller.scale
 
     st = _checkpointed.Stages(scene, place, checkpoints, build, fold)
@@ -369,6 +386,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         raise PreparationError("stage 1 did not reach %.4g Pa within %d steps" % (r["stage1_pressure"], max_steps))
     if st.at("stage 1"):
         st.scene.block_rotations = False
+        if r["mu_free"] is not None:  # the friction of the free expansion and the unloading
+            st.scene.friction = r["mu_free"]
         st.advance("expansion", new_engines=False)
     if st.at("expansion"):
         label = "expansion (free)" if r["stage1_pressure"] < pressure else "expansion"
@@ -377,10 +396,20 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
             raise PreparationError("%s did not converge within %d steps (p or unbalanced force off target)"
                                    % (label, max_steps))
         fold(st)
+        st.advance("unloading" if switch < pressure else "switch")
+    if st.at("unloading"):
+        # Rotations as the expansion left them, its friction: the radii shrink until the switch pressure
+        # is held.
+        if not st.run("unloading", _checkpointed.CHUNK, lambda: st.controller.reached, max_steps, progress):
+            raise PreparationError("unloading did not converge within %d steps (p or unbalanced force off the "
+                                   "switch pressure)" % max_steps)
+        fold(st)
+        st.advance("switch")
+    if st.at("switch"):
         st.scene.rescale(1.0 / (st.place["start_scale"] * st.place["grown_scale"]))
         st.scene.cell_ref_size = st.scene.cell_size
-        # Stage 2: rotations free, final friction, the cell servoed to the isotropic stress until the
-        # forces and the moments are balanced.
+        # Stage 2: rotations free, final friction, the cell servoed from the switch pressure to the
+        # isotropic stress until the forces and the moments are balanced.
         st.scene.block_rotations = False
         st.scene.friction = r["mu_final"]
         st.advance("consolidation")
@@ -401,6 +430,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
                generation_time=st.place["generation_time"], wall_time=st.elapsed(),
                aspect_ratio=clump_shapes.aspect_ratio(tmpl), template_volume_error=tmpl.volume_error_estimate,
                **{k: (list(v) if isinstance(v, tuple) else v) for k, v in r.items()})
+    if switch < pressure:  # absent, as in every file before the unloading: the switch at the final pressure
+        log.update(switch_pressure=switch, unloaded_from=pressure, steps_unloading=st.steps("unloading"))
     if hold_deviator is not None:  # the default's log records none
         log["hold_deviator"] = hold_deviator
     if checkpoints is not None:

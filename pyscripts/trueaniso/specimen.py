@@ -1,17 +1,23 @@
-"""Sphere specimens: random loose packing, radius expansion to the target pressure, and the
-final equilibrium with the consolidation friction.
+"""Sphere specimens: random loose packing, radius expansion to the target pressure, an unloading to
+a low pressure, and the consolidation back to the target at the consolidation friction.
 
 Recipe (choices and reasons are in docs/specimens.md):
 
 1. random sequential addition at solid fraction 0.30 in a cubic periodic cell sized so that the
    final radii would fill it to ``phi_cell``; particles ordered along the cell grid for locality;
 2. radius expansion at fixed cell with friction ``mu_prep``, the growth servoed on the mean
-   stress, until p = target (or ``switch_pressure``, below it) and the unbalanced force is below
-   ``prep_unbalanced``;
-3. a similarity rescale back to the exact size distribution (Hertz stresses do not change);
-4. friction set to ``mu_final`` (0.5), the cell servoed to the isotropic target stress (its
-   shear stresses to zero: the cell shears a little) until every principal stress and every
-   shear stress is within ``stress_tolerance`` and the unbalanced force below ``unbalanced``.
+   stress, until p = the target and the unbalanced force is below ``prep_unbalanced``: a dense
+   packing, nearly isostatic;
+3. the radii shrink, still at ``mu_prep``, until p = ``switch_pressure`` (20 % of the target) is held
+   with the unbalanced force below ``prep_unbalanced``;
+4. a similarity rescale back to the exact size distribution (Hertz stresses do not change);
+5. friction set to ``mu_final`` (0.5, the paper's consolidation friction), the cell servoed from
+   the switch pressure to the isotropic target stress (its shear stresses to zero: the cell
+   shears a little) until every principal stress and every shear stress is within
+   ``stress_tolerance`` and the unbalanced force below ``unbalanced``.
+
+A switch pressure at the target skips step 3 (the named variant ``grown-to-target``, the earlier
+default); ``grown-to-switch`` grows the radii to the switch pressure only (clump_recipes.VARIANTS).
 """
 import math
 import time
@@ -129,10 +135,25 @@ def consolidation(pressure, gain, rate, stress_tolerance, unbalanced):
     return servo
 
 
+# The mean stress at which the friction becomes mu_final and the cell servo takes the packing to the
+# target, as a fraction of the target: 20 kPa at 100 kPa (docs/specimens.md, "Why unload, and to
+# 20 kPa": at 5 kPa the packing leaves the unloading denser, e 0.572 and Zm 5.89 at 1000 spheres).
+SWITCH_FRACTION = 0.2
+
+
+def default_switch_pressure(pressure, fraction=SWITCH_FRACTION, stress_tolerance=100.0):
+    """The switch pressure of a preparation to `pressure` that names none: `fraction` of it, but not
+    below the least switch_pressure_problem accepts (10 stress tolerances); at the final pressure
+    itself (no unloading) when that is above it."""
+    if fraction >= 1.0:
+        return pressure
+    return min(pressure, max(fraction * pressure, 10.0 * stress_tolerance))
+
+
 def switch_pressure_problem(switch_pressure, pressure, stress_tolerance=100.0, name="switch pressure"):
-    """Why the radii cannot stop growing at `switch_pressure` (None if they can): above `pressure`
-    the servo would have to unload; below 10 stress tolerances the expansion's stop (p within one
-    tolerance of its goal) is met more than 10 % off, or by a packing not yet jammed (p near 0)."""
+    """Why the friction cannot be switched at `switch_pressure` (None if it can): above `pressure`
+    the servo would have to unload; below 10 stress tolerances the stop of the stage that reaches
+    it (p within one tolerance of its goal) is met more than 10 % off, or by a packing not jammed."""
     least = 10.0 * stress_tolerance
     if not least <= switch_pressure <= pressure:
         return ("%s %g Pa must lie in [%g, %g] Pa (at least 10 times the stress tolerance %g Pa, "
@@ -143,13 +164,14 @@ def switch_pressure_problem(switch_pressure, pressure, stress_tolerance=100.0, n
 def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=100e3,
                     mu_prep=0.015, mu_final=0.5, phi_cell=0.60, damping=0.4, inertial_number=1e-2,
                     prep_unbalanced=1e-2, unbalanced=1e-3, stress_tolerance=100.0, gain=0.002,
-                    max_steps=5_000_000, progress=None, checkpoints=None, switch_pressure=None):
+                    max_steps=5_000_000, progress=None, checkpoints=None, switch_pressure=None,
+                    switch_fraction=SWITCH_FRACTION, unload=True):
     """A sphere specimen consolidated isotropically to `pressure` (the recipe of the module doc).
 
     Args:
         n: number of spheres.
         seed: seed of the random placement; the same seed gives the same specimen, bit for bit.
-        size_distribution: a `psd.SizeDistribution`; the paper's (D50 0.2 mm, Cu 1.5) by default.
+        size_distribution: a `psd.SizeDistribution`; the paper's (D50 0.195 mm, Cu 1.25) by default.
         pressure: isotropic stress of the specimen, Pa.
         mu_prep: friction while the radii grow (lower: a denser specimen).
         mu_final: friction at the end (the paper's 0.5).
@@ -166,10 +188,15 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
             steps and starts from the checkpoint on disk if there is one, so an interrupted preparation
             resumes. None: nothing is written (the specimen is the same bits as with checkpoints
             never due).
-        switch_pressure: the mean stress at which the radii stop growing and the friction becomes
-            `mu_final` (None: `pressure`); below `pressure`, the packing is then compressed to
-            `pressure` by the cell servo at `mu_final`. The time step and rate caps stay those of
-            `pressure`.
+        switch_pressure: the mean stress to which the packing grown to `pressure` is unloaded (at
+            `mu_prep`, in balance), where the friction becomes `mu_final` and the cell servo
+            compresses it to `pressure`. None: `switch_fraction` of `pressure`
+            (default_switch_pressure); `pressure`: no unloading, the friction switched at the target
+            (the variant grown-to-target, every file before the unloading).
+        switch_fraction: the default switch pressure's share of `pressure` (20 %).
+        unload: False grows the radii to `switch_pressure` only, without the unloading (the variant
+            grown-to-switch). The time step and rate caps are those of `pressure`, the unloading's
+            cap that of `switch_pressure`.
 
     Returns:
         (scene, log): the engines' Scene at rest at the state, and a dict of the recipe's parameters,
@@ -189,11 +216,12 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
     if pressure <= 0:
         raise ValueError("pressure must be > 0")
     if switch_pressure is None:
-        switch_pressure = pressure
+        switch_pressure = default_switch_pressure(pressure, switch_fraction, stress_tolerance)
     # The switch at the final pressure is the recipe itself, at any pressure the recipe accepts.
     problem = switch_pressure != pressure and switch_pressure_problem(switch_pressure, pressure, stress_tolerance)
     if problem:
         raise ValueError(problem)
+    expansion_pressure = pressure if unload else switch_pressure
     if mu_prep < 0 or mu_final < 0:
         raise ValueError("friction coefficients must be >= 0")
     t0 = time.time()
@@ -204,21 +232,29 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
         pos, radii, start, side = random_loose_packing(n, size_distribution, seed, phi_cell)
         scene = new_scene(pos, start * radii, side, friction=mu_prep)
         # The growth scale so far multiplies the controllers' own (one per run between checkpoints).
+        final = new_scene(pos, radii, side)
         place = dict(stage="expansion", steps={}, start_scale=start, grown_scale=1.0,
-                     max_dt=dem.reference_time_step(new_scene(pos, radii, side), pressure))
+                     max_dt=dem.reference_time_step(final, pressure))
+        if switch_pressure < expansion_pressure:
+            # The unloaded packing's contacts are softer (k_n ~ N^(1/3)): its cap is that of the
+            # switch pressure (1.6 times the target's at 5 kPa); the steps of the unloading are spent
+            # relaxing the packing there, a time, not a number of steps.
+            place["unloading_max_dt"] = dem.reference_time_step(final, switch_pressure)
         place["elapsed"] = time.time() - t0
     rate = dem.strain_rate_for_inertial_number(inertial_number, size_distribution.d50, scene.density, pressure)
+    sizing = ("expansion", "unloading")  # the stages whose controller changes the radii
 
     def build(st):
-        if st.at("expansion"):
-            st.controller = expansion(switch_pressure, gain, rate, stress_tolerance, prep_unbalanced)
-            st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller], max_dt=st.place["max_dt"])
+        if st.place["stage"] in sizing:
+            goal, cap = (expansion_pressure, "max_dt") if st.at("expansion") else (switch_pressure, "unloading_max_dt")
+            st.controller = expansion(goal, gain, rate, stress_tolerance, prep_unbalanced)
+            st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller], max_dt=st.place[cap])
         else:
             st.controller = consolidation(pressure, gain, rate, stress_tolerance, unbalanced)
             st.chain = dem.Chain(st.scene, damping=damping, controllers=[st.controller])
 
     def fold(st):
-        if st.at("expansion"):
+        if st.place["stage"] in sizing:
             st.place["grown_scale"] *= st.controller.scale
 
     st = _checkpointed.Stages(scene, place, checkpoints, build, fold)
@@ -227,6 +263,14 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
             raise PreparationError("expansion did not converge within %d steps (p or unbalanced force off target)"
                                    % max_steps)
         fold(st)
+        st.advance("unloading" if switch_pressure < expansion_pressure else "switch")
+    if st.at("unloading"):
+        if not st.run("unloading", _checkpointed.CHUNK, lambda: st.controller.reached, max_steps, progress):
+            raise PreparationError("unloading did not converge within %d steps (p or unbalanced force off the "
+                                   "switch pressure)" % max_steps)
+        fold(st)
+        st.advance("switch")
+    if st.at("switch"):
         # Back to the sampled radii exactly: they were placed at start_scale and grew since.
         st.scene.rescale(1.0 / (st.place["start_scale"] * st.place["grown_scale"]))
         st.scene.cell_ref = st.scene.cell
@@ -248,8 +292,13 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
                radius_scale=st.place["start_scale"] * st.place["grown_scale"],
                steps_expansion=st.steps("expansion"), steps_consolidation=st.steps("consolidation"),
                wall_time=st.elapsed(), d50=size_distribution.d50, cu=size_distribution.cu)
-    if switch_pressure != pressure:  # absent: the switch at the final pressure, every earlier file's recipe
+    # Keys absent: the switch at the final pressure (every file before the option), and the radii
+    # grown to the switch pressure (every file before the unloading).
+    if switch_pressure != pressure:
         log["switch_pressure"] = switch_pressure
+    if expansion_pressure != switch_pressure:
+        log["unloaded_from"] = expansion_pressure
+        log["steps_unloading"] = st.steps("unloading")
     if checkpoints is not None:
         log["checkpoint_every"] = checkpoints.every
     return scene, log

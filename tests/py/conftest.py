@@ -159,6 +159,7 @@ def specimen_300(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def specimen_150(tmp_path_factory):
-    """A 150-sphere specimen (prepare_spheres(150, seed=4) on one engine thread), committed, for
-    the static solves (test_specimen prepares its own: the preparation is what it checks)."""
+    """A 150-sphere specimen (prepare_spheres(150, seed=4) by the variant grown-to-target, one engine
+    thread), committed, for the static solves and the time step's tests: what they check does not
+    depend on the recipe (test_specimen prepares its own, spheres-150-s5: the recipe is what it checks)."""
     return committed_specimen("spheres-150-s4.npz", tmp_path_factory)

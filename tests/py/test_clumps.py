@@ -54,7 +54,8 @@ def test_template_from_python_matches_lens_and_rejects_bad_members():
 
 @pytest.mark.parametrize("centres,radii", [
     ([[0, 0, 0], [0.7, 0.1, 0.05], [1.2, 0.6, 0.2]], [1.0, 0.8, 0.6]),  # asymmetric trimer: every axis a test
-    (clump_shapes.SHAPES["trimer-2.0"][0], clump_shapes.SHAPES["trimer-2.0"][1]),  # clump1's shape
+    (clump_shapes.SHAPES["trimer-2.0"][0], clump_shapes.SHAPES["trimer-2.0"][1]),  # clump1's before the unloading
+    (clump_shapes.SHAPES["pentamer-2.0"][0], clump_shapes.SHAPES["pentamer-2.0"][1]),  # clump1's shape
 ])
 def test_template_mass_properties_match_monte_carlo(centres, radii):
     """Volume, mass, centre and inertia tensor of the CGAL template against plain Monte Carlo
@@ -450,18 +451,20 @@ def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path
     option that contradicts one is refused), records its name, and refuses a name the assembly does
     not have."""
     import inspect
-    from trueaniso import clump_recipes, clump_specimen, cli
+    from trueaniso import clump_recipes, clump_specimen, cli, specimen
     keywords = set(inspect.signature(clump_specimen.prepare_clumps).parameters) - {"overrides"}
     for assembly, named in clump_recipes.VARIANTS.items():
+        allowed = (set(inspect.signature(specimen.prepare_spheres).parameters) if assembly == "sphere" else
+                   set(clump_recipes.RECIPES[assembly]) | keywords)
         for name, settings in named.items():
-            assert settings and set(settings) <= set(clump_recipes.RECIPES[assembly]) | keywords, (assembly, name)
+            assert settings and set(settings) <= allowed, (assembly, name)
     v = clump_recipes.variant("clump2", "frictionless")
     assert v == {"mu_prep": 0.0}
     v["mu_prep"] = 1.0
     assert clump_recipes.variant("clump2", "frictionless") == {"mu_prep": 0.0}
     with pytest.raises(ValueError, match="clump1 has no recipe variant 'frictionless'"):
         clump_recipes.variant("clump1", "frictionless")
-    with pytest.raises(ValueError, match="unknown clump assembly"):
+    with pytest.raises(ValueError, match="unknown assembly 'clump9'"):
         clump_recipes.variant("clump9", "frictionless")
 
     sys.path.insert(0, os.path.join(REPO, "pyscripts"))
@@ -486,7 +489,7 @@ def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path
 
 
 def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
-    """docs/clumps.md's clump2 variant and state-21 tables are what clump_recipe_variants.py --doc
+    """docs/studies/clumps.md's clump2 variant and state-21 tables are what clump_recipe_variants.py --doc
     writes from docs/data/clump-recipes (no number typed by hand), and a state-21 ratio there is
     E at state 21 over E at state 1 of the run's probes.csv (read here with the csv module: the
     frictionless seed-1 run's x probe, 309.8 / 387.0 MPa in its log)."""
@@ -495,9 +498,9 @@ def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
     import clump_recipe_variants as crv
     data = os.path.join(REPO, "docs", "data", "clump-recipes")
     doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "clumps.md"), doc)
+    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
     crv.write_doc(str(doc), data)
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "clumps.md")).read()
+    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
     with open(os.path.join(data, "state21-frictionless-s1", "probes.csv")) as f:
         E = {(r["state"], r["probe"]): float(r["E"]) for r in csv.DictReader(f)}
     ratio = E[("21", "x")] / E[("1", "x")]

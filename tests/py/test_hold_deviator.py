@@ -117,7 +117,7 @@ def test_the_variant_is_clump1s_and_is_refused_elsewhere(tmp_path):
     one_line_error(run_script("prepare_specimen.py", "--assembly", "clump2", "--n", 100, "--recipe", "hold-deviator",
                               "--out", out), "--recipe", "clump2 has no recipe variant 'hold-deviator'")
     one_line_error(run_script("prepare_specimen.py", "--n", 100, "--recipe", "hold-deviator", "--out", out),
-                   "--recipe", "unknown clump assembly")
+                   "--recipe", "sphere has no recipe variant 'hold-deviator'")
     assert not os.path.exists(out)
 
 
@@ -155,14 +155,14 @@ def test_prepare_specimen_takes_clump1s_variants(tmp_path, name, keyword):
 
 
 def test_the_clump1_preparation_table_is_that_of_its_data(tmp_path):
-    """docs/clumps.md's clump1 preparation table is what clump1_prep.py --doc writes from
+    """docs/studies/clumps.md's clump1 preparation table is what clump1_prep.py --doc writes from
     docs/data/clump1-prep (no number typed by hand)."""
     import shutil
     sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump1_prep
     doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "clumps.md"), doc)
+    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
     import _bench
     _bench.replace_block(str(doc), "clump1-prep", clump1_prep.table(clump1_prep.rows_of(
         os.path.join(REPO, "docs", "data", "clump1-prep"))))
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "clumps.md")).read()
+    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()

@@ -25,7 +25,7 @@ TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (truea
     (["--cu", "0.5"], ["--cu 0.5:", "Cu must lie in (1, 6)"]),  # the option and the value named
     # the count that fits is said (28 does: test_the_least_count_said_is_taken)
     (["--n", "5"], ["cannot fit the box", "use --n of at least 28"]),
-    (["--assembly", "clump1", "--n", "60"], ["60 clump1 clumps", "use --n of at least 98"]),
+    (["--assembly", "clump1", "--n", "60"], ["60 clump1 clumps", "use --n of at least 94"]),
     # the least count that holds clump2's layers too: the two checks' advice, followed in turn, led
     # from 60 to 67 (not a multiple of its 4 layers) to 80
     (["--assembly", "clump2", "--n", "60"], ["use --n of at least 80"]),

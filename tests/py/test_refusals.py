@@ -195,7 +195,7 @@ def _scaled(name, k, factor):
     (lambda m: m["material"].update(density=2000.0), None, r"body \d+: its mass"),
     # a clump1 file labelled clump2 would be reported as clump2
     (lambda m: m["parameters"].update(assembly="clump2"), None, "a clump of clump2"),
-    (lambda m: m["parameters"].update(assembly="clump2", shape="trimer-2.0", orientation_weights=[1.0, 1.0, 10.0],
+    (lambda m: m["parameters"].update(assembly="clump2", shape="pentamer-2.0", orientation_weights=[1.0, 1.0, 10.0],
                                       layers=1), None, "parameters record the clump1 recipe"),
     (None, _scaled("member_offsets", 0, 1.01), "body 0: its members are not the clump1 template"),
 ])

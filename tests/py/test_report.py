@@ -251,7 +251,7 @@ def test_table_b1_takes_state_21_from_a_study_of_another_size(tmp_path):
         measured = json.load(f)
     text = "\n".join(report.table_b1(study, paper, "4000 clump2 clumps", B1_OTHER))
     assert "These are 1000 clump2 clumps, not this report's 4000 clump2 clumps." in text
-    assert "(1000 clump2 clumps: e 0.6479, Zm 5.532 as prepared)" in text  # the specimen's, docs/clumps.md 5b
+    assert "(1000 clump2 clumps: e 0.6479, Zm 5.532 as prepared)" in text  # the specimen's, docs/studies/clumps.md 5b
     assert "| isotropic, 1000 clump2 clumps | | | | | | |" in text
     blocked = ["| | ours static solve, rotations blocked | %s | %s | %s | | |"
                % report._b1_cells(np.array(measured[s]["E_restrained"]) / 1e6) for s in ("1", "21")]

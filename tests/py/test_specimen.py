@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from trueaniso import buildarch, dem, engines, psd, specimen, specimen_file
+from trueaniso import buildarch, dem, engines, psd, specimen, specimen_file, triaxial
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -20,7 +20,7 @@ def small():
     threads = engines.threads()
     engines.set_threads(1)
     try:
-        scene, log = specimen.prepare_spheres(150, seed=4)
+        scene, log = specimen.prepare_spheres(150, seed=5)
     finally:
         engines.set_threads(threads)
     return scene, log
@@ -42,7 +42,7 @@ def test_consolidated_state(small):
 
 def test_similarity_rescale_restores_exact_radii(small):
     scene, _ = small
-    pos, radii, scale, side = specimen.random_loose_packing(150, psd.PAPER_SPHERES, 4)
+    pos, radii, scale, side = specimen.random_loose_packing(150, psd.PAPER_SPHERES, 5)
     # Same seed, same sampled radii: the expansion grew them, the rescale brought them back (the
     # bodies are renumbered along the Morton curve after placement, so compared as sets).
     np.testing.assert_allclose(np.sort(scene.radii), np.sort(radii), rtol=1e-12)
@@ -62,9 +62,9 @@ def test_rescale_keeps_stress():
 def test_file_round_trip(small, tmp_path):
     scene, log = small
     path = tmp_path / "s.npz"
-    specimen_file.save(str(path), scene, seed=4, parameters=log)
+    specimen_file.save(str(path), scene, seed=5, parameters=log)
     loaded, meta = specimen_file.load(str(path))
-    assert meta["seed"] == 4 and meta["format_version"] == 4
+    assert meta["seed"] == 5 and meta["format_version"] == 4
     for name in ("positions", "radii", "masses", "cell", "cell_ref", "velocity_gradient", "velocities"):
         np.testing.assert_array_equal(getattr(loaded, name), getattr(scene, name))
     # The contact history comes back: evaluating forces without motion gives the same stress.
@@ -96,25 +96,46 @@ def test_same_seed_one_thread_is_bit_identical(tmp_path):
 
 
 def test_recipe_keeps_its_committed_bits(small):
-    """The default recipe on 150 spheres, seed 4, one thread, makes tests/data/spheres-150-s4.npz to
-    the last bit (e 0.5811, Zm 5.840, 102,000 + 6,000 steps). The preparation is chaotic: a change of
-    the last bit anywhere in its steps (a sum's order, a time step rule, a default) ends in another
-    packing, and every documented specimen (docs/specimens.md) then stops reproducing. A change
-    meant to move the packing regenerates the file (tests/data/README.md) and the documented numbers
-    with it; one not meant to fails here."""
+    """The default recipe on 150 spheres, seed 5, one thread, makes tests/data/spheres-150-s5.npz to
+    the last bit (e 0.6069, Zm 5.874; 110,000 steps of expansion, 4,000 of unloading to 20 kPa, 6,000
+    of consolidation). The preparation is chaotic: a change of the last bit anywhere in its steps (a
+    sum's order, a time step rule, a default) ends in another packing, and every documented specimen
+    (docs/specimens.md) then stops reproducing. A change meant to move the packing regenerates the
+    file (tests/data/README.md) and the documented numbers with it; one not meant to fails here."""
     if engines.build_arch() != buildarch.BASELINE:  # this process runs another level: the baseline's, apart
         from test_processor_bits import _baseline_build as has_baseline, assert_same_bits, remade
         has_baseline()
-        assert_same_bits(remade("spheres", (150, 4), {}), "spheres-150-s4.npz")
+        assert_same_bits(remade("spheres", (150, 5), {}), "spheres-150-s5.npz")
         return
     scene, log = small
-    committed, meta = specimen_file.load(os.path.join(REPO, "tests", "data", "spheres-150-s4.npz"))
+    committed, meta = specimen_file.load(os.path.join(REPO, "tests", "data", "spheres-150-s5.npz"))
     for name in ("positions", "radii", "cell", "orientations"):
         np.testing.assert_array_equal(getattr(scene, name), getattr(committed, name), err_msg=name)
-    assert (log["steps_expansion"], log["steps_consolidation"]) == (102000, 6000)
-    assert (meta["parameters"]["steps_expansion"], meta["parameters"]["steps_consolidation"]) == (102000, 6000)
+    steps = ("steps_expansion", "steps_unloading", "steps_consolidation")
+    assert tuple(log[k] for k in steps) == (110000, 4000, 6000)
+    assert tuple(meta["parameters"][k] for k in steps) == (110000, 4000, 6000)
     st = specimen.state(scene)
-    assert (round(st["void_ratio"], 4), round(st["Zm"], 3)) == (0.5811, 5.840)
+    assert (round(st["void_ratio"], 4), round(st["Zm"], 3)) == (0.6069, 5.874)
+
+
+def test_the_default_specimen_keeps_its_contacts_to_state_21(small, tmp_path):
+    """The paper's Zm stays within 5.94-5.99 over its 39 states (Fig. 8a). A specimen consolidated at
+    friction 0.5 from the unloaded packing keeps its contacts; one whose friction is switched to 0.5
+    at 100 kPa (the variant grown-to-target, the earlier default) loses them at large |q|. State 21
+    (b = 0.5, sigma_z 140 kPa), reached straight from the specimen, measured on 150 spheres: Zm falls
+    by 0.014 (seed 5, this one), 0.014 and 0.068 (seeds 6, 7) with the default recipe (unloaded to
+    20 kPa), by 0.350, 0.192 and 0.315 with grown-to-target; at 1000 spheres (seed 1) by 0.037
+    against 0.367. A bound of 0.1 lies between, and e stays put (1e-4: the packing does not creep;
+    measured 1.3e-5 to 1.9e-5)."""
+    scene, log = small
+    path = str(tmp_path / "s.npz")
+    specimen_file.save(path, scene, seed=5, parameters=log)
+    copy, _ = specimen_file.load(path)  # the fixture's scene stays as prepared for the other tests
+    before = engines.coordination(copy)["Zm"], engines.void_ratio(copy)
+    triaxial.reach_state(copy, 0.5, 140e3)
+    after = engines.coordination(copy)["Zm"], engines.void_ratio(copy)
+    assert before[0] - after[0] < 0.1, (before, after)
+    assert abs(after[1] - before[1]) < 1e-4
 
 
 @pytest.mark.long
@@ -134,18 +155,20 @@ def test_documented_1000_sphere_specimen(tmp_path):
     assert proc.returncode == 0, proc.stderr
     _, meta = specimen_file.load(str(out))
     st, p = meta["summary"], meta["parameters"]
-    assert (round(st["void_ratio"], 4), round(st["Zm"], 3)) == (0.5815, 5.956)
-    assert (p["steps_expansion"], p["steps_consolidation"]) == (120000, 4000)
+    assert (round(st["void_ratio"], 4), round(st["Zm"], 3)) == (0.5808, 5.962)
+    assert (p["steps_expansion"], p["steps_unloading"], p["steps_consolidation"]) == (120000, 22000, 4000)
 
 
 @pytest.mark.long
 def test_paper_void_ratio_and_coordination_at_4000():
-    """The paper's sphere specimen: e = 0.584 and Zm in 5.94-5.99, within 2 % at N >= 4000. Long
-    (minutes on one core): the full-size preparation is what is checked, no smaller one stands in."""
+    """The paper's sphere specimen: e = 0.584 and Zm in 5.94-5.99; issue 45 asks e within 0.01 and
+    Zm in 5.92-6.00 at 4000 spheres (the recipe's seed scatter at 1000 spheres is about 0.003 in e and
+    0.02 in Zm, docs/studies/specimens.md "Seeds"). Long (minutes on one core): the full-size preparation is
+    what is checked, no smaller one stands in."""
     scene, _ = specimen.prepare_spheres(4000, seed=1)
     st = specimen.state(scene)
-    assert st["void_ratio"] == pytest.approx(0.584, rel=0.02)
-    assert st["Zm"] == pytest.approx(5.965, rel=0.02)
+    assert abs(st["void_ratio"] - 0.584) <= 0.01
+    assert 5.92 <= st["Zm"] <= 6.00
     # Finite-size shear stress shrinks as ~1/sqrt(N): 0.96 % of p measured at 4000 spheres.
     sig = engines.stress(scene)
     assert np.abs(sig - np.diag(np.diag(sig))).max() < 0.02 * 100e3

@@ -14,9 +14,11 @@ from conftest import REPO, one_line_error, run_script
 from trueaniso import specimen_file
 
 SPHERES = os.path.join(REPO, "tests", "data", "spheres-150-s4.npz")
-CLUMPS = os.path.join(REPO, "tests", "data", "clump1-200-s4.npz")  # the default recipe, mu_prep 0, I 0.05
-# What the clump fixture was made with beyond the defaults (tests/data/README.md)
-CLUMP_SETTINGS = ["--assembly", "clump1", "--n", "200", "--seed", "4", "--inertial-number", "0.05", "--mu-prep", "0"]
+CLUMPS = os.path.join(REPO, "tests", "data", "clump1-200-s4.npz")  # mu_prep 0, I 0.05, no unloading
+# What the clump fixture was made with beyond the defaults (tests/data/README.md), as prepare_specimen.py
+# takes them (its friction switched at the target: no unloading).
+CLUMP_SETTINGS = ["--assembly", "clump1", "--n", "200", "--seed", "4", "--inertial-number", "0.05", "--mu-prep", "0",
+                  "--switch-pressure", "100000"]
 
 
 def _resealed(src, dst, edit):

@@ -4,7 +4,7 @@ the states, and where the stiffness trend reverses.
 A reversal is a step along one loading path where a modulus E_i falls while its own stress
 sigma_i rises (by more than `threshold`, 0.5 kPa: a stress that stays put, e.g. sigma_x on a b = 0
 path, is no trend). The paths are the constant-b paths of triaxial.paths, each walked from the
-isotropic state (sigma_z = p) outwards by distance from it, as in docs/study-table-c1.md.
+isotropic state (sigma_z = p) outwards by distance from it, as in docs/studies/table-c1-4000.md.
 
     /usr/bin/python3 -m trueaniso.analysis.path_fidelity results/x/probes.csv [more.csv ...]
     /usr/bin/python3 -m trueaniso.analysis.path_fidelity --gaps 1e-5,1e-4,1e-3,1e-2 results/x [more study dirs ...]
