@@ -51,6 +51,11 @@ def parser():
     study_options.add_probe_options(p, "zxy on the true-triaxial path, all six on the cross-anisotropic one")
     study_options.add_servo_options(p)
     study_options.add_run_options(p, mpi=True)
+    p.add_argument("--host", choices=study.HOSTS, default="trueaniso",
+                   help="who steps the states and probes: trueaniso (our stepper) or yade (YADE's own loop with the "
+                        "plugin's TrueTriaxialServo, StressProbe and FabricRecorder in O.engines; run under yade-double "
+                        "with YADE_PREFIX=<repository>/build/yade-prefix, docs/yade-peer.md). The same specimen, "
+                        "states, probes and CSV; a study is stepped by one host")
     p.add_argument("--mpi", action="store_true",
                    help="run the states on MPI workers, one state a task, each loading path in order: start as "
                         "mpiexec -n K /usr/bin/python3 -m mpi4py.futures pyscripts/run_states.py --mpi ... (K-1 "
@@ -114,6 +119,10 @@ def validate(o):
         raise cli.InputError(str(exc)) from None
     o.probe_axes = study_options.probe_axes(o.probes, o.path)
     study_options.check(o)
+    if o.host != "trueaniso":
+        if o.mpi:
+            raise cli.InputError("--host %s steps the states in this process's YADE: it takes no --mpi workers" % o.host)
+        study.host_named(o.host)  # not under yade-double, or without the plugin: said before any work
     try:
         arrays, meta = specimen_file.read(o.specimen)
     except specimen_file.SpecimenFileError as exc:
@@ -196,7 +205,7 @@ def main(argv=None):
         engines.set_threads(o.threads)
     try:
         path, servo, probe = study_options.objects(o, o.path)
-        study.run_states(o.specimen, states, o.out, path=path, servo=servo, probe=probe, wait=o.wait,
+        study.run_states(o.specimen, states, o.out, path=path, servo=servo, probe=probe, wait=o.wait, host=o.host,
                          force_new=o.force_new, progress_every=o.progress_every, log=progress.say, executor=executor)
     except triaxial.StateNotReached as exc:
         cli.fail(str(exc), 1)

@@ -54,6 +54,10 @@ def parser():
     study_options.add_probe_options(p, "zxy")
     study_options.add_servo_options(p)
     study_options.add_run_options(p, out_default="results/default")
+    p.add_argument("--host", choices=study.HOSTS, default="trueaniso",
+                   help="who steps the states and probes: trueaniso (our stepper) or yade (YADE's own loop with the "
+                        "plugin's classes in O.engines; under yade-double with YADE_PREFIX=<repository>/build/"
+                        "yade-prefix, docs/yade-peer.md); the specimen and the static solve are ours either way")
     return p
 
 
@@ -126,6 +130,7 @@ def validate(o):
     study.refuse_slow_paths(states, "true-triaxial", (defaults["pressure"].default,) * 3, dict(path_rate=o.path_rate),
                             start_within=defaults["stress_tolerance"].default)
     check_memory(o)
+    study.host_named(o.host)  # --host yade outside yade-double, or without the plugin: said before any work
     return states
 
 
@@ -235,7 +240,7 @@ def main(argv=None):
             study_dir.supersede(o.out, log)
         path = specimen_path
         walk, servo, probe = study_options.objects(o)
-        options = dict(path=walk, servo=servo, probe=probe, recipe=None if o.specimen else recipe(o))
+        options = dict(path=walk, servo=servo, probe=probe, recipe=None if o.specimen else recipe(o), host=o.host)
         if o.specimen:  # the user's file: checked whole, as run_states.py checks it
             try:
                 scene = specimen_file.load(path)[0]

@@ -26,7 +26,8 @@ void StressProbe::begin(const Vec6& hold) {
           "held there is nothing to probe");
   require(sign == 1 || sign == -1, "probe sign must be +1 or -1");
   require(std::isfinite(gammaTarget) && gammaTarget > 0, "probe gamma must be a finite number > 0");
-  require(increment >= 0, "probe increment must be >= 0 (0: stop at gamma)");
+  require(increment >= 0 && std::isfinite(increment), "probe increment must be a finite number >= 0 (0: stop at gamma)");
+  require(probeFriction > 0, "probe friction must be > 0 (the paper's 1e23 suppresses sliding)");
   require(relativeTolerance > 0 && relativeTolerance < 1, "probe tolerance must lie in (0, 1)");
   require(unbalancedTolerance > 0 && rampSteps > 0 && settleSteps >= 1 && maxSteps > 0,
           "probe tolerances and step counts must be > 0");

@@ -16,6 +16,9 @@ void TrueTriaxialServo::validate() const {
           "nothing would servo them");
   require(pathRate > 0 && stressTolerance > 0 && followTolerance > 0 && maxStrain > 0,
           "servo tolerances and path rate must be > 0");
+  require(unbalancedTolerance > 0 && settleSteps >= 1 && maxSteps >= 1 && stallSteps >= 1 && holdSteps >= 1,
+          "servo: the unbalanced force tolerance must be > 0 and the step counts >= 1");
+  require(lostStressFraction >= 0 && lostStressFraction < 1, "servo: the lost-stress fraction must lie in [0, 1)");
   require(std::isfinite(stepScale) && stepScale > 0, "servo: the step scale must be a finite number > 0");
   require(std::isfinite(loadingFriction) && loadingFriction > 0,
           "servo: the loading friction must be a finite number > 0");
@@ -131,11 +134,18 @@ Vec6 TrueTriaxialServo::update(const CellMeasurement& m, Real dt) {
     if (!(mask >> k & 1u)) goalNow[k] = 0;  // held shear strains: rate 0
   // The gain closes its fraction of the error per reference step (capped at the whole error).
   const CellServoLaw stepLaw = law.perStep(stepScale);
-  if (!feedForward) return stepLaw.rates(goalNow, mask, stress, m.stiffness, dt);
+  if (!feedForward) return recovering(stepLaw.rates(goalNow, mask, stress, m.stiffness, dt), mask, stepLaw);
   // The goal's rate this step: zero while it waits and once it is held.
   const Vec6 goalRate = (target - previousTarget) / dt;
-  const Vec6 r = stepLaw.rates(goalNow, mask, stress, m.stiffness, dt, goalRate, tangent.ratio());
+  const Vec6 r = recovering(stepLaw.rates(goalNow, mask, stress, m.stiffness, dt, goalRate, tangent.ratio()), mask,
+                            stepLaw);
   predicted_ = -m.stiffness.cwiseProduct(r) * dt;
+  return r;
+}
+
+Vec6 TrueTriaxialServo::recovering(Vec6 r, unsigned mask, const CellServoLaw& stepLaw) const {
+  for (int k = 0; k < 3; ++k)
+    if ((mask >> k & 1u) && target[k] > 0 && stress[k] < lostStressFraction * target[k]) r[k] = -stepLaw.maxStrainRate;
   return r;
 }
 

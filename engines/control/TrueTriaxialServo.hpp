@@ -62,6 +62,13 @@ class TrueTriaxialServo : public Engine {
   long settleSteps = 200;          // the hold criterion must be met this many steps in a row
   Real maxStrain = 0.05;           // failure: |cell strain since start| on any axis beyond it
   long maxSteps = 3000000;
+  // A packing that has lost its stress (a loose packing whose friction was lowered, a cloud not yet
+  // in contact): a normal stress below this fraction of its current goal is loaded at the strain
+  // rate cap (law.maxStrainRate, an inertial number's), as YADE's PeriTriaxController does far
+  // from its goal: the proportional law would take its strain from the affine stiffness of the few
+  // contacts left, orders above the packing's own, and creep. A specimen followed along its path
+  // (within followTolerance) never comes near it, so no study's loading changes; 0 switches it off.
+  Real lostStressFraction = 0.5;
   // Failure: while loading, the specimen has not followed the goal (no progress) for this many
   // steps: it creeps at a stress ratio it cannot exceed.
   long stallSteps = 100000;
@@ -118,6 +125,8 @@ class TrueTriaxialServo : public Engine {
   bool started_ = false;
   // A step count given per reference step, in steps of the current length (itself at scale 1).
   long scaled(long n) const;
+  // The rates with every lost normal stress (lostStressFraction) loaded at the cap.
+  Vec6 recovering(Vec6 rates, unsigned mask, const CellServoLaw& stepLaw) const;
   Vec6 predicted_ = Vec6::Zero();  // the affine stress change of the last rates (TangentRatio)
 };
 

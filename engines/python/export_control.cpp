@@ -2,6 +2,7 @@
 #include <memory>
 
 #include "control/CellMeasurement.hpp"
+#include "control/InertialNumber.hpp"
 #include "control/RadiusExpansion.hpp"
 #include "control/StressProbe.hpp"
 #include "control/StressServo.hpp"
@@ -123,6 +124,10 @@ void exportControl() {
           "principal stress <= 0.");
   bp::def("deviatoric_q", &pathQ, (bp::arg("b"), bp::arg("sigma_z"), bp::arg("p") = 100e3), "Eq. (13), signed.");
   bp::def("gamma", &gamma, "Eq. (12) from the three strain increments.");
+  bp::def("strain_rate_for_inertial_number", &strainRateForInertialNumber,
+          (bp::arg("inertial_number"), bp::arg("d50"), bp::arg("density"), bp::arg("pressure")),
+          "Strain rate of inertial number I = rate d50 sqrt(rho/p) (1/s); ValueError unless every argument is finite "
+          "and > 0.");
 
   bp::def("velocity_gradient", &velocityGradientOf, (bp::arg("rates")),
           "The cell's (symmetric) velocity gradient of six engineering strain rates (xx, yy, zz, yz, xz, xy).");

@@ -126,6 +126,8 @@ def reference_time_step(scene, pressure=100e3, safety=None, coordination=12):
 def strain_rate_for_inertial_number(inertial_number, d50, density, pressure):
     """The strain rate of an inertial number, I = rate d sqrt(rho / p) (I < 1e-3: quasi-static).
 
+    The engines' control/InertialNumber.hpp, which the YADE plugin's TrueTriaxialServo takes too.
+
     Args:
         inertial_number: I.
         d50: the particles' diameter, m.
@@ -137,4 +139,4 @@ def strain_rate_for_inertial_number(inertial_number, d50, density, pressure):
         >>> print("%.3g /s" % dem.strain_rate_for_inertial_number(1e-3, 0.2e-3, 2500.0, 100e3))
         31.6 /s
     """
-    return inertial_number / (d50 * math.sqrt(density / pressure))
+    return _e.strain_rate_for_inertial_number(float(inertial_number), float(d50), float(density), float(pressure))

@@ -88,6 +88,45 @@ def options_of(path=None, servo=None, probe=None, probes=None, gamma=None, restr
     return path, servo, probe
 
 
+# Who steps the states and probes (run_states.py --host): our own stepper, or YADE's loop with the
+# plugin's classes in O.engines (yade_host). The same protocol, specimen, checkpoints and rows.
+HOSTS = ("trueaniso", "yade")
+
+
+class _Stepper:
+    """Our own stepper: triaxial.reach_state, triaxial.probe and fabric.fabric_row on the scene."""
+    name = "trueaniso"
+
+    @staticmethod
+    def reach_state(scene, *args, **kw):
+        return scene, triaxial.reach_state(scene, *args, **kw)
+
+    probe = staticmethod(triaxial.probe)
+    fabric_row = staticmethod(fabric.fabric_row)
+
+
+def host_named(name):
+    """The host of that name (HOSTS), or InputError saying why it cannot run here."""
+    if name == "trueaniso":
+        return _Stepper
+    if name == "yade":
+        from . import yade_host
+        problem = yade_host.problem()
+        if problem:
+            raise InputError(problem)
+        return yade_host
+    raise InputError("unknown host %r: the hosts are %s" % (name, ", ".join(HOSTS)))
+
+
+def _host_fingerprint(name):
+    """What a study's rows depend on of its host, beyond our engines: none for our stepper (its
+    studies' fingerprints are as they were); YADE's name and thread count for YADE's loop."""
+    if name == "trueaniso":
+        return None
+    from . import yade_host
+    return dict(name=name, threads=yade_host.threads())
+
+
 ASSEMBLIES = ("sphere", "clump1", "clump2")  # what prepare_specimen.py builds (the paper's three)
 UNNAMED_CLUMPS = "clumps"  # a clump packing saved without an assembly (the YADE bridge, a script)
 
@@ -113,15 +152,15 @@ def assembly_of(specimen_meta, member_begin):
 
 
 def fingerprint(specimen_meta, assembly, gamma, restrain_rotations, skip_detection, damping, state_options=None,
-                probe_options=None, recipe=None, path="true-triaxial"):
+                probe_options=None, recipe=None, path="true-triaxial", host="trueaniso"):
     """What every row and checkpoint of a study depends on (study_dir compares it on reruns), from
     the keywords of run_states before its option objects (study_fingerprint takes those)."""
     path, servo, probe = options_of(path, None, None, None, gamma, restrain_rotations, skip_detection, damping,
                                     state_options, probe_options)
-    return study_fingerprint(specimen_meta, assembly, path, servo, probe, recipe)
+    return study_fingerprint(specimen_meta, assembly, path, servo, probe, recipe, host)
 
 
-def study_fingerprint(specimen_meta, assembly, path, servo, probe, recipe=None):
+def study_fingerprint(specimen_meta, assembly, path, servo, probe, recipe=None, host="trueaniso"):
     """What every row and checkpoint of a study depends on (study_dir compares it on reruns); the
     loading path too, which gives a state definition (b, sigma_z) its mean stress."""
     # The assembly is also behind the specimen's checksum; named here so a refusal can say it.
@@ -131,11 +170,20 @@ def study_fingerprint(specimen_meta, assembly, path, servo, probe, recipe=None):
               probe=_recorded(probe.fingerprint()))
     if recipe:
         fp["recipe"] = recipe
+    stepped_by = _host_fingerprint(host)
+    if stepped_by:
+        fp["host"] = stepped_by
     return fp
 
 
-def _study(specimen_path, states, path_o, servo, probe, recipe):
+def _study(specimen_path, states, path_o, servo, probe, recipe, host="trueaniso"):
     """Every check that needs no work, then (ids, axes, specimen metadata, fingerprint)."""
+    stepper = host_named(host)
+    if host != "trueaniso":
+        try:
+            stepper.check_options(servo.keywords(), probe.keywords())
+        except ValueError as exc:
+            raise InputError(str(exc)) from None
     path = path_o.path
     for i, b, sz in states:
         try:
@@ -178,7 +226,7 @@ def _study(specimen_path, states, path_o, servo, probe, recipe):
     if spec_meta["block_rotations"] and not probe.restrain_rotations:
         raise InputError("specimen %s blocks rotations (block_rotations true), so its probes are rotation-"
                          "restrained: ask for --rotations restrained" % specimen_path)
-    fp = study_fingerprint(spec_meta, assembly, path_o, servo, probe, recipe)
+    fp = study_fingerprint(spec_meta, assembly, path_o, servo, probe, recipe, host)
     return ids, axes, spec_meta, fp
 
 
@@ -314,18 +362,18 @@ def _nearer_states(path, sid, b, sz, asked):
     return ""
 
 
-def check(specimen_path, states, out, path=None, servo=None, probe=None, recipe=None, **settings):
+def check(specimen_path, states, out, path=None, servo=None, probe=None, recipe=None, host="trueaniso", **settings):
     """What run_states checks before any work, alone (run_study.py asks before it writes anything):
     the metadata of the study in `out` (None for a new one), or a refusal. The caller holds the
     lock. The options as run_states takes them."""
     assert lock.is_held(out)
     path, servo, probe = options_of(path, servo, probe, **settings)
-    _, _, _, fp = _study(specimen_path, states, path, servo, probe, recipe)
+    _, _, _, fp = _study(specimen_path, states, path, servo, probe, recipe, host)
     return study_dir.check(out, fp, states)
 
 
 def run_states(specimen_path, states, out, path=None, servo=None, probe=None, log=print, wait=False, force_new=False,
-               progress_every=EVERY, recipe=None, executor=None, checkpoints=(), **settings):
+               progress_every=EVERY, recipe=None, executor=None, checkpoints=(), host="trueaniso", **settings):
     """Run true-triaxial states and their probes on a specimen, writing each result as it comes (module doc).
 
     The results directory `out` is one study: a rerun continues it where it stopped (after a kill
@@ -357,6 +405,8 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
             (`options_of`): ``probes`` (axes 0-5 or "x", "y", "z", "yz", "xz", "xy"), ``gamma``,
             ``restrain_rotations``, ``skip_detection``, ``damping`` (the servo's and the probes'),
             ``state_options`` (fields of ServoOptions), ``probe_options`` (fields of ProbeOptions).
+        host: "trueaniso" (our stepper) or "yade" (YADE's loop with the plugin's classes, under
+            yade-double: `trueaniso.yade_host`, docs/yade-peer.md section 9); "yade" takes no executor.
 
     Returns:
         list: the complete rows of probes.csv after the run, one dict of text per state and probe
@@ -379,10 +429,12 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
         >>> [(r["state"], r["probe"], "%.0f MPa" % (float(r["E"]) / 1e6)) for r in rows]
         [('1', 'z', '278 MPa'), ('1', 'x', '278 MPa'), ('1', 'y', '288 MPa')]
     """
+    if executor is not None and host != "trueaniso":
+        raise InputError("--host %s steps the states in this process's YADE: it takes no MPI workers" % host)
     path_o, servo, probe = options_of(path, servo, probe, **settings)
     wait, force_new = flag("run_states", "wait", wait), flag("run_states", "force_new", force_new)
     path = path_o.path
-    ids, axes, spec_meta, fp = _study(specimen_path, states, path_o, servo, probe, recipe)
+    ids, axes, spec_meta, fp = _study(specimen_path, states, path_o, servo, probe, recipe, host)
     record = dict(started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), argv=sys.argv, table=os.environ.get("YADE_BATCH"),
                   states=ids, probes=axes,
                   versions=provenance.versions(),
@@ -420,7 +472,7 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
                                           % (csv_path, ", ".join(strange),
                                              study_dir.WAY_OUT % os.path.join(out, study_dir.SUPERSEDED)))
         run = _Run(specimen_path, spec_meta, out, fp, axes, csv_path, table, log, progress_every, path,
-                   probe.keywords(), servo.keywords(), keep=checkpoints, asked=ids)
+                   probe.keywords(), servo.keywords(), keep=checkpoints, asked=ids, host=host)
         # The paths run over the states asked and the states earlier runs defined: a state is
         # reached from the nearest one before it on its path, so adding states to a study in path
         # order gives the rows of asking them all at once (paths of the states asked alone would
@@ -530,8 +582,9 @@ class _Run:
     """One run's walk over the loading paths (the caller holds the lock)."""
 
     def __init__(self, specimen_path, spec_meta, out, fp, axes, csv_path, table, log, every, path, probe_kw, state_kw,
-                 sink=None, keep=(), asked=None):
+                 sink=None, keep=(), asked=None, host="trueaniso"):
         self.specimen_path, self.spec_meta, self.out, self.fp, self.loading = specimen_path, spec_meta, out, fp, path
+        self.stepper = host_named(host)
         self.axes, self.csv_path, self.log, self.every = axes, csv_path, log, every
         self.columns = list(table.columns)
         self.done = {(r["state"], r["probe"]) for r in table.rows}
@@ -652,8 +705,9 @@ class _Run:
         self.log("state %s: b = %.2f, sigma_z = %.1f kPa, from %s ..."
                  % (sid, b, sz / 1e3, "the specimen" if start is None else "state %s" % start))
         progress = Progress("state %s" % sid, self.log, self.every)
-        info = triaxial.reach_state(scene, b, sz, p=triaxial.path_mean_stress(self.loading, b, sz),
-                                    progress=progress.servo, chunk=chunk_for(scene.num_bodies), **self.state_kw)
+        scene, info = self.stepper.reach_state(scene, b, sz, p=triaxial.path_mean_stress(self.loading, b, sz),
+                                               progress=progress.servo if self.stepper is _Stepper else progress,
+                                               chunk=chunk_for(scene.num_bodies), **self.state_kw)
         specimen_file.save(ck, scene, seed=self.spec_meta["seed"], summary=specimen.state(scene),
                            parameters=dict(state=str(sid), b=b, sigma_z=sz, path=self.loading, steps=info["steps"],
                                            wall_time=info["wall_time"],
@@ -670,13 +724,13 @@ class _Run:
         scene, meta = self.load(ck, sid, b, sz)
         p = meta["parameters"]
         st = specimen.state(scene)
-        extra = fabric.fabric_row(scene)
+        extra = self.stepper.fabric_row(scene)
         for name in self.wanted(sid):
             scene, _ = self.load(ck, sid, b, sz)  # every probe from the checkpoint's bytes
             progress = Progress("state %s probe %s" % (sid, name), self.log, self.every)
-            r = triaxial.probe(scene, hold, name, progress=progress.probe, chunk=chunk_for(scene.num_bodies, 1_000_000,
-                                                                                          largest=500),
-                               **self.probe_kw)
+            r = self.stepper.probe(scene, hold, name,
+                                   progress=progress.probe if self.stepper is _Stepper else progress,
+                                   chunk=chunk_for(scene.num_bodies, 1_000_000, largest=500), **self.probe_kw)
             nus = sorted(k for k in r if k.startswith("nu_"))
             ds, de = r["d_stress"], r["d_strain"]
             row = dict(path=self.loading, state=sid, b=b, sigma_z_goal=sz,

@@ -23,7 +23,7 @@ from . import engines, yade_clumps
 from .yade_convert import (MATERIAL_FIELDS, BridgeError, _cell, _check_homo_deform, _contact_rows,  # noqa: F401
                            _current_velocity_gradient, _interaction_images, _keep_interaction_images,
                            _reference_cell, _scheduled_velocity_gradient, _shared_material, _write_cell, _yade,
-                           _yade_matrix, contacts_made_at_rest, nearest_image_shifts, write_shear_history)
+                           _yade_matrix, contact_law, contacts_made_at_rest, nearest_image_shifts, write_shear_history)
 
 __all__ = ["yade_scene_from", "scene_from_yade", "write_to_yade"]
 
@@ -262,22 +262,10 @@ def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ra
     """
     O = O or _yade()
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
-                      InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys,
-                      Law2_ScGeom_MindlinPhys_Mindlin, NewtonIntegrator, Vector3, utils)
-    if law not in ("yade", "trueaniso"):
-        raise BridgeError("law must be 'yade' (YADE's Hertz-Mindlin) or 'trueaniso' (ours, from the YADE plugin)")
-    if law == "trueaniso":
-        try:
-            from yade import Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys as Ip2, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin as Law2
-        except ImportError:
-            raise BridgeError("law='trueaniso' needs the trueaniso YADE plugin: run yade-double with "
-                              "YADE_PREFIX=<repository>/build/yade-prefix (./setup.sh builds it)") from None
-    else:
-        Ip2, Law2 = Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
+                      InsertionSortCollider, InteractionLoop, NewtonIntegrator, Vector3, utils)
+    Ip2, Law2 = contact_law(law)
     if scene.has_clumps:
-        if law != "yade":
-            raise BridgeError("the trueaniso YADE plugin's law is for spheres; a clump scene takes law='yade'")
-        return yade_clumps.yade_clump_scene_from(scene, O, damping, import_contacts, mindlin_ratcheting)[0]
+        return yade_clumps.yade_clump_scene_from(scene, O, damping, import_contacts, mindlin_ratcheting, law)[0]
     O.reset()
     O.periodic = True
     _write_cell(O, scene.cell, scene.cell_ref)

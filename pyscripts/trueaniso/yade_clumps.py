@@ -24,7 +24,7 @@ from . import clump_shapes, engines
 from .yade_convert import (BridgeError, _cell, _check_homo_deform, _contact_rows, _current_velocity_gradient,
                            _interaction_images, _keep_interaction_images, _reference_cell,
                            _scheduled_velocity_gradient, _shared_material, _write_cell, _yade_matrix,
-                           contacts_made_at_rest, nearest_image_shifts, write_shear_history)
+                           contact_law, contacts_made_at_rest, nearest_image_shifts, write_shear_history)
 
 
 def _quat_wxyz(q):
@@ -123,17 +123,17 @@ def scene_from_yade_clumps(O, import_contacts=True):
     return s, ids
 
 
-def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_ratcheting=False):
+def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_ratcheting=False, law="yade"):
     """Rebuild YADE's O from our scene with clumps (O.bodies.appendClumped), with YADE's Hertz-
-    Mindlin law as in yade_bridge.yade_scene_from. Our mass and inertia are written into YADE's
+    Mindlin law or ours (`law`) as in yade_bridge.yade_scene_from. Our mass and inertia are written into YADE's
     clump states. Returns (ids, members, report): ids[k] the YADE id of our body k, members[m] the
     YADE id of our member m, report = dict(max_centre_offset, max_inertia_offdiagonal): the
     distance between YADE's reference point and our centre of mass over our largest member radius,
     and our inertia tensor's largest off-diagonal term in YADE's frame over its largest term
     (0 when YADE's clump frame is ours)."""
     from yade import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
-                      InteractionLoop, Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin,
-                      NewtonIntegrator, Vector3, utils)
+                      InteractionLoop, NewtonIntegrator, Vector3, utils)
+    Ip2, Law2 = contact_law(law)
     O.reset()
     O.periodic = True
     _write_cell(O, scene.cell, scene.cell_ref)
@@ -169,8 +169,8 @@ def yade_clump_scene_from(scene, O, damping=0.2, import_contacts=True, mindlin_r
         ForceResetter(),
         InsertionSortCollider([Bo1_Sphere_Aabb()], label="collider"),
         InteractionLoop([Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=mindlin_ratcheting)],
-                        [Ip2_FrictMat_FrictMat_MindlinPhys()],
-                        [Law2_ScGeom_MindlinPhys_Mindlin(label="mindlin")]),
+                        [Ip2()],
+                        [Law2(label="mindlin")]),
         NewtonIntegrator(damping=damping, label="newton"),
     ]
     O.dt = scene.dt if scene.dt > 0 else 1e-8

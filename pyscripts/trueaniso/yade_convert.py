@@ -227,3 +227,18 @@ def contacts_made_at_rest(scene, O, bodies, yade_of_member):
     for i, (v, w, dofs) in zip(bodies, saved):
         st = O.bodies[i].state
         st.vel, st.angVel, st.blockedDOFs = v, w, dofs
+
+
+def contact_law(law):
+    """(Ip2, Law2) classes of a law: "yade" (YADE's Hertz-Mindlin) or "trueaniso" (ours, from the plugin)."""
+    if law == "trueaniso":
+        try:
+            from yade import Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys as Ip2, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin as Law2
+        except ImportError:
+            raise BridgeError("law='trueaniso' needs the trueaniso YADE plugin: run yade-double with "
+                              "YADE_PREFIX=<repository>/build/yade-prefix (./setup.sh builds it)") from None
+        return Ip2, Law2
+    if law == "yade":
+        from yade import Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
+        return Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin
+    raise BridgeError("law must be 'yade' (YADE's Hertz-Mindlin) or 'trueaniso' (ours, from the YADE plugin)")

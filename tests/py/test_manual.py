@@ -368,10 +368,10 @@ def _yade_classes():
 
 def _source_docs():
     """{class: its docstring's first 60 characters} read from the plugin's YADE_CLASS_BASE_DOC*
-    macros in engines/yade/*.cpp (the string literals after the class and base names, joined):
-    the page, made from the loaded classes, must say what the source says."""
+    macros in engines/yade/*.cpp and *.hpp (the string literals after the class and base names,
+    joined): the page, made from the loaded classes, must say what the source says."""
     docs = {}
-    for path in glob.glob(os.path.join(REPO, "engines", "yade", "*.cpp")):
+    for path in glob.glob(os.path.join(REPO, "engines", "yade", "*.[ch]pp")):
         with open(path) as f:
             text = f.read()
         for name, literals in re.findall(r'YADE_CLASS_BASE_DOC\w*\(\s*(\w+)\s*,\s*\w+\s*,\s*((?:"(?:[^"\\]|\\.)*"\s*)+)',

@@ -254,6 +254,10 @@ def _study_line(results, rows=()):
         _fmt(probe.get("gamma"), "%g"),
         probe.get("rotations", "?") + (" (--rotations restrained)" if probe.get("rotations") == "restrained" else ""),
         probe.get("detection", "?") + (" (--skip-detection)" if probe.get("detection") == "off" else ""))
+    host = fp.get("host") or {}
+    if host.get("name") == "yade":  # run_states.py --host yade: the same protocol, stepped by YADE's loop
+        probes += ("; states and probes stepped by YADE's loop with the trueaniso plugin's classes "
+                   "(--host yade, %s thread%s)" % (host.get("threads", "?"), "" if host.get("threads") == 1 else "s"))
     return ("Study: %s %s (%s), e = %s and Zm = %s at the isotropic state%s; %s; %s path, %s; %s%s."
             % (summ.get("n", "?"), fp.get("assembly", "sphere") + "s" if fp.get("assembly", "sphere") == "sphere"
                else fp.get("assembly"), "seed not recorded" if seed is None else "seed %s" % seed,
