@@ -161,8 +161,8 @@ def test_documented_1000_sphere_specimen(tmp_path):
 
 @pytest.mark.long
 def test_paper_void_ratio_and_coordination_at_4000():
-    """The paper's sphere specimen: e = 0.584 and Zm in 5.94-5.99; issue 45 asks e within 0.01 and
-    Zm in 5.92-6.00 at 4000 spheres (the recipe's seed scatter at 1000 spheres is about 0.003 in e and
+    """The paper's sphere specimen: e = 0.584 and Zm in 5.94-5.99; the recipe is held to e within 0.01
+    and Zm in 5.92-6.00 at 4000 spheres (the recipe's seed scatter at 1000 spheres is about 0.003 in e and
     0.02 in Zm, docs/studies/specimens.md "Seeds"). Long (minutes on one core): the full-size preparation is
     what is checked, no smaller one stands in."""
     scene, _ = specimen.prepare_spheres(4000, seed=1)
