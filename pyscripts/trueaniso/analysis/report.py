@@ -454,15 +454,16 @@ def paper_table2(assembly, zm):
     our Zm lies outside the Zm on which they rise (where the paper's data must lie)."""
     paper = chain.PAPER[assembly]
     if assembly == "spheres":
-        return dict(K=paper["K"], G=paper["G"], zm=figures.PAPER_ZM_SPHERES,
-                    note="dashed: the paper's quadratics over its $Z_m$, %.2f-%.2f (Fig. 8a)" % figures.PAPER_ZM_SPHERES)
+        band = figures.PAPER_ZM_SPHERES
+        return dict(K=paper["K"], G=paper["G"], zm=band,
+                    note="dashed: the paper's quadratics over its $Z_m$, %.2f-%.2f (Fig. 8a)" % band)
     low, high, why = chain.rising_range({k: paper[k] for k in ("K", "G")})
-    inside = low <= float(np.min(zm)) and float(np.max(zm)) <= high
-    return dict(K=paper["K"], G=paper["G"],
-                note="dashed: the paper's quadratics at our $Z_m$" + ("" if inside else
-                                                                        ", extrapolated:\nits fits rise only %s"
-                                                                        % ", ".join("%s %s" % (w.split()[0], w.split(" only ")[1]) for w in why)
-                                                                        .replace("Zm", "$Z_m$")))
+    note = "dashed: the paper's quadratics at our $Z_m$"
+    if not (low <= float(np.min(zm)) and float(np.max(zm)) <= high):
+        # "K rises with Zm only below Zm = 7.45" -> "K below Zm = 7.45"
+        where = ", ".join("%s %s" % (w.split()[0], w.split(" only ")[1]) for w in why)
+        note += ", extrapolated:\nits fits rise only %s" % where.replace("Zm", "$Z_m$")
+    return dict(K=paper["K"], G=paper["G"], note=note)
 
 
 def _other_size(size, own):
