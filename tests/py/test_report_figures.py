@@ -298,10 +298,12 @@ def test_fig13_legend_tells_each_axis_by_its_marker_in_no_zm_colour(tmp_path, mo
     report.fig13(tab, [("zeta = 1", a2 * 1.01), ("zeta = 0.5", a2 * 0.99)], str(tmp_path / "f13.png"))
     (fig,) = caught
     fig.canvas.draw()  # the points take their Zm colours when drawn
+    # One legend for the panels, beside the last (off the data); its entries hold for each panel.
+    (legend,) = [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    assert legend is fig.axes[1].get_legend()
     for ax in fig.axes[:2]:
         series = ax.collections[:3]
         point_colours = {c for s in series for c in _marker_and_colour(s)[1]}
-        legend = ax.get_legend()
         handles = getattr(legend, "legend_handles", None) or legend.legendHandles
         entries = dict(zip([t.get_text() for t in legend.get_texts()], handles))
         for a, s in zip("xyz", series):

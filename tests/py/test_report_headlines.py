@@ -137,8 +137,10 @@ def _capture(monkeypatch):
         ticks = {(k, name): _labelled_ticks(getattr(ax, name)) for k, ax in enumerate(fig.axes)
                  if ax.get_label() != "<colorbar>" for name in ("xaxis", "yaxis")}
         lines = {ln.get_label(): (ln.get_xdata(), ln.get_ydata()) for ax in fig.axes for ln in ax.get_lines()}
+        title = fig._suptitle.get_window_extent() if fig._suptitle else None
+        inside = title is not None and title.x0 >= 0 and title.x1 <= fig.bbox.x1 and title.y1 <= fig.bbox.y1
         seen[os.path.basename(path)] = dict(title=fig._suptitle.get_text() if fig._suptitle else "",
-                                            covered=covered, ticks=ticks, lines=lines)
+                                            inside=inside, covered=covered, ticks=ticks, lines=lines)
         save(fig, path)
     monkeypatch.setattr(figures, "_save", kept)
     return seen
@@ -159,6 +161,7 @@ def test_every_figure_names_its_study_asks_its_question_and_keeps_its_legend_off
     for name, f in seen.items():
         assert "4000 spheres, seed 1" in f["title"], (name, f["title"])
         assert "?" in f["title"].splitlines()[0], (name, f["title"])  # the question, on its first line
+        assert f["inside"], "%s: its title runs out of the figure" % name
         assert f["covered"] == 0, "%s: %d points under a legend" % (name, f["covered"])
         for (k, axis), labels in f["ticks"].items():
             assert len(labels) >= 3, (name, k, axis, labels)
@@ -177,7 +180,7 @@ def test_a_clump_report_names_its_clumps_and_draws_the_papers_quadratics(tmp_pat
     study = _cut_study(os.path.join(DATA, "clump1-4000-s1"), str(tmp_path / "clump1"))
     seen = _capture(monkeypatch)
     report.build(study, str(tmp_path / "rep"), log=lambda m: None)
-    assert seen and all("4000 clump1 clumps, seed 1" in f["title"] for f in seen.values())
+    assert seen and all("4000 clump1 clumps, seed 1" in f["title"] and f["inside"] for f in seen.values())
     assert all(f["covered"] == 0 for f in seen.values())
     x, y = seen["fig11-K-G-vs-Zm.png"]["lines"]["$K$, paper's Table 2"]
     assert np.allclose(y, np.polyval(chain.PAPER["clump1"]["K"], x), rtol=1e-12)
@@ -227,3 +230,21 @@ def test_the_legend_check_sees_points_under_a_legend():
     fig.canvas.draw()
     assert _covered(fig) == 0
     plt.close(fig)
+
+
+def test_a_study_without_its_specimen_summary_says_so_and_refuses_seeds(small_table, three_seeds, tmp_path):
+    """A study whose metadata.json records no specimen (written by hand, or saved without its
+    summary) still gets its report, whose headline section says why it has none; asked for the
+    table over seeds, it is refused before anything is written."""
+    study = tmp_path / "study"
+    study.mkdir()
+    shutil.copy(small_table, study / "probes.csv")
+    with open(small_table) as f:
+        defined = {r["state"]: dict(b=float(r["b"]), sigma_z=float(r["sigma_z_goal"])) for r in csv.DictReader(f)}
+    (study / "metadata.json").write_text(json.dumps(dict(states=defined)))
+    text = open(report.build(str(study), str(tmp_path / "rep"), log=lambda m: None)[0]).read()
+    assert "Not computed for this study: %s: its metadata.json records no specimen n, void_ratio, Zm, material" \
+        % study in _section(text, "## Headlines against the paper (spheres)")
+    with pytest.raises(ResultsError, match="records no specimen"):
+        report.build(str(study), str(tmp_path / "rep2"), log=lambda m: None, seeds=three_seeds[1:])
+    assert not (tmp_path / "rep2").exists()

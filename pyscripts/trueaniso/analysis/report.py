@@ -407,12 +407,15 @@ def study_size(source):
 def headline_section(heads, assembly, borrowed_b1=False):
     """The report's first section: its headline numbers (analysis.seeds.HEADLINE_ROWS) beside the
     paper's, each the mean +/- sample standard deviation over the seeds in `heads` (the report's
-    study first) with how many seeds it is of; None for a bare table, which records no specimen."""
+    study first) with how many seeds it is of. `heads` None: a bare table, which records no
+    specimen; a string: why the study's could not be computed."""
     from . import seeds
     out = ["## Headlines against the paper (%s)" % assembly, ""]
     if heads is None:
         return out + ["Not for a bare probe table: the headlines need the study's directory (its metadata.json "
                       "records the specimen's e, Zm and seed).", ""]
+    if isinstance(heads, str):
+        return out + ["Not computed for this study: %s." % heads.rstrip("."), ""]
     if len(heads) == 1:
         said = ("One seed: each number is this study's alone, with no spread between seeds (`--seeds DIR ...` "
                 "gives the studies of the same recipe at other seeds).")
@@ -683,10 +686,17 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     from . import seeds as seeds_mod
     heads = None
     if os.path.isdir(results):
-        heads = [seeds_mod.headlines(results)] + [seeds_mod.headlines(d) for d in seeds]
-        problem = seeds_mod.recipe_problem(heads)
-        if problem:
-            raise ResultsError("--seeds: %s" % problem)
+        try:
+            heads = [seeds_mod.headlines(results)]
+        except ResultsError as exc:
+            if seeds:  # asked for the table over seeds: refused, said why
+                raise
+            heads = str(exc)  # a study without what they need (no complete state, no specimen summary)
+        if seeds:
+            heads += [seeds_mod.headlines(d) for d in seeds]
+            problem = seeds_mod.recipe_problem(heads)
+            if problem:
+                raise ResultsError("--seeds: %s" % problem)
     rows = read_probes(csv_path, need=zeta_contrast.NEEDED + ["Zm", "b", "q", "nu_1", "nu_2", "nu_1_name",
                                                             "nu_2_name"], material=material)
     if os.path.isdir(results):

@@ -114,6 +114,12 @@ def preparation_steps(params):
 def headlines(study):
     """The headline numbers of one study directory (module doc), a dict; None for what it lacks."""
     meta = read_metadata(study, required=True)
+    spec = meta.get("specimen") or {}
+    summary = spec.get("summary") or {}
+    lacks = [k for k in ("n", "void_ratio", "Zm") if k not in summary] + ([] if spec.get("material") else ["material"])
+    if lacks:
+        raise ResultsError("%s: its metadata.json records no specimen %s (a specimen saved without its summary, "
+                           "or a study written by hand)" % (study, ", ".join(lacks)))
     csv_path = os.path.join(study, "probes.csv")
     rows = read_probes(csv_path, need=["state", "probe", "E", "Zm", "void_ratio", "rotations", "state_steps",
                                        "probe_steps", "nu_1", "nu_2", "nu_1_name", "nu_2_name"])
