@@ -5,18 +5,34 @@ utils.getStress() (the same step, the integrator off), FabricRecorder's Zm again
 utils.avgNumInteractions(skipFree=True), StressProbe's E_z against getStress's increment over the
 strain of YADE's cell between the ramp's start and the probe's end. One seed (7), one thread.
 
-Usage: YADE_PREFIX=$PWD/build/yade-prefix yade-double -j1 -n -x bench/yade_clump_trial.py OUT.json
+    YADE_PREFIX=$PWD/build/yade-prefix yade-double -j1 -n -x bench/yade_clump_trial.py --json OUT.json
 """
 import json
 import math
+import os
 import sys
 
 import numpy as np
-from yade import O, pack, utils
-from yade.wrapper import (Bo1_Sphere_Aabb, FabricRecorder, ForceResetter, FrictMat, GlobalStiffnessTimeStepper,
-                          Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider, InteractionLoop,
-                          Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin,
-                          NewtonIntegrator, PyRunner, StressProbe, TrueTriaxialServo)
+
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)
+import _bench  # noqa: E402,F401  (it makes trueaniso importable)
+
+from trueaniso import cli  # noqa: E402
+
+parser = cli.Parser(description=cli.description(__doc__))
+parser.add_argument("--json", required=True, help="where the readings are written")
+o = cli.parse(parser)
+try:
+    from yade import O, pack, utils
+except ImportError:
+    cli.fail("this script runs in YADE with the plugin: YADE_PREFIX=build/yade-prefix yade-double -n -x %s --json OUT"
+             % sys.argv[0])
+from yade.wrapper import (  # noqa: E402
+    Bo1_Sphere_Aabb, FabricRecorder, ForceResetter, FrictMat, GlobalStiffnessTimeStepper, Ig2_Sphere_Sphere_ScGeom,
+    InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys,
+    Law2_ScGeom_SimplifiedMindlinPhys_Mindlin, NewtonIntegrator, PyRunner, StressProbe, TrueTriaxialServo)
 
 N = 300
 G, NU, RHO, P, D50 = 18e9, 0.15, 2500.0, 100e3, 0.2e-3
@@ -106,5 +122,5 @@ ds = seen[4]["s"] - seen[2]["s"]
 res["probe"] = dict(E_z=probe.E, steps=probe.steps, stage=probe.stage, yade_E_z=ds[2, 2] / eps[2, 2],
                     rel=abs(probe.E - ds[2, 2] / eps[2, 2]) / probe.E)
 print(json.dumps(res))
-with open(sys.argv[-1], "w") as f:
+with open(o.json, "w") as f:
     json.dump(res, f, indent=1)

@@ -5,19 +5,36 @@ refusal, reset() mid-probe, a hold given in part, the loading friction on contac
 recorder's default period; scenes that are not periodic or empty; two materials and materials out of
 range; a sphere on a wall. Writes each case's exception (or None) and what it measured.
 
-Usage: YADE_PREFIX=$PWD/build/yade-prefix yade-double -j1 -n -x bench/yade_misuse_trial.py STATE21.yade.gz OUT.json
+    YADE_PREFIX=$PWD/build/yade-prefix yade-double -j1 -n -x bench/yade_misuse_trial.py --scene STATE21.yade.gz --json OUT.json
 """
 import json
 import math
+import os
 import sys
 
-from yade import O, utils
-from yade.wrapper import (Bo1_Sphere_Aabb, Bo1_Wall_Aabb, FabricRecorder, ForceResetter, FrictMat,
-                          Ig2_Sphere_Sphere_ScGeom, Ig2_Wall_Sphere_ScGeom, InsertionSortCollider, InteractionLoop,
-                          Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys, Law2_ScGeom_SimplifiedMindlinPhys_Mindlin,
-                          NewtonIntegrator, PeriTriaxController, StressProbe, TrueTriaxialServo)
+HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)
+import _bench  # noqa: E402,F401  (it makes trueaniso importable)
 
-SCENE = sys.argv[1]
+from trueaniso import cli  # noqa: E402
+
+parser = cli.Parser(description=cli.description(__doc__))
+parser.add_argument("--scene", required=True, help="a YADE scene at state 21 (yade_cloud_state21.py writes OUTDIR/state21.yade.gz)")
+parser.add_argument("--json", required=True, help="where each case's exception and readings are written")
+o = cli.parse(parser)
+try:
+    from yade import O, utils
+except ImportError:
+    cli.fail("this script runs in YADE with the plugin: YADE_PREFIX=build/yade-prefix yade-double -n -x %s "
+             "--scene S.yade.gz --json OUT" % sys.argv[0])
+from yade.wrapper import (  # noqa: E402
+    Bo1_Sphere_Aabb, Bo1_Wall_Aabb, FabricRecorder, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
+    Ig2_Wall_Sphere_ScGeom, InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys,
+    Law2_ScGeom_SimplifiedMindlinPhys_Mindlin, NewtonIntegrator, PeriTriaxController, StressProbe,
+    TrueTriaxialServo)
+
+SCENE = o.scene
 res = {}
 
 
@@ -192,5 +209,5 @@ res["poisson_1"] = pair(fm(4.14e10, 1.0), fm(4.14e10, 0.15))
 res["wall"] = pair(fm(4.14e10, 0.15), fm(4.14e10, 0.15), wall=True)
 res["process_alive"] = True
 print(json.dumps(res))
-with open(sys.argv[-1], "w") as fh:
+with open(o.json, "w") as fh:
     json.dump(res, fh, indent=1)
