@@ -440,7 +440,9 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
                   versions=provenance.versions(),
                   specimen=dict(path=os.path.abspath(specimen_path), sha256=spec_meta["sha256"],
                                 seed=spec_meta["seed"], summary=spec_meta.get("summary"),
-                                material=spec_meta.get("material")))
+                                material=spec_meta.get("material"),
+                                # its preparation's rule (a file that records none: smallest-inertia)
+                                time_step=(spec_meta.get("parameters") or {}).get("time_step", UNRECORDED_TIME_STEP)))
     made_as = (spec_meta.get("parameters") or {}).get("state")
     if made_as is not None:  # allowed (a study may start from a state), but said: its states start stressed
         log("note: %s is the checkpoint of state %s of a study, not a specimen at its preparation pressure; "

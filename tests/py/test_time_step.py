@@ -123,8 +123,10 @@ def test_the_default_study_takes_the_per_axis_rule_for_its_states_and_probes(spe
                       "--out", out)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "--time-step" not in proc.stdout, proc.stdout  # nothing to say: the default, asked by nobody
-    fp = study_dir.read_metadata(str(out))["fingerprint"]
+    meta = study_dir.read_metadata(str(out))
+    fp = meta["fingerprint"]
     assert (fp["state"]["time_step"], fp["probe"]["time_step"]) == ("per-axis", "per-axis")
+    assert meta["specimen"]["time_step"] == "smallest-inertia"  # the fixture's preparation (it records none)
     state, meta = specimen_file.load(str(out / "states" / "1.npz"))
     assert state.step_scale == pytest.approx(dem.TIME_STEP_RULES["per-axis"][1] / 0.5, rel=1e-9)  # the cap binds
 
@@ -239,3 +241,15 @@ def test_a_specimen_file_keeps_a_reference_step_that_is_not_its_step(specimen_15
     again, meta2 = specimen_file.load(str(path))
     assert meta2["reference_dt"] == again.reference_dt == scene.reference_dt < again.dt
     assert again.step_scale == scene.dt / scene.reference_dt > 1.5
+
+
+def test_the_yade_hosts_probe_counts_as_the_engines_probe():
+    """--host yade gives the plugin's StressProbe (no step scale) its counts already scaled, as the
+    engines' stepsFor does: the same time, at least one step, halves rounded away from zero (C's
+    lround; Python's round would give 62 for 62.5)."""
+    from trueaniso import yade_host
+    assert yade_host.steps_for(300, 1.0) == 300
+    assert yade_host.steps_for(300, 1.6) == 188  # 187.5
+    assert yade_host.steps_for(100, 1.6) == 63  # 62.5
+    assert yade_host.steps_for(2_000_000, 1.6) == 1_250_000
+    assert yade_host.steps_for(1, 5.0) == 1
