@@ -406,7 +406,7 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
             ``restrain_rotations``, ``skip_detection``, ``damping`` (the servo's and the probes'),
             ``state_options`` (fields of ServoOptions), ``probe_options`` (fields of ProbeOptions).
         host: "trueaniso" (our stepper) or "yade" (YADE's loop with the plugin's classes, under
-            yade-double: `trueaniso.yade_host`, docs/yade-peer.md section 9); "yade" takes no executor.
+            yade-double: `trueaniso.yade_host`, docs/yade-peer.md section 8); "yade" takes no executor.
 
     Returns:
         list: the complete rows of probes.csv after the run, one dict of text per state and probe

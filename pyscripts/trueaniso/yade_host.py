@@ -137,6 +137,9 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     from . import yade_bridge
     held, _ = yade_bridge.scene_from_yade(O)
     held.velocity_gradient = np.zeros((3, 3))
+    # the checkpoint's step is the rule's, its unit the reference rule's step (as our stepper's Chain
+    # keeps them): a study under another rule than the reference checks its checkpoints against both
+    held.reference_dt = dt / scale
     dem.refresh(held)
     info = dict(status="reached", steps=int(servo.steps), wall_time=wall, stress=list(servo.stress),
                 unbalanced=float(servo.unbalanced), message=servo.message, overshoot=list(servo.overshoot),
