@@ -143,7 +143,7 @@ def _row(d):
             "-" if ezex is None else "%.3f" % ezex,
             "-" if not prep else "{:,}".format(prep["steps_expansion"] + (prep.get("steps_unloading") or 0)
                                                + prep["steps_consolidation"]),
-            "{:,}-{:,}".format(min(steps), max(steps)) if steps else "-"]
+            ("{:,}".format(steps[0]) if len(steps) == 1 else "{:,}-{:,}".format(min(steps), max(steps))) if steps else "-"]
 
 
 def _states(ids):
