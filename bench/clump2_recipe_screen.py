@@ -30,7 +30,7 @@ import _bench  # noqa: E402,F401  (it makes trueaniso and analysis importable)
 
 from trueaniso import cli  # noqa: E402
 
-REPO = os.path.dirname(HERE)
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 COPIED = ("probes.csv", "metadata.json", "statics_isotropic.json", "statics_state-21.json", "specimen.json")
 
 
