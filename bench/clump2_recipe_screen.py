@@ -12,9 +12,10 @@ The first form prepares WORK/NAME/specimen.npz (one thread), solves its isotropi
 `run_study.py --specimen ... --ids IDS --time-step per-axis --threads 1` into WORK/NAME/study and
 copies what the table reads into DATA/NAME/: prep.json (the preparation's settings, steps, e, Zm,
 rattlers and the static E_i) and the study's probes.csv, metadata.json and statics records; the
-table computes each study's headlines (trueaniso.analysis.seeds). A study that stops at a state that does not settle keeps the rows of
-the states it reached; the table says which states each row covers. A study made otherwise
-(run_study.py preparing its own specimen) is copied in with --study DIR --label NAME.
+table computes each study's headlines (trueaniso.analysis.seeds). A study that stops at a state
+that does not settle keeps the rows of the states it reached; the table says which states each row
+covers. A study made otherwise (run_study.py preparing its own specimen) is copied in with --study
+DIR --label NAME; --reciprocity IDS compares its probes' compliance with the exact static solve's.
 """
 import json
 import os
@@ -143,7 +144,13 @@ def _row(d):
             "-" if ezex is None else "%.3f" % ezex,
             "-" if not prep else "{:,}".format(prep["steps_expansion"] + (prep.get("steps_unloading") or 0)
                                                + prep["steps_consolidation"]),
-            ("{:,}".format(steps[0]) if len(steps) == 1 else "{:,}-{:,}".format(min(steps), max(steps))) if steps else "-"]
+            _steps(steps)]
+
+
+def _steps(steps):
+    if not steps:
+        return "-"
+    return "{:,}".format(steps[0]) if len(steps) == 1 else "{:,}-{:,}".format(min(steps), max(steps))
 
 
 def _states(ids):

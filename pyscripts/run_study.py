@@ -198,7 +198,8 @@ def specimen_recipe_problem(params, want):
     settings = want["settings"]
     have = {k: params[k] for k in settings if k in params}
     have["switch_pressure"] = params.get("switch_pressure", params.get("pressure", settings["pressure"]))
-    diff = study_dir.said(study_dir.differences(json.loads(json.dumps(have)), {k: settings[k] for k in have}, rel_tol=1e-9))
+    diff = study_dir.said(study_dir.differences(json.loads(json.dumps(have)), {k: settings[k] for k in have},
+                                                rel_tol=1e-9))
     return "made by another recipe than this run's default (%s)" % "; ".join(diff) if diff else None
 
 
