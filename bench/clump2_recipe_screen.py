@@ -73,8 +73,7 @@ def study(specimen_path, ids, out):
 
 
 def collect(label, study_dir, data, prep=None):
-    """Copy what the table reads into DATA/LABEL/ (and the headlines of the study)."""
-    from trueaniso.analysis import seeds
+    """Copy what the table reads into DATA/LABEL/ (and the preparation's record, prep.json)."""
     dest = os.path.join(data, label)
     os.makedirs(dest, exist_ok=True)
     for name in COPIED:
