@@ -544,3 +544,28 @@ def test_clump2_recipe_screen_table_is_that_of_its_data(tmp_path):
     with open(os.path.join(data, "default-1000-s1", "probes.csv")) as f:
         e = {r["state"]: float(r["void_ratio"]) for r in csv.DictReader(f)}
     assert len(e) == 39 and max(abs(v - e["1"]) for v in e.values()) < 1e-4
+
+
+def test_a_kept_clump2_specimen_of_the_earlier_default_is_not_the_default(tmp_path):
+    """prepare_specimen.py keeps an existing --out only when it is what the run would make: a clump2
+    file of the earlier default (rotations blocked to 100 kPa, w 0.5, no free expansion) records no
+    recipe name, as the default's files do, and is told apart by the recipe settings it records;
+    the same file is what --recipe grown-to-target makes."""
+    sys.path.insert(0, os.path.join(REPO, "pyscripts"))
+    import prepare_specimen
+    from trueaniso import clump_recipes
+    out = str(tmp_path / "s.npz")
+    old = dict(clump_recipes.RECIPES["clump2"], orientation_weights=[1.0, 1.0, 0.5], stage1_pressure=100e3,
+               mu_free=None)
+    meta = dict(seed=1, parameters=dict(old, assembly="clump2", n=1000, seed=1, pressure=100e3, inertial_number=1e-2,
+                                        unbalanced=1e-3, gain=0.002))
+
+    def differences(*args):
+        o = prepare_specimen.options(["--assembly", "clump2", "--n", "1000", "--out", out, *args])
+        prepare_specimen.validate(o)
+        return prepare_specimen.differences(o, meta)
+    said = differences()
+    assert any(d.startswith("stage1_pressure: 100000.0 there, 5000.0 here") for d in said), said
+    assert any(d.startswith("orientation_weights:") for d in said) and any(d.startswith("mu_free:") for d in said)
+    assert differences("--recipe", "grown-to-target") == ["recipe: \"the assembly's default\" there, "
+                                                          "\"grown-to-target\" here"]
