@@ -72,6 +72,20 @@ def study(specimen_path, ids, out):
         return subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, env=env).returncode
 
 
+def from_study(label, study_dir):
+    """The record of prepare() for the specimen run_study.py prepared in its directory (the E_i of its
+    isotropic state's statics record, rotations restrained)."""
+    from trueaniso import specimen_file
+    _, meta = specimen_file.read(os.path.join(study_dir, "specimen.npz"))
+    p, st = meta["parameters"], meta["summary"]
+    with open(os.path.join(study_dir, "statics_isotropic.json")) as f:
+        E = json.load(f)["E_blocked"]
+    return dict(label=label, n=p["n"], seed=meta["seed"], settings={}, e=st["void_ratio"], Zm=st["Zm"], Np0=st["Np0"],
+                steps_expansion=p["steps_expansion"], steps_unloading=p.get("steps_unloading", 0),
+                steps_consolidation=p["steps_consolidation"], wall_prep=p["wall_time"], E_restrained=E,
+                Ez_Ex=E[2] / (0.5 * (E[0] + E[1])), checkpoint_every=p.get("checkpoint_every"))
+
+
 def collect(label, study_dir, data, prep=None):
     """Copy what the table reads into DATA/LABEL/ (and the preparation's record, prep.json)."""
     dest = os.path.join(data, label)
@@ -79,6 +93,8 @@ def collect(label, study_dir, data, prep=None):
     for name in COPIED:
         if os.path.exists(os.path.join(study_dir, name)):
             shutil.copyfile(os.path.join(study_dir, name), os.path.join(dest, name))
+    if prep is None and os.path.exists(os.path.join(study_dir, "specimen.npz")):  # run_study.py prepared it
+        prep = from_study(label, study_dir)
     if prep is not None:
         with open(os.path.join(dest, "prep.json"), "w") as f:
             json.dump(prep, f, indent=1)
@@ -193,7 +209,8 @@ def main():
     p.add_argument("--ids", default="1,9,21,33", help="Table C1 states of the study")
     p.add_argument("--work", default="results/clump2-recipes", help="where specimens and studies are made")
     p.add_argument("--study", help="a study made otherwise, copied in as --label")
-    p.add_argument("--data", default="docs/data/clump2-recipes", help="the measurements the table is made of")
+    p.add_argument("--data", default="results/clump2-recipes/data",
+                   help="the measurements the table is made of (the committed ones: docs/data/clump2-recipes)")
     p.add_argument("--reciprocity", help="with --study and --label: the states (e.g. 17,33) whose probes' compliance is "
                                          "compared with the exact static solve's, into DATA/LABEL/reciprocity.json")
     p.add_argument("--doc", help="rewrite the table of this Markdown file from --data instead")

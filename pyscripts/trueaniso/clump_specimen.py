@@ -162,7 +162,7 @@ def least_layered_count(assembly, start, seed, phi_start=0.20, **overrides):
     Example:
         >>> from trueaniso import clump_specimen
         >>> clump_specimen.least_layered_count("clump2", 10, seed=1)
-        60
+        52
     """
     layers = recipe(assembly, **overrides)["layers"]
     fits = _layers_check(assembly, seed, phi_start, overrides)
