@@ -232,13 +232,14 @@ def resolve_switch(o):
 
 def settings(o):
     """Every option that makes the specimen (what its preparation checkpoint is bound to). The time
-    step rule only when it is not the one every earlier file was made with (which records none)."""
+    step rule only when it is not the one every earlier file was made with (which records none:
+    cli.UNRECORDED_TIME_STEP)."""
     made = dict(assembly=o.assembly, n=o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu,
                 mu_prep=o.mu_prep, mu=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
                 unbalanced=o.unbalanced)
     if o.recipe is not None:  # the default recipe's files record none
         made["recipe"] = o.recipe
-    if o.time_step != cli.DEFAULT_TIME_STEP:
+    if o.time_step != cli.UNRECORDED_TIME_STEP:
         made["time_step"] = o.time_step
     if switched_below(o):
         made["switch_pressure"] = o.switch_pressure
@@ -294,7 +295,7 @@ def differences(o, meta):
     another --recipe is not kept."""
     p = meta.get("parameters", {})
     have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"),
-                time_step=p.get("time_step", cli.DEFAULT_TIME_STEP),
+                time_step=p.get("time_step", cli.UNRECORDED_TIME_STEP),
                 switch_pressure=p.get("switch_pressure", p.get("pressure")), unloaded="unloaded_from" in p)
     want = dict(settings(o), time_step=o.time_step,
                 switch_pressure=o.switch_pressure if switched_below(o) else o.pressure, unloaded=unloaded(o))
@@ -424,7 +425,7 @@ def prepare(o, dist):
     log.setdefault("assembly", o.assembly)
     if o.recipe is not None:
         log["recipe"] = o.recipe
-    if o.time_step != cli.DEFAULT_TIME_STEP:  # the default's files record none
+    if o.time_step != cli.UNRECORDED_TIME_STEP:  # smallest-inertia's files record none, as every earlier one
         log["time_step"] = o.time_step
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)

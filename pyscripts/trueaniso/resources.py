@@ -114,7 +114,7 @@ def preparation_estimate(n, threads, assembly="sphere"):
 
 # The clumps' step counts were measured up to this many clumps. Above it they grow: the clump1
 # preparation at 53,004 clumps had not converged after 402,000 steps, its stress 844 Pa from the
-# 100 Pa criterion (docs/runs.md, "The paper's clump counts"); clump2's count is unknown there.
+# 100 Pa criterion (docs/studies/paper-size.md, "The paper's clump counts"); clump2's count is unknown there.
 CLUMP_STEPS_MEASURED_UP_TO = 4000
 
 
