@@ -275,6 +275,18 @@ def recipe_settings(o):
     return {k: named.get(k, defaults[k]) for k in keys}, {k: defaults[k] for k in keys}
 
 
+def clump_recipe(o):
+    """The clump recipe (clump_recipes.RECIPES, with a named variant's settings) this run prepares, as
+    a file records it (lists, no friction of a free expansion there is none of); {} for spheres."""
+    if o.assembly == "sphere":
+        return {}
+    named = clump_recipes.variant(o.assembly, o.recipe) if o.recipe else {}
+    r = clump_specimen.recipe(o.assembly, **{k: v for k, v in named.items() if k in clump_recipes.RECIPES[o.assembly]})
+    if r["stage1_pressure"] >= o.pressure:
+        r["mu_free"] = None
+    return json.loads(json.dumps(r))
+
+
 def differences(o, meta):
     """The settings of this run that the specimen file was not made with ("seed: 5 there, 1 here");
     settings a file does not record (older files) are not compared, but for the recipe: its name
@@ -290,6 +302,9 @@ def differences(o, meta):
     want = {k: v for k, v in want.items() if have.get(k) is not None and k != "recipe"}
     recipe, defaults = recipe_settings(o)
     recipe = {k: v for k, v in recipe.items() if k in p or defaults[k] is None}
+    # A clump recipe's own settings (shape, orientations, stages) where the file records them: the
+    # default recipe changed keeps its name, so the name alone would keep a specimen of the old one.
+    recipe.update({k: v for k, v in clump_recipe(o).items() if k in p and k not in want})
     want.update(recipe, recipe=o.recipe or DEFAULT_RECIPE)
     have = {k: have.get(k) for k in want}
     have["recipe"] = p.get("recipe") or DEFAULT_RECIPE
