@@ -100,6 +100,7 @@ def main():
     per_step = {c: [] for c in codes}
     ratios = []
     contacts = None
+    load_before = os.getloadavg()[0]
     for rep in range(o.repeats):
         order = codes if rep % 2 == 0 else codes[::-1]
         got = {}
@@ -109,10 +110,10 @@ def main():
             contacts = r["contacts"]
             print("round %d %-9s %.3f ms/step" % (rep + 1, c, 1e3 * per_step[c][-1]), flush=True)
         ratios.append(per_step["trueaniso"][-1] / per_step["yade"][-1])
-    lines = ["Machine: %s (shared with other jobs while measured). Specimen: %s, %d spheres, %d contacts; %d timed "
-             "steps after 100, yade-double -j %d, %d rounds, %s."
-             % (_bench.machine(), os.path.basename(o.specimen), n, contacts, o.steps, o.threads, o.repeats,
-                time.strftime("%Y-%m-%d")), "",
+    lines = ["Machine: %s, shared with other jobs (load average %.1f before, %.1f after). Specimen: %s, %d spheres, "
+             "%d contacts; %d timed steps after 100, yade-double -j %d, %d rounds, the loops alternating within each, %s."
+             % (_bench.machine(), load_before, os.getloadavg()[0], os.path.basename(o.specimen), n, contacts, o.steps,
+                o.threads, o.repeats, time.strftime("%Y-%m-%d")), "",
              "| loop | ms per step (median) | range |", "|---|---|---|"]
     for c, name in (("trueaniso", "our law + TrueTriaxialServo"), ("yade", "YADE Mindlin + PeriTriaxController")):
         v = per_step[c]

@@ -108,7 +108,7 @@ def main():
     import clump_recipe_variants
     engines.set_threads(1)
     provenance.versions()  # the code version, taken now: sources edited during the run do not refuse its save
-    rule = o.time_step or cli.DEFAULT_TIME_STEP
+    rule = o.time_step or cli.DEFAULT_PREPARATION_TIME_STEP
     if o.time_step:
         dem.time_step_rule = o.time_step
     trace = []

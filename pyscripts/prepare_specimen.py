@@ -232,13 +232,14 @@ def resolve_switch(o):
 
 def settings(o):
     """Every option that makes the specimen (what its preparation checkpoint is bound to). The time
-    step rule only when it is not the one every earlier file was made with (which records none)."""
+    step rule only when it is not the one every earlier file was made with (which records none:
+    cli.UNRECORDED_TIME_STEP)."""
     made = dict(assembly=o.assembly, n=o.n, seed=o.seed, pressure=o.pressure, d50=o.d50, cu=o.cu,
                 mu_prep=o.mu_prep, mu=o.mu, phi_cell=o.phi_cell, inertial_number=o.inertial_number,
                 unbalanced=o.unbalanced)
     if o.recipe is not None:  # the default recipe's files record none
         made["recipe"] = o.recipe
-    if o.time_step != cli.DEFAULT_TIME_STEP:
+    if o.time_step != cli.UNRECORDED_TIME_STEP:
         made["time_step"] = o.time_step
     if switched_below(o):
         made["switch_pressure"] = o.switch_pressure
@@ -274,6 +275,18 @@ def recipe_settings(o):
     return {k: named.get(k, defaults[k]) for k in keys}, {k: defaults[k] for k in keys}
 
 
+def clump_recipe(o):
+    """The clump recipe (clump_recipes.RECIPES, with a named variant's settings) this run prepares, as
+    a file records it (lists, no friction of a free expansion there is none of); {} for spheres."""
+    if o.assembly == "sphere":
+        return {}
+    named = clump_recipes.variant(o.assembly, o.recipe) if o.recipe else {}
+    r = clump_specimen.recipe(o.assembly, **{k: v for k, v in named.items() if k in clump_recipes.RECIPES[o.assembly]})
+    if r["stage1_pressure"] >= o.pressure:
+        r["mu_free"] = None
+    return json.loads(json.dumps(r))
+
+
 def differences(o, meta):
     """The settings of this run that the specimen file was not made with ("seed: 5 there, 1 here");
     settings a file does not record (older files) are not compared, but for the recipe: its name
@@ -282,13 +295,16 @@ def differences(o, meta):
     another --recipe is not kept."""
     p = meta.get("parameters", {})
     have = dict(p, assembly=p.get("assembly", "sphere"), seed=meta.get("seed"), mu=p.get("mu_final"),
-                time_step=p.get("time_step", cli.DEFAULT_TIME_STEP),
+                time_step=p.get("time_step", cli.UNRECORDED_TIME_STEP),
                 switch_pressure=p.get("switch_pressure", p.get("pressure")), unloaded="unloaded_from" in p)
     want = dict(settings(o), time_step=o.time_step,
                 switch_pressure=o.switch_pressure if switched_below(o) else o.pressure, unloaded=unloaded(o))
     want = {k: v for k, v in want.items() if have.get(k) is not None and k != "recipe"}
     recipe, defaults = recipe_settings(o)
     recipe = {k: v for k, v in recipe.items() if k in p or defaults[k] is None}
+    # A clump recipe's own settings (shape, orientations, stages) where the file records them: the
+    # default recipe changed keeps its name, so the name alone would keep a specimen of the old one.
+    recipe.update({k: v for k, v in clump_recipe(o).items() if k in p and k not in want})
     want.update(recipe, recipe=o.recipe or DEFAULT_RECIPE)
     have = {k: have.get(k) for k in want}
     have["recipe"] = p.get("recipe") or DEFAULT_RECIPE
@@ -409,7 +425,7 @@ def prepare(o, dist):
     log.setdefault("assembly", o.assembly)
     if o.recipe is not None:
         log["recipe"] = o.recipe
-    if o.time_step != cli.DEFAULT_TIME_STEP:  # the default's files record none
+    if o.time_step != cli.UNRECORDED_TIME_STEP:  # smallest-inertia's files record none, as every earlier one
         log["time_step"] = o.time_step
     summary = specimen.state(scene)
     meta = specimen_file.save(o.out, scene, seed=o.seed, parameters=log, summary=summary)

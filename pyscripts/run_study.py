@@ -17,6 +17,7 @@ after a kill, and may add states (--ids 1,5 then --ids 1,5,9); a rerun that asks
 specimen or other settings refuses in one line.
 """
 import inspect
+import json
 import os
 import sys
 import time
@@ -27,7 +28,7 @@ from trueaniso import start_guard  # noqa: E402  (first: Ctrl-C while numpy and 
 start_guard.install()
 try:
     from trueaniso.analysis import figures, report, zeta_contrast
-    from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, resources,
+    from trueaniso import (atomic, clump_specimen, cli, engines, lock, prep_checkpoint, progress, psd, resources,
                            specimen, statics, specimen_file, study, study_dir, study_options, triaxial)
 except ImportError as exc:  # the compiled module not built (or a Debian package missing): one line, not a traceback
     sys.stderr.write("error: %s\n" % exc)
@@ -148,12 +149,58 @@ def members(assembly):
 
 
 def recipe(o):
-    """What the study's specimen is made from (part of the study's fingerprint)."""
-    return dict(assembly=o.assembly, n=o.n, seed=o.seed)
+    """What the study's specimen is made from: the assembly, count and seed, and the assembly's
+    recipe by name and settings (`recipe_settings`). It keys the preparation's checkpoint and is
+    part of the study's fingerprint, so that a specimen or checkpoint made by another recipe (the
+    default changed since) is never taken for this one."""
+    return dict(assembly=o.assembly, n=o.n, seed=o.seed, recipe="default", settings=recipe_settings(o.assembly))
+
+
+# Keywords of a preparation that are not settings of its recipe.
+_NOT_RECIPE = ("n", "seed", "progress", "checkpoints", "max_steps", "switch_pressure", "size_distribution", "assembly")
+
+
+def recipe_settings(assembly):
+    """Every setting the assembly's default preparation is made with: the preparation's own defaults
+    (friction, rates, tolerances), the clumps' recipe (clump_recipes.RECIPES: shape, sizes,
+    orientations, stages), the size distribution and the switch pressure it resolves to."""
+    prepare = specimen.prepare_spheres if assembly == "sphere" else clump_specimen.prepare_clumps
+    out = {k: p.default for k, p in inspect.signature(prepare).parameters.items()
+           if p.default is not inspect.Parameter.empty and k not in _NOT_RECIPE and p.default is not None}
+    if assembly == "sphere":
+        out.update(d50=psd.PAPER_SPHERES.d50, cu=psd.PAPER_SPHERES.cu)
+        fraction = out["switch_fraction"]
+    else:
+        out.update(clump_specimen.recipe(assembly))
+        fraction = out["switch_fraction"]
+    out["switch_pressure"] = specimen.default_switch_pressure(out["pressure"], fraction, out["stress_tolerance"])
+    return json.loads(json.dumps(out))  # as metadata.json holds it (tuples as lists)
 
 
 def describe(r):
     return "--assembly %s --n %s --seed %s" % (r.get("assembly", "sphere"), r.get("n"), r.get("seed"))
+
+
+def recipe_said(have, want):
+    """How the recipe of `have` differs from `want` ("settings.mu_prep: 0.01 there, 0 here"; a
+    study or specimen made before its recipe was recorded says so), or None when it is the same."""
+    if have.get("settings") is None:
+        return "made before run_study.py recorded its recipe, so not provably by this one (%s)" % want.get("recipe")
+    diff = study_dir.said(study_dir.differences({k: have.get(k) for k in ("recipe", "settings")},
+                                                {k: want[k] for k in ("recipe", "settings")}, rel_tol=1e-9))
+    return "made by another recipe (%s)" % "; ".join(diff) if diff else None
+
+
+def specimen_recipe_problem(params, want):
+    """How the recipe a specimen file records (its parameters) differs from `want`'s settings, or
+    None. Only what the file records is compared; a switch pressure it lacks is its final pressure
+    (every file made before the unloading)."""
+    settings = want["settings"]
+    have = {k: params[k] for k in settings if k in params}
+    have["switch_pressure"] = params.get("switch_pressure", params.get("pressure", settings["pressure"]))
+    diff = study_dir.said(study_dir.differences(json.loads(json.dumps(have)), {k: settings[k] for k in have},
+                                                rel_tol=1e-9))
+    return "made by another recipe than this run's default (%s)" % "; ".join(diff) if diff else None
 
 
 def check_recipe(o, log):
@@ -165,11 +212,15 @@ def check_recipe(o, log):
         have = meta.get("fingerprint", {}).get("recipe")
         if have is not None:
             have = dict(dict(assembly="sphere"), **have)  # studies written before clumps are sphere studies
-        if have is not None and have != want:
+        if have is not None and describe(have) != describe(want):
             raise study_dir.StudyMismatch(
                 "%s holds another study: its specimen is %s, this run asks %s; %s"
                 % (o.out, describe(have), describe(want),
                    study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
+        other = have is not None and recipe_said(have, want)
+        if other:
+            raise study_dir.StudyMismatch("%s holds another study: its specimen was %s; %s" % (
+                o.out, other, study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
     path = os.path.join(o.out, SPECIMEN)
     if not os.path.exists(path):
         if meta is not None and meta.get("fingerprint", {}).get("recipe") is None:
@@ -189,11 +240,15 @@ def check_recipe(o, log):
         raise study_dir.StudyMismatch("%s; %s" % (exc, study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
     have = dict(assembly=spec_meta["parameters"].get("assembly", "sphere"), n=spec_meta["parameters"].get("n"),
                 seed=spec_meta["seed"])
-    if have != want:
+    if describe(have) != describe(want):
         raise study_dir.StudyMismatch(
             "%s holds another study: its specimen is %s, this run asks %s; %s"
             % (o.out, describe(have), describe(want),
                study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
+    other = specimen_recipe_problem(spec_meta["parameters"], want)
+    if other:
+        raise study_dir.StudyMismatch("%s holds another study: its specimen (%s) was %s; %s" % (
+            o.out, describe(have), other, study_dir.WAY_OUT % os.path.join(o.out, study_dir.SUPERSEDED)))
     log("specimen: kept %s" % path)
     prep_checkpoint.Checkpoints(prep_checkpoint.path_for(path), {}).remove()  # of a run killed after its save
     return scene

@@ -17,8 +17,10 @@
 #include <pkg/dem/ScGeom.hpp>
 
 #include <cmath>
+#include <set>
 #include <string>
 
+#include "PythonAttributes.hpp"
 #include "YadeRefusal.hpp"
 
 namespace yade {
@@ -128,8 +130,7 @@ class Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys : public IPhysFunctor {
     }
     I->phys = p;
   }
-  // The rolling parameters as last validated: YADE's setter assigns before postLoad can refuse.
-  Real validStiffness_ = 0, validFriction_ = 0;
+  // The rolling parameters in range; an assignment refused keeps the old value (PythonAttributes).
   void postLoad(Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys&) {
     trueaniso::Material m;
     m.rollingStiffness = rollingStiffness;
@@ -137,19 +138,18 @@ class Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys : public IPhysFunctor {
     try {
       m.validate();
     } catch (const std::exception& e) {
-      const std::string what = "Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys (rollingStiffness " +
-          trueanisoPlugin::shown(rollingStiffness) + ", rollingFriction " + trueanisoPlugin::shown(rollingFriction) +
-          "): " + e.what();
-      rollingStiffness = validStiffness_;
-      rollingFriction = validFriction_;
-      throw std::invalid_argument(what);
+      throw std::invalid_argument("Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys (rollingStiffness " +
+                                  trueanisoPlugin::shown(rollingStiffness) + ", rollingFriction " +
+                                  trueanisoPlugin::shown(rollingFriction) + "): " + e.what());
     }
-    validStiffness_ = rollingStiffness;
-    validFriction_ = rollingFriction;
+  }
+  static std::set<std::string> customAttributes() { return {}; }
+  void pyHandleCustomCtorArgs(boost::python::tuple& /*t*/, boost::python::dict& d) override {
+    trueanisoPlugin::PythonAttributes<Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys>::checkConstructorArguments(d);
   }
   FUNCTOR2D(FrictMat, FrictMat);
   // clang-format off
-  YADE_CLASS_BASE_DOC_ATTRS(Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys, IPhysFunctor,
+  YADE_CLASS_BASE_DOC_ATTRS_CTOR_PY(Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys, IPhysFunctor,
     "Makes :yref:`SimplifiedMindlinPhys` from two FrictMat: G = young/(2(1+poisson)) and nu = poisson of each (the "
     "particle's Poisson ratio, as in :yref:`Ip2_FrictMat_FrictMat_MindlinPhys`), friction tan(min(frictionAngle)). "
     "One material gives the paper's C_n and C_s (Eqs. 5-6); two give Hertz's and Mindlin's combined moduli, "
@@ -159,7 +159,9 @@ class Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys : public IPhysFunctor {
     "the run stops after the step): young or frictionAngle not finite, young <= 0, poisson outside (-1, 0.5), any "
     "other pair of shapes.",
     ((Real, rollingStiffness, 0, Attr::triggerPostLoad, "beta of the rolling spring k_r = beta k_s rbar^2 (0: none; >= 0)"))
-    ((Real, rollingFriction, 0, Attr::triggerPostLoad, "eta_r of the rolling cap eta_r rbar N (>= 0)")));
+    ((Real, rollingFriction, 0, Attr::triggerPostLoad, "eta_r of the rolling cap eta_r rbar N (>= 0)")),
+    /* ctor */,
+    PYTHON_ATTRIBUTES_DEFS(Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys));
   // clang-format on
 };
 REGISTER_SERIALIZABLE(Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys);

@@ -9,9 +9,11 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
+#include "PythonAttributes.hpp"
 #include "YadeRefusal.hpp"
 #include "YadeScene.hpp"
 
@@ -70,13 +72,38 @@ class FabricRecorder : public PeriodicEngine {
 
  public:
   void action() override { trueanisoPlugin::refusingInLoop([&] { record(); }); }
+  // Every step, not only those it records at: a scene it cannot measure is refused at the first.
+  bool isActivated() override {
+    trueanisoPlugin::refusingInLoop([&] { checkPeriodic(); });
+    return PeriodicEngine::isActivated();
+  }
+
+  // The periods: one of them > 0, or the recorder would never record in O.engines.
+  void postLoad(FabricRecorder&) {
+    namespace tp = trueanisoPlugin;
+    for (const auto& p : {std::make_pair("iterPeriod", Real(iterPeriod)), std::make_pair("virtPeriod", virtPeriod),
+                          std::make_pair("realPeriod", realPeriod)})
+      if (!(p.second >= 0)) tp::refuse("FabricRecorder", p.first, tp::shown(p.second), "a period is >= 0 (0: not used)");
+    if (!(iterPeriod > 0 || virtPeriod > 0 || realPeriod > 0))
+      tp::refuse("FabricRecorder", "iterPeriod", tp::shown(iterPeriod),
+                 "with virtPeriod and realPeriod 0 too, it would never record: give iterPeriod > 0 (default 100, "
+                 "about 1 % of the steps' time); to record only when called, call it (recorder()) outside O.engines");
+  }
+  static std::set<std::string> customAttributes() { return {}; }
+  void pyHandleCustomCtorArgs(boost::python::tuple& /*t*/, boost::python::dict& d) override {
+    trueanisoPlugin::PythonAttributes<FabricRecorder>::checkConstructorArguments(d);
+  }
 
  private:
-  void record() {
-    namespace tp = trueanisoPlugin;
+  void checkPeriodic() const {
     if (!scene->isPeriodic)
       throw std::runtime_error("FabricRecorder needs a periodic cell (O.periodic=True): its Nc/V and void ratio are "
                                "those of the cell, its branch vectors cross the cell's boundary");
+  }
+
+  void record() {
+    namespace tp = trueanisoPlugin;
+    checkPeriodic();
     // The particles: free spheres and clumps (of spheres); anything else is refused, not skipped.
     std::vector<int> perParticle(scene->bodies->size(), 0);
     long nb = 0;
@@ -89,6 +116,9 @@ class FabricRecorder : public PeriodicEngine {
       ++nb;
       solid += solidVolume(*b, scene);
     }
+    if (nb == 0)
+      throw std::runtime_error("FabricRecorder: the scene has no particles (spheres or clumps of spheres): no fabric "
+                               "and no void ratio to give");
     trueaniso::FabricSums sum;
     for (const auto& I : *scene->interactions) {
       if (!I->isReal()) continue;
@@ -115,7 +145,7 @@ class FabricRecorder : public PeriodicEngine {
     f.Zm = f.counts.mechanical();
     f.volume = scene->cell->hSize.determinant();
     f.voidRatio = (f.volume - solid) / solid;
-    f.meanRadiusCubed = nb > 0 ? 3.0 * solid / (4.0 * M_PI * nb) : NAN;
+    f.meanRadiusCubed = 3.0 * solid / (4.0 * M_PI * nb);
     contacts = sum.contacts;
     particles = nb;
     rattlers = f.counts.noContact;
@@ -146,7 +176,7 @@ class FabricRecorder : public PeriodicEngine {
 
  public:
   // clang-format off
-  YADE_CLASS_BASE_DOC_ATTRS_CTOR(FabricRecorder, PeriodicEngine,
+  YADE_CLASS_BASE_DOC_ATTRS_CTOR_PY(FabricRecorder, PeriodicEngine,
     "The fabric of the contact network (paper sections 3.2 and 4.2), the code of the trueaniso engines "
     "(measure/Fabric.hpp, measure/FabricTerms.hpp), every iterPeriod steps (100 unless given: about 1 % of the "
     "steps' time) or by calling the engine: Zm (Eq. 14), R (Eq. 15), H (Eq. 16), B (Eq. 33), M (Eq. 34), the "
@@ -159,9 +189,11 @@ class FabricRecorder : public PeriodicEngine {
     "Units: R dimensionless, H m^2, B and M m^(7/3) N^(1/3) (the weight (rbar N)^(1/3) of Eqs. 33-34 is k_n/C_n; "
     "the material constants C_n, C_s stay outside), Nc/V 1/m^3. M holds 81 values, M[9(3i+j) + 3k + l] = "
     "M_ijkl.\n\n"
-    "Refusals: a scene that is not periodic, or a body other than a sphere or a clump of spheres, raises "
-    "RuntimeError from O.run. Without any contact carrying a force, ``message`` says 'no contacts' and the "
-    "averages are 0 (not NaN).",
+    "Refusals: a period < 0, or no period > 0 (it would never record), raises ValueError at construction or "
+    "assignment; a value of the wrong type a TypeError naming the attribute. A scene that is not periodic raises "
+    "RuntimeError from O.run at the first step, a scene without particles or a body other than a sphere or a clump "
+    "of spheres at the first record. Without any contact carrying a force, ``message`` says 'no contacts' and the averages are 0 (not NaN); "
+    "before the first record Zm is NaN and ``message`` 'not recorded yet'.",
     ((Real, Zm, NAN, Attr::readonly, "mechanical coordination number, Eq. (14): (2 Nc - Np1)/(Np - Np0 - Np1)"))
     ((Matrix3r, R, Matrix3r::Zero(), Attr::readonly, "contact normal fabric, Eq. (15), <n n>"))
     ((Matrix3r, H, Matrix3r::Zero(), Attr::readonly, "branch vector fabric, Eq. (16), <L L> [m^2]"))
@@ -177,8 +209,9 @@ class FabricRecorder : public PeriodicEngine {
     ((long, rattlers, 0, Attr::readonly, "Np0: particles without a contact"))
     ((long, oneContact, 0, Attr::readonly, "Np1: particles with one contact"))
     ((long, records, 0, Attr::readonly, "times recorded"))
-    ((string, message, "", Attr::readonly, "what the last record could not give ('no contacts', ...); empty when all is defined")),
-    iterPeriod = 100;);
+    ((string, message, "not recorded yet", Attr::readonly, "what the last record could not give ('no contacts', ...); empty when all is defined")),
+    iterPeriod = 100;,
+    PYTHON_ATTRIBUTES_DEFS(FabricRecorder));
   // clang-format on
 };
 REGISTER_SERIALIZABLE(FabricRecorder);

@@ -5,8 +5,10 @@
 
 #include <functional>
 #include <memory>
+#include <set>
 #include <string>
 
+#include "PythonAttributes.hpp"
 #include "YadeRefusal.hpp"
 #include "YadeScene.hpp"
 
@@ -44,6 +46,7 @@ class StressProbe : public GlobalEngine {
   }
   void pyHandleCustomCtorArgs(boost::python::tuple& /*t*/, boost::python::dict& d) override {
     if (d.has_key("axis")) d["axis"] = axisFrom(d["axis"]);
+    trueanisoPlugin::PythonAttributes<StressProbe>::checkConstructorArguments(d, customAttributes());
   }
 
   // The kernel with this engine's parameters (not begun).
@@ -72,28 +75,22 @@ class StressProbe : public GlobalEngine {
     namespace tp = trueanisoPlugin;
     using K = trueaniso::StressProbe;
     const trueaniso::Vec6 someHold = (trueaniso::Vec6() << 1e5, 1e5, 1e5, 0, 0, 0).finished();
-    auto alone = [&](const char* name, const std::string& value, const std::function<void(K&)>& set) {
-      K k;
-      set(k);
-      try {
-        k.begin(someHold);
-      } catch (const std::exception& e) {
-        tp::refuse(kName, name, value, e.what());
-      }
+    auto alone = [&](const char* name, auto value, const std::function<void(K&)>& set) {
+      tp::checkAlone<K>(kName, name, tp::shown(value), set, [&](K& k) { k.begin(someHold); });
     };
     if (axisIndex(axis) < 0)
       tp::refuse(kName, "axis", "'" + axis + "'", "must be one of x, y, z, yz, xz, xy (or 0-5)");
-    alone("sign", tp::shown(sign), [&](K& k) { k.sign = sign; });
-    alone("gammaTarget", tp::shown(gammaTarget), [&](K& k) { k.gammaTarget = gammaTarget; });
-    alone("increment", tp::shown(increment), [&](K& k) { k.increment = increment; });
-    alone("probeFriction", tp::shown(probeFriction), [&](K& k) { k.probeFriction = probeFriction; });
-    alone("gain", tp::shown(gain), [&](K& k) { k.law.gain = gain; });
-    alone("maxStrainRate", tp::shown(maxStrainRate), [&](K& k) { k.law.maxStrainRate = maxStrainRate; });
-    alone("rampSteps", tp::shown(rampSteps), [&](K& k) { k.rampSteps = rampSteps; });
-    alone("relativeTolerance", tp::shown(relativeTolerance), [&](K& k) { k.relativeTolerance = relativeTolerance; });
-    alone("unbalancedTolerance", tp::shown(unbalancedTolerance), [&](K& k) { k.unbalancedTolerance = unbalancedTolerance; });
-    alone("settleSteps", tp::shown(settleSteps), [&](K& k) { k.settleSteps = settleSteps; });
-    alone("maxSteps", tp::shown(maxSteps), [&](K& k) { k.maxSteps = maxSteps; });
+    alone("sign", sign, [&](K& k) { k.sign = sign; });
+    alone("gammaTarget", gammaTarget, [&](K& k) { k.gammaTarget = gammaTarget; });
+    alone("increment", increment, [&](K& k) { k.increment = increment; });
+    alone("probeFriction", probeFriction, [&](K& k) { k.probeFriction = probeFriction; });
+    alone("gain", gain, [&](K& k) { k.law.gain = gain; });
+    alone("maxStrainRate", maxStrainRate, [&](K& k) { k.law.maxStrainRate = maxStrainRate; });
+    alone("rampSteps", rampSteps, [&](K& k) { k.rampSteps = rampSteps; });
+    alone("relativeTolerance", relativeTolerance, [&](K& k) { k.relativeTolerance = relativeTolerance; });
+    alone("unbalancedTolerance", unbalancedTolerance, [&](K& k) { k.unbalancedTolerance = unbalancedTolerance; });
+    alone("settleSteps", settleSteps, [&](K& k) { k.settleSteps = settleSteps; });
+    alone("maxSteps", maxSteps, [&](K& k) { k.maxSteps = maxSteps; });
     for (int i = 0; i < 6; ++i) {
       const Real h = holdStress[i];
       if (std::isnan(h)) continue;
@@ -104,34 +101,8 @@ class StressProbe : public GlobalEngine {
                        "stress measured when the probe starts");
     }
   }
-  // The settable attributes as last validated (see TrueTriaxialServo::Settings).
-  struct Settings {
-    std::string axis;
-    int sign;
-    Real gammaTarget, increment, probeFriction, gain, maxStrainRate, relativeTolerance, unbalancedTolerance;
-    long rampSteps, settleSteps, maxSteps;
-    Vector6r holdStress;
-  };
-  Settings capture() const {
-    return {axis, sign, gammaTarget, increment, probeFriction, gain, maxStrainRate, relativeTolerance,
-            unbalancedTolerance, rampSteps, settleSteps, maxSteps, holdStress};
-  }
-  void put(const Settings& v) {
-    axis = v.axis; sign = v.sign; gammaTarget = v.gammaTarget; increment = v.increment; probeFriction = v.probeFriction;
-    gain = v.gain; maxStrainRate = v.maxStrainRate; relativeTolerance = v.relativeTolerance;
-    unbalancedTolerance = v.unbalancedTolerance; rampSteps = v.rampSteps; settleSteps = v.settleSteps;
-    maxSteps = v.maxSteps; holdStress = v.holdStress;
-  }
-  Settings valid_;
-  void postLoad(StressProbe&) {
-    try {
-      validate();
-    } catch (...) {
-      put(valid_);
-      throw;
-    }
-    valid_ = capture();
-  }
+  void postLoad(StressProbe&) { validate(); }
+  static std::set<std::string> customAttributes() { return {"axis"}; }  // axisFrom converts it
 
   void action() override;
   void resetPy();
@@ -216,7 +187,8 @@ class StressProbe : public GlobalEngine {
     ((Matrix3r, heldTrsf, Matrix3r::Identity(), Attr::hidden, "held state: cell trsf"))
     ((Matrix3r, heldPrevHSize, Matrix3r::Identity(), Attr::hidden, "held state: cell prevHSize"))
     ((Matrix3r, heldVelGrad, Matrix3r::Zero(), Attr::hidden, "held state: cell velGrad")),
-    valid_ = capture();,
+    /* ctor */,
+    PYTHON_ATTRIBUTES_DEFS(StressProbe)
     .def("reset", &StressProbe::resetPy, "forget the results and probe again at the next step; mid-probe, the held state is put back first")
     .add_property("axis", &StressProbe::axisPy, &StressProbe::setAxisPy,
                   "x, y, z (E, nu) or yz, xz, xy (G); an index 0-5 is taken as its name :ydefault:`'z'` :yattrtype:`string`")

@@ -3,8 +3,10 @@
 #include <core/GlobalEngine.hpp>
 
 #include <functional>
+#include <set>
 #include <string>
 
+#include "PythonAttributes.hpp"
 #include "YadeRefusal.hpp"
 #include "YadeScene.hpp"
 
@@ -78,38 +80,31 @@ class TrueTriaxialServo : public GlobalEngine {
 
   // Each attribute against the kernel's own range (a servo of defaults given that one value, so a
   // message names the attribute), then b, sigmaZ and meanStress together (Eq. 9: every principal
-  // stress > 0). At construction, at each assignment and at O.load.
+  // stress > 0). At construction, at each assignment (PythonAttributes) and at O.load.
   void validate() const {
     namespace tp = trueanisoPlugin;
     using K = trueaniso::TrueTriaxialServo;
-    auto alone = [](const char* name, const std::string& value, const std::function<void(K&)>& set) {
-      K k;
-      set(k);
-      try {
-        k.validate();
-      } catch (const std::exception& e) {
-        tp::refuse(kName, name, value, e.what());
-      }
+    auto alone = [](const char* name, auto value, const std::function<void(K&)>& set) {
+      tp::checkAlone<K>(kName, name, tp::shown(value), set, [](K& k) { k.validate(); });
     };
     // the goal's three numbers alone: at an isotropic state, which any b in [0, 1] keeps valid
-    alone("b", tp::shown(b), [&](K& k) { k.goal.b = b; });
+    alone("b", b, [&](K& k) { k.goal.b = b; });
     if (!(std::isfinite(sigmaZ) && sigmaZ > 0)) tp::refuse(kName, "sigmaZ", tp::shown(sigmaZ), "sigma_z must be a finite stress > 0 (Pa, compression positive)");
     if (!(std::isfinite(meanStress) && meanStress > 0)) tp::refuse(kName, "meanStress", tp::shown(meanStress), "the mean stress p must be a finite stress > 0 (Pa, compression positive)");
-    alone("pathRate", tp::shown(pathRate), [&](K& k) { k.pathRate = pathRate; });
-    alone("followTolerance", tp::shown(followTolerance), [&](K& k) { k.followTolerance = followTolerance; });
-    alone("stressTolerance", tp::shown(stressTolerance), [&](K& k) { k.stressTolerance = stressTolerance; });
-    alone("unbalancedTolerance", tp::shown(unbalancedTolerance), [&](K& k) { k.unbalancedTolerance = unbalancedTolerance; });
-    alone("settleSteps", tp::shown(settleSteps), [&](K& k) { k.settleSteps = settleSteps; });
-    alone("maxStrain", tp::shown(maxStrain), [&](K& k) { k.maxStrain = maxStrain; });
-    alone("maxSteps", tp::shown(maxSteps), [&](K& k) { k.maxSteps = maxSteps; });
-    alone("stallSteps", tp::shown(stallSteps), [&](K& k) { k.stallSteps = stallSteps; });
-    alone("holdSteps", tp::shown(holdSteps), [&](K& k) { k.holdSteps = holdSteps; });
-    alone("gain", tp::shown(gain), [&](K& k) { k.law.gain = gain; });
-    if (maxStrainRate != 0)
-      alone("maxStrainRate", tp::shown(maxStrainRate), [&](K& k) { k.law.maxStrainRate = maxStrainRate; });
-    alone("loadingFriction", tp::shown(loadingFriction), [&](K& k) { k.loadingFriction = loadingFriction; });
-    alone("stepScale", tp::shown(stepScale), [&](K& k) { k.stepScale = stepScale; });
-    alone("lostStressFraction", tp::shown(lostStressFraction), [&](K& k) { k.lostStressFraction = lostStressFraction; });
+    alone("pathRate", pathRate, [&](K& k) { k.pathRate = pathRate; });
+    alone("followTolerance", followTolerance, [&](K& k) { k.followTolerance = followTolerance; });
+    alone("stressTolerance", stressTolerance, [&](K& k) { k.stressTolerance = stressTolerance; });
+    alone("unbalancedTolerance", unbalancedTolerance, [&](K& k) { k.unbalancedTolerance = unbalancedTolerance; });
+    alone("settleSteps", settleSteps, [&](K& k) { k.settleSteps = settleSteps; });
+    alone("maxStrain", maxStrain, [&](K& k) { k.maxStrain = maxStrain; });
+    alone("maxSteps", maxSteps, [&](K& k) { k.maxSteps = maxSteps; });
+    alone("stallSteps", stallSteps, [&](K& k) { k.stallSteps = stallSteps; });
+    alone("holdSteps", holdSteps, [&](K& k) { k.holdSteps = holdSteps; });
+    alone("gain", gain, [&](K& k) { k.law.gain = gain; });
+    if (maxStrainRate != 0) alone("maxStrainRate", maxStrainRate, [&](K& k) { k.law.maxStrainRate = maxStrainRate; });
+    alone("loadingFriction", loadingFriction, [&](K& k) { k.loadingFriction = loadingFriction; });
+    alone("stepScale", stepScale, [&](K& k) { k.stepScale = stepScale; });
+    alone("lostStressFraction", lostStressFraction, [&](K& k) { k.lostStressFraction = lostStressFraction; });
     try {
       trueaniso::strainRateForInertialNumber(inertialNumber, 1.0, 1.0, 1.0);
     } catch (const std::exception& e) {
@@ -123,35 +118,10 @@ class TrueTriaxialServo : public GlobalEngine {
                                   " (to change them together: servo.updateAttrs(dict(b=..., sigmaZ=..., meanStress=...)))");
     }
   }
-  // The settable attributes as last validated: YADE's setter assigns before postLoad can refuse,
-  // so a refused assignment puts them back and the servo keeps its valid settings.
-  struct Settings {
-    Real b, sigmaZ, meanStress, pathRate, followTolerance, stressTolerance, unbalancedTolerance, maxStrain, gain,
-        maxStrainRate, inertialNumber, loadingFriction, stepScale, lostStressFraction;
-    long settleSteps, maxSteps, stallSteps, holdSteps;
-  };
-  Settings capture() const {
-    return {b, sigmaZ, meanStress, pathRate, followTolerance, stressTolerance, unbalancedTolerance, maxStrain, gain,
-            maxStrainRate, inertialNumber, loadingFriction, stepScale, lostStressFraction, settleSteps, maxSteps,
-            stallSteps, holdSteps};
-  }
-  void put(const Settings& v) {
-    b = v.b; sigmaZ = v.sigmaZ; meanStress = v.meanStress; pathRate = v.pathRate; followTolerance = v.followTolerance;
-    stressTolerance = v.stressTolerance; unbalancedTolerance = v.unbalancedTolerance; maxStrain = v.maxStrain;
-    gain = v.gain; maxStrainRate = v.maxStrainRate; inertialNumber = v.inertialNumber;
-    loadingFriction = v.loadingFriction; stepScale = v.stepScale; lostStressFraction = v.lostStressFraction;
-    settleSteps = v.settleSteps; maxSteps = v.maxSteps;
-    stallSteps = v.stallSteps; holdSteps = v.holdSteps;
-  }
-  Settings valid_;
-  void postLoad(TrueTriaxialServo&) {
-    try {
-      validate();
-    } catch (...) {
-      put(valid_);
-      throw;
-    }
-    valid_ = capture();
+  void postLoad(TrueTriaxialServo&) { validate(); }
+  static std::set<std::string> customAttributes() { return {}; }
+  void pyHandleCustomCtorArgs(boost::python::tuple& /*t*/, boost::python::dict& d) override {
+    trueanisoPlugin::PythonAttributes<TrueTriaxialServo>::checkConstructorArguments(d);
   }
 
   // The cell's strain-rate cap: maxStrainRate, or (0) that of inertialNumber for the median sphere
@@ -215,7 +185,8 @@ class TrueTriaxialServo : public GlobalEngine {
     ((long, stalled, 0, Attr::readonly, "steps in a row without following the goal"))
     ((long, holding, 0, Attr::readonly, "steps held at the state"))
     ((long, waited, 0, Attr::readonly, "steps the goal waited for the specimen, in all")),
-    valid_ = capture();,
+    /* ctor */,
+    PYTHON_ATTRIBUTES_DEFS(TrueTriaxialServo)
     .def("finalStress", &TrueTriaxialServo::finalStressPy, "the six stresses of the state (Eq. 9), Voigt, compression positive, Pa")
   );
   // clang-format on

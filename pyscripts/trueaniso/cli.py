@@ -14,7 +14,7 @@ import signal
 import sys
 import threading
 
-from . import param_table
+from . import options as options_module, param_table
 from .refusal import InputError, Refusal
 
 __all__ = ["InputError", "Refusal", "Parser", "parse", "fail", "guarded", "tool", "release_start_guard", "in_yade",
@@ -123,26 +123,36 @@ def _check_openmp_count():
 def add_path_rate_option(parser):
     parser.add_argument("--path-rate", type=positive_or_inf, default=None,
                         help="servo's path rate while states are reached, in Pa per step of the smallest-inertia time "
-                             "step rule (under --time-step per-axis a step moves it further: the same rate in time); "
-                             "inf: the whole load at once; when not given: the rate of the study --out holds, else "
-                             "2 (docs/state-speed.md: what a faster rate changes)")
+                             "step rule (a rule with a longer step, per-axis, moves it further a step: the same rate "
+                             "in time); inf: the whole load at once; when not given: the rate of the study --out "
+                             "holds, else 2 (docs/state-speed.md: what a faster rate changes)")
 
 
-DEFAULT_TIME_STEP = "smallest-inertia"  # the rule of every committed result (dem.TIME_STEP_RULES)
+# The time step rules (dem.TIME_STEP_RULES; docs/time-step.md). A study's states and probes take
+# DEFAULT_TIME_STEP; a preparation DEFAULT_PREPARATION_TIME_STEP; a study or specimen that records
+# no rule was made with options.UNRECORDED_TIME_STEP, and is continued with it.
+TIME_STEP_CHOICES = options_module.TIME_STEP_RULES
+DEFAULT_TIME_STEP = options_module.DEFAULT_TIME_STEP
+DEFAULT_PREPARATION_TIME_STEP = "smallest-inertia"
+UNRECORDED_TIME_STEP = options_module.UNRECORDED_TIME_STEP
 
 
 def add_time_step_option(parser, study=False):
     if not study:
-        parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=DEFAULT_TIME_STEP,
-                            help="time step rule (docs/time-step.md): smallest-inertia, or per-axis, the bound of each "
-                                 "body's stiffest mode, a longer step; the preparation's rates are per unit time, so "
-                                 "per-axis takes fewer steps, and makes another packing")
+        parser.add_argument("--time-step", choices=TIME_STEP_CHOICES, default=DEFAULT_PREPARATION_TIME_STEP,
+                            help="time step rule of the preparation (docs/time-step.md): smallest-inertia, a safety "
+                                 "factor 0.5 of the body's smallest sqrt(inertia / stiffness), or per-axis, 0.8 of the "
+                                 "bound of each body's stiffest mode, a longer step; the preparation's rates are per "
+                                 "unit time, so per-axis takes fewer steps, and makes another packing (default: %s)"
+                                 % DEFAULT_PREPARATION_TIME_STEP)
         return
-    parser.add_argument("--time-step", choices=("smallest-inertia", "per-axis"), default=None,
-                        help="time step rule while states are reached (docs/time-step.md; when not given: the rule "
-                             "of the study --out holds, else smallest-inertia). The path rate, servo gain and step "
-                             "counts are per step of smallest-inertia, so per-axis reaches each state at the same "
-                             "rate in time in fewer steps; probes and the static solve take smallest-inertia")
+    parser.add_argument("--time-step", choices=TIME_STEP_CHOICES, default=None,
+                        help="time step rule of the states and the probes (docs/time-step.md): per-axis, 0.8 of the "
+                             "bound of each body's stiffest mode, or smallest-inertia, 0.5 of the body's smallest "
+                             "sqrt(inertia / stiffness), a shorter step. The path rate and the servos' gains and step "
+                             "counts are per step of smallest-inertia, so either rule loads at the same rate in time. "
+                             "When not given: the rule of the study --out holds (%s for one that records none), else "
+                             "%s" % (UNRECORDED_TIME_STEP, DEFAULT_TIME_STEP))
 
 
 def resolve_time_step(o):
@@ -165,14 +175,30 @@ def _continue_held(o, option, held, default, says):
 
 
 def resolve_study_time_step(o):
-    """--time-step of a study when not given: the rule of the study --out holds, else the default."""
+    """--time-step of a study (o.time_step, the states' rule) and the probes' rule (o.probe_time_step).
+
+    Not given: the rules of the study --out holds, each read from its fingerprint (state.time_step,
+    probe.time_step); a study that records none was made with UNRECORDED_TIME_STEP, and goes on
+    with it; no study: DEFAULT_TIME_STEP for both. Said in one line when that is not the default.
+    Given: both rules, and a study made with another is refused by its fingerprint (study_dir.check);
+    but given as the states' rule of a study whose probes took another (a study made before the
+    probes took the study's rule), the probes go on with theirs, said in one line."""
     from . import study_dir
-    if o.time_step is not None:
+    held = None if getattr(o, "force_new", False) else study_dir.time_step_rules_of(o.out)
+    if o.time_step is None:
+        states, probes = held or (None, None)
+        _continue_held(o, "time_step", states, DEFAULT_TIME_STEP, "its study reached its states with the %s rule")
+        o.probe_time_step = probes or DEFAULT_TIME_STEP
+        if probes is not None and probes != o.time_step:
+            print("%s: its study probed its states with the %s time step rule, so this run does too"
+                  % (o.out, probes), flush=True)
         return o.time_step
-    held = None if getattr(o, "force_new", False) else study_dir.state_option_of(o.out, "time_step")
-    held = held if held in ("smallest-inertia", "per-axis") else None
-    return _continue_held(o, "time_step", held, DEFAULT_TIME_STEP,
-                          "its study reached its states with the %s rule")
+    o.probe_time_step = o.time_step
+    if held is not None and held[0] == o.time_step and held[1] != o.time_step:
+        o.probe_time_step = held[1]
+        print("%s: its study probed its states with the %s time step rule, so this run does too"
+              % (o.out, held[1]), flush=True)
+    return o.time_step
 
 
 def resolve_path_rate(o):

@@ -162,7 +162,7 @@ def least_layered_count(assembly, start, seed, phi_start=0.20, **overrides):
     Example:
         >>> from trueaniso import clump_specimen
         >>> clump_specimen.least_layered_count("clump2", 10, seed=1)
-        60
+        52
     """
     layers = recipe(assembly, **overrides)["layers"]
     fits = _layers_check(assembly, seed, phi_start, overrides)
@@ -430,6 +430,8 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
                generation_time=st.place["generation_time"], wall_time=st.elapsed(),
                aspect_ratio=clump_shapes.aspect_ratio(tmpl), template_volume_error=tmpl.volume_error_estimate,
                **{k: (list(v) if isinstance(v, tuple) else v) for k, v in r.items()})
+    if r["stage1_pressure"] >= pressure:  # no free expansion, so no friction of one (as every such file records)
+        log["mu_free"] = None
     if switch < pressure:  # absent, as in every file before the unloading: the switch at the final pressure
         log.update(switch_pressure=switch, unloaded_from=pressure, steps_unloading=st.steps("unloading"))
     if hold_deviator is not None:  # the default's log records none

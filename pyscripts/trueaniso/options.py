@@ -20,6 +20,11 @@ from .refusal import InputError
 __all__ = ["ServoOptions", "ProbeOptions", "PathOptions"]
 
 TIME_STEP_RULES = ("smallest-inertia", "per-axis")  # dem.TIME_STEP_RULES's keys (dem loads the engines)
+# The rule of the states and the probes: per-axis, the same states and moduli as smallest-inertia
+# in 1.6 (spheres) to 3.2 (clump1) times fewer steps (docs/time-step.md).
+DEFAULT_TIME_STEP = "per-axis"
+# The rule of a study or a specimen that records none: every one made before the rule was recorded.
+UNRECORDED_TIME_STEP = "smallest-inertia"
 PATHS = ("true-triaxial", "cross-anisotropic")  # stress_states.PATHS
 AXES = ("x", "y", "z", "yz", "xz", "xy")  # triaxial.AXES
 
@@ -88,8 +93,8 @@ class ServoOptions(_Options):
 
     Every value is checked for its type and range when the object is made; the defaults are the
     paper's protocol, every study's. The rates and step counts are per step of the reference time
-    step rule (smallest-inertia), so that a rule with a longer step loads at the same rate in time
-    (docs/time-step.md). Frozen: ``dataclasses.replace(servo, path_rate=4.0)`` makes another.
+    step rule (smallest-inertia), so that a rule with a longer step (per-axis, the default) loads at
+    the same rate in time (docs/time-step.md). Frozen: ``dataclasses.replace(servo, path_rate=4.0)`` makes another.
 
     Args:
         damping: YADE's local non-viscous damping, in [0, 1).
@@ -109,7 +114,7 @@ class ServoOptions(_Options):
         rolling_friction: eta_r of the rolling resistance.
         gain: the fraction of the stress error closed a step (None: the engine's 0.01).
         feed_forward: True feeds the path's rate forward through the measured tangent stiffness.
-        time_step: the time step rule, "smallest-inertia" or "per-axis".
+        time_step: the time step rule, "per-axis" or "smallest-inertia".
 
     Raises:
         trueaniso.refusal.InputError: a value of the wrong type or out of range, in one line.
@@ -142,7 +147,7 @@ class ServoOptions(_Options):
     rolling_friction: float = 0.0
     gain: float = None
     feed_forward: bool = False
-    time_step: str = "smallest-inertia"
+    time_step: str = DEFAULT_TIME_STEP
 
     def __post_init__(self):
         o = self.OWNER
@@ -205,6 +210,8 @@ class ProbeOptions(_Options):
             only).
         hold_other_strains: True holds the five other strains at zero: the modulus is then the
             stiffness C_kk, not 1/S_kk (docs/cell.md).
+        time_step: the time step rule, "per-axis" or "smallest-inertia". The gain and the step
+            counts are per step of smallest-inertia, so either rule probes over the same time.
 
     Raises:
         trueaniso.refusal.InputError: a value of the wrong type or out of range, in one line.
@@ -231,6 +238,7 @@ class ProbeOptions(_Options):
     max_steps: int = 2_000_000
     control_shear: bool = True
     hold_other_strains: bool = False
+    time_step: str = DEFAULT_TIME_STEP
 
     def __post_init__(self):
         o = self.OWNER
@@ -246,6 +254,8 @@ class ProbeOptions(_Options):
         for name in ("settle_steps", "ramp_steps"):
             put(self, name, _integer(o, name, getattr(self, name), 0))
         put(self, "max_steps", _integer(o, "max_steps", self.max_steps, 1))
+        if self.time_step not in TIME_STEP_RULES:
+            _refuse(o, "time_step", self.time_step, "one of %s" % ", ".join(TIME_STEP_RULES))
 
     def fingerprint(self):
         """What a study's metadata.json records of it (fingerprint.probe): gamma, rotations,

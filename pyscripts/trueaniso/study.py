@@ -24,7 +24,7 @@ import numpy as np
 
 from . import (dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_checks, study_dir,
                triaxial, validate)
-from .options import PathOptions, ProbeOptions, ServoOptions, flag
+from .options import UNRECORDED_TIME_STEP, PathOptions, ProbeOptions, ServoOptions, flag
 from .progress import EVERY, Progress, chunk_for, say
 from .refusal import InputError
 
@@ -212,9 +212,9 @@ def _study(specimen_path, states, path_o, servo, probe, recipe, host="trueaniso"
         raise InputError("%s is a preparation checkpoint, a specimen not yet made; finish it by running its "
                          "preparation again (the same prepare_specimen.py or run_study.py command)" % specimen_path)
     summary = _summary(specimen_path, spec_meta)
-    prepared_with = (spec_meta.get("parameters") or {}).get("time_step", dem.REFERENCE_TIME_STEP)
+    prepared_with = (spec_meta.get("parameters") or {}).get("time_step", UNRECORDED_TIME_STEP)
     states_with = servo.time_step
-    if prepared_with not in (states_with, dem.REFERENCE_TIME_STEP):
+    if prepared_with not in (states_with, UNRECORDED_TIME_STEP):
         # The rule is in the study's fingerprint (state.time_step), the specimen's in its file: two
         # choices. A specimen prepared with the longer step is another packing, not the same one
         # made faster, and a study that does not take that rule may be a surprise: said.
@@ -406,7 +406,7 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
             ``restrain_rotations``, ``skip_detection``, ``damping`` (the servo's and the probes'),
             ``state_options`` (fields of ServoOptions), ``probe_options`` (fields of ProbeOptions).
         host: "trueaniso" (our stepper) or "yade" (YADE's loop with the plugin's classes, under
-            yade-double: `trueaniso.yade_host`, docs/yade-peer.md section 9); "yade" takes no executor.
+            yade-double: `trueaniso.yade_host`, docs/yade-peer.md section 8); "yade" takes no executor.
 
     Returns:
         list: the complete rows of probes.csv after the run, one dict of text per state and probe
@@ -440,7 +440,9 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
                   versions=provenance.versions(),
                   specimen=dict(path=os.path.abspath(specimen_path), sha256=spec_meta["sha256"],
                                 seed=spec_meta["seed"], summary=spec_meta.get("summary"),
-                                material=spec_meta.get("material")))
+                                material=spec_meta.get("material"),
+                                # its preparation's rule (a file that records none: smallest-inertia)
+                                time_step=(spec_meta.get("parameters") or {}).get("time_step", UNRECORDED_TIME_STEP)))
     made_as = (spec_meta.get("parameters") or {}).get("state")
     if made_as is not None:  # allowed (a study may start from a state), but said: its states start stressed
         log("note: %s is the checkpoint of state %s of a study, not a specimen at its preparation pressure; "

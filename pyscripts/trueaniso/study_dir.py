@@ -40,6 +40,7 @@ LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code
           "state.friction": "the loading friction (--mu; state.friction)",
           "state.path_rate": "the path rate (--path-rate; state.path_rate)",
           "state.time_step": "the time step rule of the states (--time-step; state.time_step)",
+          "probe.time_step": "the time step rule of the probes (--time-step; probe.time_step)",
           "state.rolling_stiffness": "the rolling stiffness (--rolling-stiffness; state.rolling_stiffness)",
           "state.rolling_friction": "the rolling friction (--rolling-friction; state.rolling_friction)",
           "probe.damping": "the damping (--damping; probe.damping)",
@@ -185,6 +186,23 @@ def state_option_of(out, name):
         return None
 
 
+def time_step_rules_of(out):
+    """(the states' rule, the probes' rule) of the study `out` holds, or None (no study, or none
+    readable: the checks that follow say what is wrong with it). A study that records no rule
+    (fingerprint state.time_step, probe.time_step) was made with options.UNRECORDED_TIME_STEP:
+    its states before the rule was recorded, its probes before they took the study's rule."""
+    from .options import TIME_STEP_RULES, UNRECORDED_TIME_STEP
+    try:
+        fp = read_metadata(out)["fingerprint"]
+        state, probe = fp["state"], fp["probe"]
+    except (StudyMismatch, OSError, TypeError, KeyError):
+        return None
+    if not (isinstance(state, dict) and isinstance(probe, dict)):
+        return None
+    rules = tuple(part.get("time_step", UNRECORDED_TIME_STEP) for part in (state, probe))
+    return rules if all(r in TIME_STEP_RULES for r in rules) else None
+
+
 def path_rate_of(out):
     """The servo's path rate (Pa per step) of the study `out` holds, or None (no study, none
     readable, or one from before the rate was an option: the checks that follow say what is wrong)."""
@@ -267,6 +285,17 @@ def require_layout(out, meta):
                             "proved to match this run; %s" % (out, _way_out(out)))
 
 
+def with_unrecorded_rules(fingerprint):
+    """A study's fingerprint with the time step rules it does not record filled in: the rule it was
+    made with (options.UNRECORDED_TIME_STEP), so that the rule continued is no difference."""
+    from .options import UNRECORDED_TIME_STEP
+    out = dict(fingerprint)
+    for part in ("state", "probe"):
+        if isinstance(out.get(part), dict) and "time_step" not in out[part]:
+            out[part] = dict(out[part], time_step=UNRECORDED_TIME_STEP)
+    return out
+
+
 def check(out, fingerprint, states):
     """The existing metadata when the directory holds this study (or None when it holds none);
     raises StudyMismatch naming the first difference."""
@@ -282,7 +311,7 @@ def check(out, fingerprint, states):
                                 % (out, ", ".join(others), METADATA, _way_out(out)))
         return None
     require_layout(out, meta)
-    diff = differences(meta["fingerprint"], _normal(fingerprint))
+    diff = differences(with_unrecorded_rules(meta["fingerprint"]), _normal(fingerprint))
     if diff:
         field, there, here = diff[0]
         more = " (and %d more difference%s)" % (len(diff) - 1, "s" if len(diff) > 2 else "") if len(diff) > 1 else ""

@@ -115,4 +115,5 @@ def objects(o, path="true-triaxial"):
             options.ServoOptions(damping=o.damping, friction=o.mu, path_rate=o.path_rate, time_step=o.time_step,
                                  rolling_stiffness=o.rolling_stiffness, rolling_friction=o.rolling_friction),
             options.ProbeOptions(gamma=o.gamma, damping=o.damping, restrain_rotations=o.rotations == "restrained",
-                                 skip_detection=o.skip_detection))
+                                 skip_detection=o.skip_detection,
+                                 time_step=getattr(o, "probe_time_step", None) or o.time_step))

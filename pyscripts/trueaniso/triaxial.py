@@ -339,7 +339,7 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
     p.settle_steps, p.ramp_steps, p.max_steps = o.settle_steps, o.ramp_steps, o.max_steps
     # The cap only matters in the relax stage; probes move strains of ~1e-6.
     p.max_strain_rate = 10.0
-    chain = dem.Chain(scene, damping=damping, controllers=[p])
+    chain = dem.Chain(scene, damping=damping, controllers=[p], rule=o.time_step)
     dem.refresh(scene)
     check_held_state(scene, hold)
     t0 = time.time()

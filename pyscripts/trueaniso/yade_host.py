@@ -13,7 +13,9 @@ YADE's time step is fixed for each piece of work: the step of the study's rule (
 on the scene as it starts (TimeStepper's bound, the one our stepper takes at its first step; a
 state's strains of ~1e-3 change it by a few per cent, inside the rule's safety factor). The servo's
 per-step settings are per step of the reference rule, so a longer rule passes its ratio as the
-servo's stepScale, as our stepper does.
+servo's stepScale, as our stepper does. The plugin's StressProbe takes no step scale: the probe's
+gain and step counts are given to it already scaled, as our StressProbe scales them
+(CellServoLaw::perStep, stepsFor), which for a fixed step is the same probe.
 
 Runs only inside yade-double with the plugin loaded (YADE_PREFIX=<repository>/build/yade-prefix);
 `problem()` says in one line why not.
@@ -105,7 +107,7 @@ def _d50(scene):
 def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, tolerance=100.0, unbalanced=1e-4,
                 path_rate=2.0, max_strain=0.05, max_steps=3_000_000, stall_steps=100_000, hold_steps=200_000,
                 friction=0.5, chunk=5000, progress=None, rolling_stiffness=0.0, rolling_friction=0.0,
-                time_step="smallest-inertia", **others):
+                time_step=dem.REFERENCE_TIME_STEP, **others):
     """triaxial.reach_state in YADE: returns (the scene at the state, the same info dict). Raises
     StateNotReached as it does."""
     from yade.wrapper import TrueTriaxialServo
@@ -135,6 +137,9 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     from . import yade_bridge
     held, _ = yade_bridge.scene_from_yade(O)
     held.velocity_gradient = np.zeros((3, 3))
+    # the checkpoint's step is the rule's, its unit the reference rule's step (as our stepper's Chain
+    # keeps them): a study under another rule than the reference checks its checkpoints against both
+    held.reference_dt = dt / scale
     dem.refresh(held)
     info = dict(status="reached", steps=int(servo.steps), wall_time=wall, stress=list(servo.stress),
                 unbalanced=float(servo.unbalanced), message=servo.message, overshoot=list(servo.overshoot),
@@ -144,9 +149,15 @@ def reach_state(scene, b, sigma_z, p=100e3, damping=0.4, inertial_number=1e-3, t
     return held, info
 
 
+def steps_for(reference_steps, scale):
+    """A count of reference steps in steps `scale` reference steps long (engines' stepsFor: the
+    same time, at least one step; C's lround, halves away from zero)."""
+    return reference_steps if scale == 1.0 else max(1, int(math.floor(reference_steps / scale + 0.5)))
+
+
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False, skip_detection=False,
           damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5, settle_steps=100, ramp_steps=300,
-          max_steps=2_000_000, chunk=500, progress=None, **others):
+          max_steps=2_000_000, chunk=500, progress=None, time_step=dem.REFERENCE_TIME_STEP, **others):
     """triaxial.probe in YADE's loop (StressProbe): the same result dict. The scene is not changed."""
     from yade.wrapper import StressProbe
     _check_options(others, UNSUPPORTED_PROBE, "StressProbe")
@@ -156,12 +167,14 @@ def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotatio
     hold6 = np.zeros(6)
     hold = np.asarray(hold, dtype=float)
     hold6[:len(hold)] = hold
-    dt, _ = _time_step(scene, dem.REFERENCE_TIME_STEP)  # probes take the reference rule, as ours
+    dt, scale = _time_step(scene, time_step)
     O = _into_yade(scene, damping, dt)
     p = StressProbe(axis=triaxial.AXES[axis], sign=sign, gammaTarget=gamma, increment=increment,
-                    restrainRotations=bool(restrain_rotations), holdStress=list(hold6), gain=gain,
-                    relativeTolerance=relative_tolerance, unbalancedTolerance=unbalanced, settleSteps=settle_steps,
-                    rampSteps=ramp_steps, maxSteps=max_steps, restoreState=False, label="trueanisoProbe")
+                    restrainRotations=bool(restrain_rotations), holdStress=list(hold6),
+                    gain=gain if scale == 1.0 else min(1.0, gain * scale),
+                    relativeTolerance=relative_tolerance, unbalancedTolerance=unbalanced,
+                    settleSteps=steps_for(settle_steps, scale), rampSteps=steps_for(ramp_steps, scale),
+                    maxSteps=steps_for(max_steps, scale), restoreState=False, label="trueanisoProbe")
     _insert(O, p)
     collider = [e for e in O.engines if type(e).__name__ == "InsertionSortCollider"][0]
     collider.dead = bool(skip_detection)

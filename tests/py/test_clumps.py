@@ -459,9 +459,10 @@ def test_recipe_variants_are_named_settings_that_prepare_specimen_takes(tmp_path
         for name, settings in named.items():
             assert settings and set(settings) <= allowed, (assembly, name)
     v = clump_recipes.variant("clump2", "frictionless")
-    assert v == {"mu_prep": 0.0}
+    frictionless = {"mu_prep": 0.0, "stage1_pressure": 100e3, "orientation_weights": (1.0, 1.0, 0.5)}
+    assert v == frictionless
     v["mu_prep"] = 1.0
-    assert clump_recipes.variant("clump2", "frictionless") == {"mu_prep": 0.0}
+    assert clump_recipes.variant("clump2", "frictionless") == frictionless
     with pytest.raises(ValueError, match="clump1 has no recipe variant 'frictionless'"):
         clump_recipes.variant("clump1", "frictionless")
     with pytest.raises(ValueError, match="unknown assembly 'clump9'"):
@@ -507,3 +508,64 @@ def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
     assert ratio == pytest.approx(309.8 / 387.0, abs=2e-4)  # the log's rounding to 0.1 MPa
     runs = {(label, seed): probes for label, seed, _, probes, _, _ in crv.state21_runs(data)}
     assert runs[("frictionless", 1)][0] == pytest.approx(ratio, rel=1e-12)
+
+
+def test_the_default_clump2_keeps_its_void_ratio_along_a_path():
+    """The paper's void ratios stay approximately constant along Table C1. The default clump2 recipe
+    lets its clumps turn while the packing densifies (rotations blocked to 5 kPa, then free at
+    friction 0.25), and keeps its e; grown with rotations blocked to 100 kPa (the variant
+    grown-to-target, the earlier default) the packing compacts once its clumps may turn. State 21
+    (b = 0.5, sigma_z 140 kPa), reached straight from a 200-clump specimen (per-axis step): e changes
+    by -8e-5 and -4.0e-4 (seeds 1, 2) with the default, by -0.021 and -0.027 with grown-to-target
+    (1000 clumps: 1e-4 over all 39 states, against 0.018 at 4000 clumps for the earlier default,
+    docs/studies/clumps.md 5d). The bound is the goal of 0.005 along the paths."""
+    from trueaniso import clump_specimen
+    scene, log = clump_specimen.prepare_clumps("clump2", 200, seed=1)
+    assert (log["stage1_pressure"], log["mu_free"]) == (5e3, 0.25)
+    before = engines.void_ratio(scene)
+    triaxial.reach_state(scene, 0.5, 140e3, time_step="per-axis")
+    assert abs(engines.void_ratio(scene) - before) < 0.005, (before, engines.void_ratio(scene))
+
+
+def test_clump2_recipe_screen_table_is_that_of_its_data(tmp_path):
+    """docs/studies/clumps.md's table of the clump2 recipes along the paths (5d) is what
+    clump2_recipe_screen.py --doc writes from docs/data/clump2-recipes, and the default's row says
+    what its probes.csv holds: e within 1e-4 of state 1's over all 39 states (read here with the
+    csv module)."""
+    import csv
+    sys.path.insert(0, os.path.join(REPO, "bench"))
+    import clump2_recipe_screen as screen
+    data = os.path.join(REPO, "docs", "data", "clump2-recipes")
+    doc = tmp_path / "clumps.md"
+    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
+    import _bench
+    _bench.replace_block(str(doc), "clump2-recipes", screen.table(data, screen.ROWS))
+    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    with open(os.path.join(data, "default-1000-s1", "probes.csv")) as f:
+        e = {r["state"]: float(r["void_ratio"]) for r in csv.DictReader(f)}
+    assert len(e) == 39 and max(abs(v - e["1"]) for v in e.values()) < 1e-4
+
+
+def test_a_kept_clump2_specimen_of_the_earlier_default_is_not_the_default(tmp_path):
+    """prepare_specimen.py keeps an existing --out only when it is what the run would make: a clump2
+    file of the earlier default (rotations blocked to 100 kPa, w 0.5, no free expansion) records no
+    recipe name, as the default's files do, and is told apart by the recipe settings it records;
+    the same file is what --recipe grown-to-target makes."""
+    sys.path.insert(0, os.path.join(REPO, "pyscripts"))
+    import prepare_specimen
+    from trueaniso import clump_recipes
+    out = str(tmp_path / "s.npz")
+    old = dict(clump_recipes.RECIPES["clump2"], orientation_weights=[1.0, 1.0, 0.5], stage1_pressure=100e3,
+               mu_free=None)
+    meta = dict(seed=1, parameters=dict(old, assembly="clump2", n=1000, seed=1, pressure=100e3, inertial_number=1e-2,
+                                        unbalanced=1e-3, gain=0.002))
+
+    def differences(*args):
+        o = prepare_specimen.options(["--assembly", "clump2", "--n", "1000", "--out", out, *args])
+        prepare_specimen.validate(o)
+        return prepare_specimen.differences(o, meta)
+    said = differences()
+    assert any(d.startswith("stage1_pressure: 100000.0 there, 5000.0 here") for d in said), said
+    assert any(d.startswith("orientation_weights:") for d in said) and any(d.startswith("mu_free:") for d in said)
+    assert differences("--recipe", "grown-to-target") == ["recipe: \"the assembly's default\" there, "
+                                                          "\"grown-to-target\" here"]

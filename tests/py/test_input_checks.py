@@ -35,8 +35,8 @@ TOO_MANY = 4 * len(os.sched_getaffinity(0)) + 1  # the cap: 4 x the cores (truea
     (["--threads", str(TOO_MANY)], ["--threads", "4 x the cores"]),
     (["--n", "1000000000"], ["memory", "this machine allows", "MemTotal"]),  # else it runs until memory is gone
     # refused before the estimate line, with the least count that fits
-    (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers",
-                                                            "--n 124 is the least that fits with this seed"]),
+    (["--assembly", "clump2", "--n", "112", "--seed", "7"], ["112 clumps in 4 stacked layers",
+                                                            "--n 116 is the least that fits with this seed"]),
 ])
 def test_prepare_specimen_refuses_before_work(tmp_path, args, words):
     out = tmp_path / "s.npz"
@@ -46,7 +46,7 @@ def test_prepare_specimen_refuses_before_work(tmp_path, args, words):
 
 
 @pytest.mark.parametrize("args", [["--n", "28"], ["--assembly", "clump1", "--n", "98"],
-                                  ["--assembly", "clump2", "--n", "80"], ["--assembly", "clump2", "--n", "124", "--seed", "3"]])
+                                  ["--assembly", "clump2", "--n", "80"], ["--assembly", "clump2", "--n", "116", "--seed", "7"]])
 def test_the_least_count_said_is_taken(tmp_path, args):
     """The count the refusal above names passes the cell-size check: a directory as --out, checked
     after it, is what refuses."""
@@ -143,8 +143,8 @@ def test_run_study_out_must_be_a_writable_directory(blocker):
     (["--ids", ""], ["--ids: no state named"]),
     (["--ids", "1,1"], ["--ids: state 1 is given twice"]),
     (["--path-rate", "-2"], ["--path-rate", "not > 0"]),
-    (["--assembly", "clump2", "--n", "120", "--seed", "3"], ["120 clumps in 4 stacked layers",
-                                                            "--n 124 is the least that fits with this seed"]),
+    (["--assembly", "clump2", "--n", "112", "--seed", "7"], ["112 clumps in 4 stacked layers",
+                                                            "--n 116 is the least that fits with this seed"]),
     (["--threads", "1000"], ["--threads", "at most"]),
     (["--out", "/sys/trueaniso-study"], ["cannot create files in /sys"]),
 ])

@@ -80,16 +80,22 @@ def test_objects_and_keywords_are_one_setting():
 
 
 def test_a_committed_study_s_fingerprint_is_made_again():
-    """docs/data/b1-clump2-4000-s1 was run by the keywords (per-axis states, rotations restrained):
-    its recorded state and probe settings are the objects' fingerprint of the same options."""
-    with open(os.path.join(REPO, "docs", "data", "b1-clump2-4000-s1", "metadata.json")) as f:
-        fp = json.load(f)["fingerprint"]
+    """docs/data/b1-clump2-4000-s1 was run by the keywords (per-axis states, rotations restrained),
+    its probes at smallest-inertia, which it does not record (a study that records no rule was made
+    with it): its recorded state and probe settings, with that rule, are the objects' fingerprint
+    of the same options."""
+    from trueaniso import study_dir
+    directory = os.path.join(REPO, "docs", "data", "b1-clump2-4000-s1")
+    assert study_dir.time_step_rules_of(directory) == ("per-axis", "smallest-inertia")
+    with open(os.path.join(directory, "metadata.json")) as f:
+        fp = study_dir.with_unrecorded_rules(json.load(f)["fingerprint"])
     servo = ServoOptions(time_step="per-axis")
-    probe = ProbeOptions(restrain_rotations=True)
+    probe = ProbeOptions(restrain_rotations=True, time_step="smallest-inertia")
     assert dict(damping=servo.damping, **servo.fingerprint()) == fp["state"]
     assert probe.fingerprint() == fp["probe"]
     meta = specimen_file.read(SPECIMEN)[1]
-    old = study.fingerprint(meta, "sphere", 1e-6, True, False, 0.4, dict(time_step="per-axis"))
+    old = study.fingerprint(meta, "sphere", 1e-6, True, False, 0.4, dict(time_step="per-axis"),
+                            dict(time_step="smallest-inertia"))
     new = study.study_fingerprint(meta, "sphere", PathOptions(), servo, probe)
     assert old == new and old["state"] == fp["state"] and old["probe"] == fp["probe"]
     # the whole load at once is recorded as text (metadata.json stays standard JSON)

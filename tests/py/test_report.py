@@ -501,15 +501,16 @@ def test_the_study_line_names_the_time_step_rule(small_table, tmp_path, text_onl
 
 def test_the_study_line_names_the_probe_settings(small_table, tmp_path, text_only):
     """A study probed with --skip-detection or rotations restrained does not read like any other in
-    its report: the probes' strain, rotations and detection are said."""
+    its report: the probes' strain, rotations, detection and time step rule are said."""
     study = tmp_path / "study"
     study.mkdir()
     shutil.copy(small_table, study / "probes.csv")
     for probe, words in ((dict(gamma=1e-6, rotations="free", detection="on"),
-                          "probes of strain 1e-06, rotations free, contact detection on."),
-                         (dict(gamma=2e-6, rotations="restrained", detection="off"),
+                          "probes of strain 1e-06, rotations free, contact detection on, time step "
+                          "smallest-inertia."),  # a study that records no rule was made with it
+                         (dict(gamma=2e-6, rotations="restrained", detection="off", time_step="per-axis"),
                           "probes of strain 2e-06, rotations restrained (--rotations restrained), "
-                          "contact detection off (--skip-detection).")):
+                          "contact detection off (--skip-detection), time step per-axis.")):
         (study / "metadata.json").write_text(json.dumps(dict(fingerprint=dict(state={}, probe=probe))))
         path, _ = report.build(str(study), str(tmp_path / ("rep" + probe["detection"])), log=lambda m: None)
         assert words in open(path).read()

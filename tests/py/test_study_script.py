@@ -218,3 +218,36 @@ def test_run_study_takes_the_options_of_run_states(finished, small_specimen, tmp
     proc = run("--specimen", str(small_specimen), "--ids", "1,2", "--probes", "zx", "--rotations", "restrained",
                "--out", str(out), script=script)
     one_line_error(proc, "another study", "rotations")
+
+
+def test_run_study_does_not_keep_a_specimen_of_another_recipe(tmp_path):
+    """A specimen in run_study.py's --out made by another recipe than the default one of this code
+    (the committed spheres-150-s4: the variant grown-to-target, switched at 100 kPa; the default
+    unloads to 20 kPa) is refused naming the setting, not kept for a study of the default recipe."""
+    out = tmp_path / "W"
+    out.mkdir()
+    shutil.copyfile(os.path.join(REPO, "tests", "data", "spheres-150-s4.npz"), out / "specimen.npz")
+    proc = run("--n", "150", "--seed", "4", "--ids", "1", "--out", str(out),
+               script=os.path.join(REPO, "pyscripts", "run_study.py"), timeout=120)
+    one_line_error(proc, "another recipe", "switch_pressure: 100000.0 there, 20000.0 here")
+    assert not (out / "probes.csv").exists()
+
+
+def test_run_study_keys_its_checkpoint_and_fingerprint_on_the_recipe(monkeypatch):
+    """The preparation's checkpoint and the study's fingerprint are keyed on the recipe's name and
+    settings: a default recipe changed (here clump2's mu_prep) is another key, so a checkpoint or a
+    study of the old one is refused (prep_checkpoint compares the key, study_dir the fingerprint)."""
+    import types
+    sys.path.insert(0, os.path.join(REPO, "pyscripts"))
+    import run_study
+    from trueaniso import clump_recipes, study_dir
+    o = types.SimpleNamespace(assembly="clump2", n=1000, seed=1)
+    before = run_study.recipe(o)
+    assert before["recipe"] == "default" and before["settings"]["mu_prep"] == clump_recipes.RECIPES["clump2"]["mu_prep"]
+    monkeypatch.setitem(clump_recipes.RECIPES, "clump2", dict(clump_recipes.RECIPES["clump2"], mu_prep=0.3))
+    after = run_study.recipe(o)
+    assert study_dir.said(study_dir.differences(before, after))[0].startswith("settings.mu_prep:")
+    assert "another recipe" in run_study.recipe_said(before, after)
+    assert run_study.recipe_said(before, before) is None
+    assert "before run_study.py recorded its recipe" in run_study.recipe_said(dict(assembly="clump2", n=1000, seed=1),
+                                                                             after)

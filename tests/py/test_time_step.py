@@ -72,22 +72,21 @@ def test_a_packing_stepped_by_the_per_axis_rule_keeps_its_energy(path, request):
     assert np.isfinite(e1) and -5 * k0 < e1 - e0 < k0
 
 
-def test_a_study_on_a_per_axis_specimen_says_its_states_take_the_default_rule(specimen_150, tmp_path):
-    """A specimen's rule and a study's are two choices (docs/time-step.md): a study run without
-    --time-step takes the default rule, and a specimen prepared with the other one is named in a
-    note, not taken silently."""
+def test_a_study_on_a_per_axis_specimen_says_its_states_take_another_rule(specimen_150, tmp_path):
+    """A specimen's rule and a study's are two choices (docs/time-step.md): a specimen prepared with
+    another rule than the study's states take is named in a note, not taken silently."""
     from conftest import run_script
     scene, meta = specimen_file.load(str(specimen_150))
     per_axis = tmp_path / "per-axis.npz"
     specimen_file.save(str(per_axis), scene, seed=meta.get("seed"),
                        parameters=dict(meta.get("parameters") or {}, time_step="per-axis"), summary=meta.get("summary"))
     proc = run_script("run_states.py", "--specimen", per_axis, "--ids", "1", "--probes", "z", "--threads", "1",
-                      "--out", tmp_path / "study")
+                      "--time-step", "smallest-inertia", "--out", tmp_path / "study")
     assert proc.returncode == 0, proc.stderr[-2000:]
     notes = [x for x in proc.stdout.splitlines() if x.startswith("note:")]
     assert len(notes) == 1 and "per-axis" in notes[0] and "smallest-inertia" in notes[0], proc.stdout
     state, _ = specimen_file.load(str(tmp_path / "study" / "states" / "1.npz"))
-    cap = dem.reference_time_step(state)  # the default rule's cap, which binds for spheres at 100 kPa
+    cap = dem.reference_time_step(state, safety=0.5)  # smallest-inertia's cap, which binds for spheres at 100 kPa
     assert state.dt <= cap * (1 + 1e-12)
 
 
@@ -114,6 +113,24 @@ def test_a_longer_step_reaches_the_same_state_in_fewer_steps(specimen_150, monke
     assert zm_a == pytest.approx(zm_b, abs=0.01)
 
 
+def test_the_default_study_takes_the_per_axis_rule_for_its_states_and_probes(specimen_150, tmp_path):
+    """The default (docs/time-step.md): a study run without --time-step reaches its states and runs
+    its probes with the per-axis step, and records both rules in its fingerprint."""
+    from conftest import run_script
+    from trueaniso import study_dir
+    out = tmp_path / "study"
+    proc = run_script("run_states.py", "--specimen", specimen_150, "--ids", "1", "--probes", "z", "--threads", "1",
+                      "--out", out)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "--time-step" not in proc.stdout, proc.stdout  # nothing to say: the default, asked by nobody
+    meta = study_dir.read_metadata(str(out))
+    fp = meta["fingerprint"]
+    assert (fp["state"]["time_step"], fp["probe"]["time_step"]) == ("per-axis", "per-axis")
+    assert meta["specimen"]["time_step"] == "smallest-inertia"  # the fixture's preparation (it records none)
+    state, meta = specimen_file.load(str(out / "states" / "1.npz"))
+    assert state.step_scale == pytest.approx(dem.TIME_STEP_RULES["per-axis"][1] / 0.5, rel=1e-9)  # the cap binds
+
+
 def test_a_study_keeps_its_time_step_rule(specimen_150, tmp_path):
     """--time-step is part of a study's fingerprint: a rerun without it continues with the study's
     rule (and says so), one with the other rule is refused naming the option; the checkpoint holds
@@ -122,18 +139,94 @@ def test_a_study_keeps_its_time_step_rule(specimen_150, tmp_path):
     from trueaniso import study_dir
     out = tmp_path / "study"
     common = ("--specimen", specimen_150, "--probes", "z", "--threads", "1", "--out", out)
-    proc = run_script("run_states.py", "--ids", "1", "--time-step", "per-axis", *common)
+    proc = run_script("run_states.py", "--ids", "1", "--time-step", "smallest-inertia", *common)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert not [x for x in proc.stdout.splitlines() if x.startswith("note:")], proc.stdout
-    assert study_dir.read_metadata(str(out))["fingerprint"]["state"]["time_step"] == "per-axis"
+    fp = study_dir.read_metadata(str(out))["fingerprint"]
+    assert (fp["state"]["time_step"], fp["probe"]["time_step"]) == ("smallest-inertia", "smallest-inertia")
     state, meta = specimen_file.load(str(out / "states" / "1.npz"))
-    assert meta["reference_dt"] < meta["dt"] and state.reference_dt == meta["reference_dt"]
-    assert state.step_scale == pytest.approx(dem.TIME_STEP_RULES["per-axis"][1] / 0.5, rel=1e-9)  # the cap binds
+    assert "reference_dt" not in meta and state.step_scale == 1.0
     again = run_script("run_states.py", "--ids", "1,2", *common)
     assert again.returncode == 0, again.stderr[-2000:]
-    assert "--time-step not given" in again.stdout and "per-axis" in again.stdout
-    other = run_script("run_states.py", "--ids", "1,2", "--time-step", "smallest-inertia", *common)
+    said = [x for x in again.stdout.splitlines() if "--time-step not given" in x]
+    assert len(said) == 1 and "smallest-inertia" in said[0], again.stdout
+    other = run_script("run_states.py", "--ids", "1,2", "--time-step", "per-axis", *common)
     assert other.returncode != 0 and "--time-step" in other.stderr, other.stderr[-2000:]
+    assert len(other.stderr.strip().splitlines()) == 1, other.stderr
+
+
+def test_a_study_that_records_no_rule_goes_on_with_smallest_inertia(specimen_150, tmp_path):
+    """A study made before the rule was recorded (no state.time_step, no probe.time_step in its
+    fingerprint) was made with smallest-inertia: a rerun without --time-step continues it with that
+    rule, saying so in one line, and one that asks per-axis is refused in one line."""
+    import json
+    from conftest import run_script
+    from trueaniso import study_dir
+    out = tmp_path / "study"
+    common = ("--specimen", specimen_150, "--probes", "z", "--threads", "1", "--out", out)
+    proc = run_script("run_states.py", "--ids", "1", "--time-step", "smallest-inertia", *common)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    path = out / "metadata.json"
+    meta = json.loads(path.read_text())
+    del meta["fingerprint"]["state"]["time_step"], meta["fingerprint"]["probe"]["time_step"]
+    path.write_text(json.dumps(meta))
+    assert study_dir.time_step_rules_of(str(out)) == ("smallest-inertia", "smallest-inertia")
+    again = run_script("run_states.py", "--ids", "1,2", *common)
+    assert again.returncode == 0, again.stderr[-2000:]
+    said = [x for x in again.stdout.splitlines() if "time step" in x or "--time-step" in x]
+    assert len(said) == 1 and "smallest-inertia" in said[0], again.stdout
+    fp = study_dir.read_metadata(str(out))["fingerprint"]
+    assert (fp["state"]["time_step"], fp["probe"]["time_step"]) == ("smallest-inertia", "smallest-inertia")
+    path.write_text(json.dumps(meta))  # the old fingerprint again
+    other = run_script("run_states.py", "--ids", "1,2", "--time-step", "per-axis", *common)
+    assert other.returncode != 0 and "--time-step" in other.stderr, other.stderr[-2000:]
+    assert len(other.stderr.strip().splitlines()) == 1, other.stderr
+
+
+def test_a_study_whose_probes_took_another_rule_goes_on_with_it(specimen_150, tmp_path):
+    """A study whose states took per-axis and whose probes took smallest-inertia (made before the
+    probes took the study's rule: no probe.time_step) continues so, said in one line, with or
+    without --time-step per-axis."""
+    import json
+    from conftest import run_script
+    from trueaniso import study_dir
+    out = tmp_path / "study"
+    common = ("--specimen", specimen_150, "--probes", "z", "--threads", "1", "--out", out)
+    assert run_script("run_states.py", "--ids", "1", "--time-step", "smallest-inertia", *common).returncode == 0
+    path = out / "metadata.json"
+    meta = json.loads(path.read_text())
+    meta["fingerprint"]["state"]["time_step"] = "per-axis"
+    del meta["fingerprint"]["probe"]["time_step"]
+    path.write_text(json.dumps(meta))
+    (out / "states" / "1.npz").unlink()  # reached again under the study's states' rule
+    for given in ((), ("--time-step", "per-axis")):
+        again = run_script("run_states.py", "--ids", "1,2", *given, *common)
+        assert again.returncode == 0, again.stderr[-2000:]
+        assert "probed its states with the smallest-inertia" in again.stdout, again.stdout
+        fp = study_dir.read_metadata(str(out))["fingerprint"]
+        assert (fp["state"]["time_step"], fp["probe"]["time_step"]) == ("per-axis", "smallest-inertia")
+
+
+@pytest.mark.parametrize("path", ["specimen_150", DIMERS])
+def test_a_probe_at_the_per_axis_rule_gives_the_modulus_of_smallest_inertia(path, request):
+    """The probe's gain and step counts are per reference step (StressProbe::stepScale), so under
+    the per-axis rule it probes over the same time in fewer steps and gives the same E and nu:
+    measured 150 spheres, z: dE/E 7.6e-6, dnu 3e-6, 960 -> 601 steps; the bounds are the default
+    probe's own error (6e-4 in E, 1.1e-4 in nu, docs/speed-vs-error.md). Fewer steps by more than
+    1.3: a probe that took the reference step (its settings per step of its own) would take as
+    many."""
+    from trueaniso import triaxial
+    if path == "specimen_150":
+        path = str(request.getfixturevalue("specimen_150"))
+    r = {}
+    for rule in ("smallest-inertia", "per-axis"):
+        scene, _ = specimen_file.load(path)
+        hold = triaxial.stress_as_held(scene)
+        r[rule] = triaxial.probe(scene, hold, "z", time_step=rule)
+    ref, fast = r["smallest-inertia"], r["per-axis"]
+    assert fast["E"] == pytest.approx(ref["E"], rel=6e-4)
+    assert abs(fast["nu_zx"] - ref["nu_zx"]) < 1.1e-4 and abs(fast["nu_zy"] - ref["nu_zy"]) < 1.1e-4
+    assert ref["steps"] / fast["steps"] > 1.3, (ref["steps"], fast["steps"])
 
 
 def test_a_specimen_file_keeps_a_reference_step_that_is_not_its_step(specimen_150, tmp_path):
@@ -148,3 +241,15 @@ def test_a_specimen_file_keeps_a_reference_step_that_is_not_its_step(specimen_15
     again, meta2 = specimen_file.load(str(path))
     assert meta2["reference_dt"] == again.reference_dt == scene.reference_dt < again.dt
     assert again.step_scale == scene.dt / scene.reference_dt > 1.5
+
+
+def test_the_yade_hosts_probe_counts_as_the_engines_probe():
+    """--host yade gives the plugin's StressProbe (no step scale) its counts already scaled, as the
+    engines' stepsFor does: the same time, at least one step, halves rounded away from zero (C's
+    lround; Python's round would give 62 for 62.5)."""
+    from trueaniso import yade_host
+    assert yade_host.steps_for(300, 1.0) == 300
+    assert yade_host.steps_for(300, 1.6) == 188  # 187.5
+    assert yade_host.steps_for(100, 1.6) == 63  # 62.5
+    assert yade_host.steps_for(2_000_000, 1.6) == 1_250_000
+    assert yade_host.steps_for(1, 5.0) == 1

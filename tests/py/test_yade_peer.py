@@ -131,7 +131,7 @@ def test_local_damping_matches_yade_newton_integrator(in_yade):
 
 
 def test_adapter_probe_workflow_restores_with_yade_tools(in_yade):
-    """docs/yade-peer.md's recipe: O.saveTmp, mu = 1e23, probe z through the adapter, O.loadTmp,
+    """docs/howto/yade-bridge.md's recipe: O.saveTmp, mu = 1e23, probe z through the adapter, O.loadTmp,
     probe x. Each probe starts from the held state (positions and cell exact, mu 0.5 again) and
     agrees with ours (the adapter reached 6e-8 on z in the peer above; 1e-3 asserted)."""
     r = in_yade["adapter_probe_restore"]

@@ -322,6 +322,28 @@ ATTRIBUTE_CASES = {  # case: the exception's start, naming the class and the att
     "probe_hold_inf": "ValueError: StressProbe.holdStress = (100000, inf, 100000, 0, 0, 0): entry y is inf",
     "probe_hold_negative": "ValueError: StressProbe.holdStress = (100000, -1000, 100000, 0, 0, 0): entry y is -1000",
     "ip2_rolling_negative": "ValueError: Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys (rollingStiffness -1,",
+    "fabric_period_0": "ValueError: FabricRecorder.iterPeriod = 0: with virtPeriod and realPeriod 0 too, it would never record",
+    "fabric_period_negative": "ValueError: FabricRecorder.iterPeriod = -1:",
+    "fabric_period_assigned_0": "ValueError: FabricRecorder.iterPeriod = 0:",
+    "servo_update_refused": "ValueError: TrueTriaxialServo.sigmaZ = -3:",
+}
+
+# A value of the wrong type names the attribute and what it takes (YADE's own conversion says
+# "No registered converter was able to produce a C++ rvalue of type double from this Python object
+# of type str", or "Python argument types in None.None(TrueTriaxialServo, str) did not match C++
+# signature"); a result (read-only) given is refused where YADE's constructor would set it.
+TYPE_CASES = {
+    "type_servo_b_str": "TypeError: TrueTriaxialServo.b = '0.5': takes a number (float or int), not str",
+    "type_servo_b_assigned_str": "TypeError: TrueTriaxialServo.b = '0.5': takes a number (float or int), not str",
+    "type_servo_maxSteps_float": "TypeError: TrueTriaxialServo.maxSteps = 1.5: takes an integer (int), not float",
+    "type_probe_hold_5": "TypeError: StressProbe.holdStress = (100000.0, 100000.0, 100000.0, 0, 0): takes 6 numbers",
+    "type_probe_hold_assigned_5": "TypeError: StressProbe.holdStress = (100000.0, 100000.0, 100000.0, 0, 0): takes 6 numbers",
+    "type_probe_restrain_str": "TypeError: StressProbe.restrainRotations = 'yes': takes True or False, not str",
+    "type_fabric_period_str": "TypeError: FabricRecorder.iterPeriod = '100': takes an integer (int), not str",
+    "type_ip2_str": "TypeError: Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys.rollingStiffness = '1': takes a number",
+    "readonly_servo_reached": "AttributeError: TrueTriaxialServo.reached is read-only",
+    "readonly_servo_reached_assigned": "AttributeError: TrueTriaxialServo.reached is read-only",
+    "readonly_servo_updated": "AttributeError: TrueTriaxialServo.reached is read-only",
 }
 
 
@@ -333,13 +355,21 @@ def test_attributes_out_of_range_are_refused_at_construction_and_assignment(refu
     assert r["servo_combination"]["error"].startswith(
         "ValueError: TrueTriaxialServo (b = 0, sigmaZ = 300000, meanStress = 100000):")
     assert "updateAttrs" in r["servo_combination"]["error"]
-    # a refused assignment leaves the attribute as it was
-    assert r["servo_after_refusals"] == dict(b=0.5, pathRate=2.0)
+    # a refused assignment (or updateAttrs) leaves every attribute as it was
+    assert r["servo_after_refusals"] == dict(b=0.5, sigmaZ=140e3, pathRate=2.0, reached=False)
+    assert r["recorder_after_refusals"] == dict(iterPeriod=100)
     assert r["probe_after_refusals"] == dict(axis="z")
     # an axis given as its Voigt index, and a hold given in part (NaN: measured), are taken
     assert r["probe_axis_int"]["axis"] == "z" and r["probe_hold_partial"]["error"] is None
     # defaults show their values; FabricRecorder's records without a period given
     assert r["defaults"] == dict(probeFriction=1e23, iterPeriod=100, loadingFriction=0.5)
+
+
+def test_values_of_the_wrong_type_and_results_given_are_refused_naming_the_attribute(refusals):
+    for case, start in TYPE_CASES.items():
+        assert (refusals[case]["error"] or "").startswith(start), (case, refusals[case]["error"])
+    assert "not tuple of 5" in refusals["type_probe_hold_5"]["error"]
+    assert refusals["probe_hold_after_refusals"] == dict(holdStress=[None] * 6)  # NaN: as constructed
 
 
 def test_a_hold_given_in_part_takes_the_measured_stress_for_its_nan_entries(refusals):
@@ -379,10 +409,11 @@ def test_reset_mid_probe_puts_the_held_state_back(refusals):
 
 
 def test_engines_refuse_a_scene_that_is_not_periodic(refusals):
-    for case in ("servo_aperiodic", "probe_aperiodic", "fabric_aperiodic"):
+    for case in ("servo_aperiodic", "probe_aperiodic", "fabric_aperiodic", "fabric_aperiodic_default_period"):
         r = refusals[case]
         assert r["error"].startswith("RuntimeError:") and "periodic cell" in r["error"], r
         assert r["frictions"] == [pytest.approx(0.5, rel=1e-2)]  # the material's tan(0.46): not the servo's
+        assert r["iter"] == 0, case  # refused at the first step, a recorder of the default period too
 
 
 def test_fabric_recorder_records_by_default_and_says_when_there_are_no_contacts(refusals):
@@ -394,6 +425,10 @@ def test_fabric_recorder_records_by_default_and_says_when_there_are_no_contacts(
     r = refusals["fabric_no_contacts"]
     assert r["contacts"] == 0 and r["Zm"] == 0 and r["message"].startswith("no contacts")
     assert np.all(np.array(r["B"]) == 0) and math.isfinite(r["voidRatio"])
+    # a cell without particles has no void ratio to give: refused, not inf
+    r = refusals["fabric_empty_scene"]
+    assert r["error"].startswith("RuntimeError: FabricRecorder: the scene has no particles"), r
+    assert r["records"] == 0 and r["message"] == "not recorded yet"
 
 
 def test_two_materials_take_both_materials_constants(refusals):

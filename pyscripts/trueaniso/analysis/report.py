@@ -251,11 +251,14 @@ def _study_line(results, rows=()):
     reached = ("states reached with the whole load at once (--path-rate inf)" if rate == "inf"
                else "states reached at the default 2 Pa per step" if float(rate) == 2.0
                else "states reached at %s Pa per step" % rate)
+    # A study that records no rule was made with smallest-inertia (options.UNRECORDED_TIME_STEP).
     if state.get("time_step", "smallest-inertia") != "smallest-inertia":
         # The rates are per step of the smallest-inertia rule (docs/time-step.md): another rule's
         # longer step reached the same states in fewer steps, at the same rate in time.
         reached += (" of the smallest-inertia time step, taken in the %s rule's longer steps (--time-step %s)"
                     % (state["time_step"], state["time_step"]))
+    else:
+        reached += " with the smallest-inertia time step (--time-step smallest-inertia)"
     seed = spec.get("seed")
     # The probes' settings, so that a study run with --skip-detection or rotations restrained does
     # not read like any other in its report.
@@ -264,6 +267,8 @@ def _study_line(results, rows=()):
         _fmt(probe.get("gamma"), "%g"),
         probe.get("rotations", "?") + (" (--rotations restrained)" if probe.get("rotations") == "restrained" else ""),
         probe.get("detection", "?") + (" (--skip-detection)" if probe.get("detection") == "off" else ""))
+    if probe:
+        probes += ", time step %s" % probe.get("time_step", "smallest-inertia")
     host = fp.get("host") or {}
     if host.get("name") == "yade":  # run_states.py --host yade: the same protocol, stepped by YADE's loop
         probes += ("; states and probes stepped by YADE's loop with the trueaniso plugin's classes "

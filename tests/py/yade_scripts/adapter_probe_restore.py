@@ -1,4 +1,4 @@
-"""The documented adapter workflow (docs/yade-peer.md): save the held state with O.saveTmp,
+"""The documented adapter workflow (docs/howto/yade-bridge.md): save the held state with O.saveTmp,
 mu = 1e23, our StressProbe through the adapter on z, detach, O.loadTmp; then the same on x.
 Checks that YADE's own save/restore brings back positions, cell and friction between probes.
 Usage: yade-double -n -x adapter_probe_restore.py SPECIMEN.npz OUT.json

@@ -60,6 +60,7 @@ def assign(obj, name, value):
 
 servo = TrueTriaxialServo(b=0.5, sigmaZ=140e3)
 probe = StressProbe()
+recorder = FabricRecorder()
 cases = {
     "servo_b_2": lambda: TrueTriaxialServo(b=2),
     "servo_sigmaZ_0": lambda: TrueTriaxialServo(sigmaZ=0),
@@ -80,10 +81,28 @@ cases = {
     "probe_hold_inf": lambda: StressProbe(holdStress=(1e5, float("inf"), 1e5, 0, 0, 0)),
     "probe_hold_negative": lambda: StressProbe(holdStress=(1e5, -1e3, 1e5, 0, 0, 0)),
     "ip2_rolling_negative": lambda: Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys(rollingStiffness=-1),
+    "fabric_period_0": lambda: FabricRecorder(iterPeriod=0),
+    "fabric_period_negative": lambda: FabricRecorder(iterPeriod=-1),
+    "fabric_period_assigned_0": assign(recorder, "iterPeriod", 0),
+    "servo_update_refused": lambda: servo.updateAttrs(dict(b=0.2, sigmaZ=-3.0)),
+    # values of the wrong type, and results (read-only) given
+    "type_servo_b_str": lambda: TrueTriaxialServo(b="0.5"),
+    "type_servo_b_assigned_str": assign(servo, "b", "0.5"),
+    "type_servo_maxSteps_float": lambda: TrueTriaxialServo(maxSteps=1.5),
+    "type_probe_hold_5": lambda: StressProbe(holdStress=(1e5, 1e5, 1e5, 0, 0)),
+    "type_probe_hold_assigned_5": assign(probe, "holdStress", (1e5, 1e5, 1e5, 0, 0)),
+    "type_probe_restrain_str": lambda: StressProbe(restrainRotations="yes"),
+    "type_fabric_period_str": lambda: FabricRecorder(iterPeriod="100"),
+    "type_ip2_str": lambda: Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys(rollingStiffness="1"),
+    "readonly_servo_reached": lambda: TrueTriaxialServo(reached=True),
+    "readonly_servo_reached_assigned": assign(servo, "reached", True),
+    "readonly_servo_updated": lambda: servo.updateAttrs(dict(reached=True)),
 }
 for name, f in cases.items():
     result[name] = dict(error=error(f))
-result["servo_after_refusals"] = dict(b=servo.b, pathRate=servo.pathRate)
+result["servo_after_refusals"] = dict(b=servo.b, sigmaZ=servo.sigmaZ, pathRate=servo.pathRate, reached=servo.reached)
+result["recorder_after_refusals"] = dict(iterPeriod=recorder.iterPeriod)
+result["probe_hold_after_refusals"] = dict(holdStress=[x if x == x else None for x in probe.holdStress])
 result["probe_after_refusals"] = dict(axis=probe.axis)
 result["probe_axis_int"] = dict(axis=StressProbe(axis=2).axis, error=None)
 result["probe_hold_partial"] = dict(error=error(lambda: StressProbe(holdStress=(float("nan"), 1e5, 1e5, 0, 0, 0))))
@@ -185,8 +204,16 @@ def aperiodic(engine):
 
 
 for name, e in (("servo_aperiodic", TrueTriaxialServo()), ("probe_aperiodic", StressProbe()),
-                ("fabric_aperiodic", FabricRecorder(iterPeriod=1))):
-    result[name] = dict(error=aperiodic(e), frictions=frictions())
+                ("fabric_aperiodic", FabricRecorder(iterPeriod=1)),
+                ("fabric_aperiodic_default_period", FabricRecorder())):  # refused at the first step, not the 100th
+    result[name] = dict(error=aperiodic(e), frictions=frictions(), iter=O.iter)
+
+# a periodic scene without particles
+O.reset()
+O.periodic = True
+O.cell.hSize = utils.Matrix3(1e-3, 0, 0, 0, 1e-3, 0, 0, 0, 1e-3)
+empty = FabricRecorder()
+result["fabric_empty_scene"] = dict(error=error(lambda: empty()), records=empty.records, message=empty.message)
 
 
 # --- materials: two of them, and one out of range, in YADE's parallel interaction loop
