@@ -193,24 +193,39 @@ def test_table_b1_prints_each_e_with_its_a2(tmp_path):
                                                                       chain.PAPER["clump2"]))
 
 
-def test_fig16_at_the_calibrated_zeta_and_at_one(small_table, tmp_path):
+def test_fig16_at_the_calibrated_zeta_the_papers_and_one(small_table, tmp_path, monkeypatch):
     """Recomputed from the fabric columns at zeta = 1 the prediction is the table's own (its rows'
-    mic_E at mic_zeta 1); at the calibrated zeta it differs, and both are in the report."""
+    mic_E at mic_zeta 1); at the calibrated zeta it differs; the figure is also given the curve at
+    the paper's zeta 0.552 (its Fig. 16a), and its title names the cross-anisotropic study's size
+    and seed: all three curves in the report's table and in the data the figure draws."""
     src = os.path.join(DATA, "fig16-spheres-4000-s1")
     rows = cross_anisotropy.states(src + "/probes.csv")
     at1 = cross_anisotropy.predicted_ratios(src + "/probes.csv", 18e9, 0.15, 1.0, 1.0)
     for m in rows:
         assert m["predicted_zeta"] == 1.0
         assert at1[m["state"]] == pytest.approx(m["predicted_ratio"], rel=1e-9)
+    drawn = {}
+    figure = cross_anisotropy.figure
+
+    def kept(rows_, path, predictions=None, who=None):
+        drawn.update(predictions=predictions, who=who)
+        figure(rows_, path, predictions, who)
+    monkeypatch.setattr(cross_anisotropy, "figure", kept)
     path, numbers = report.build(small_table, str(tmp_path), log=lambda m: None, fig16=src)
     text = open(path).read()
     zh, zv = numbers["free"]["zeta"]
     calibrated = cross_anisotropy.predicted_ratios(src + "/probes.csv", 18e9, 0.15, zh, zv)
+    paper = cross_anisotropy.predicted_ratios(src + "/probes.csv", 18e9, 0.15, 0.552, 0.552)
     assert "predicted a_h^2/a_v^2, zeta_h = %.3f, zeta_v = %.3f (calibrated on this report's study)" % (zh, zv) in text
+    assert "predicted a_h^2/a_v^2, zeta = 0.552 (the paper's)" in text
     assert "predicted a_h^2/a_v^2, zeta = 1 (unmodified)" in text
     first = rows[0]
-    assert "| %.3f | %.3f |" % (calibrated[first["state"]], first["predicted_ratio"]) in text
+    assert "| %.3f | %.3f | %.3f |" % (calibrated[first["state"]], paper[first["state"]],
+                                       first["predicted_ratio"]) in text
     assert "From `%s`, 4000 spheres." % src in text
+    curve = next(c for c in drawn["predictions"] if "0.552" in c[0])
+    assert curve[1] == pytest.approx([paper[m["state"]] for m in rows], rel=1e-12)
+    assert drawn["who"] == "4000 spheres, seed 1"
 
 
 def test_d50_and_cu_are_stored_and_old_files_still_load(tmp_path):
@@ -283,10 +298,12 @@ def test_fig13_legend_tells_each_axis_by_its_marker_in_no_zm_colour(tmp_path, mo
     report.fig13(tab, [("zeta = 1", a2 * 1.01), ("zeta = 0.5", a2 * 0.99)], str(tmp_path / "f13.png"))
     (fig,) = caught
     fig.canvas.draw()  # the points take their Zm colours when drawn
+    # One legend for the panels, beside the last (off the data); its entries hold for each panel.
+    (legend,) = [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    assert legend is fig.axes[1].get_legend()
     for ax in fig.axes[:2]:
         series = ax.collections[:3]
         point_colours = {c for s in series for c in _marker_and_colour(s)[1]}
-        legend = ax.get_legend()
         handles = getattr(legend, "legend_handles", None) or legend.legendHandles
         entries = dict(zip([t.get_text() for t in legend.get_texts()], handles))
         for a, s in zip("xyz", series):

@@ -104,14 +104,15 @@ def predicted_ratios(path, shear_modulus, poisson, zeta_h, zeta_v):
     return out
 
 
-def figure(rows, path, predictions=None):
+def figure(rows, path, predictions=None, who=None):
     """Fig. 16: the anisotropy ratios against sigma_v / sigma_h. `predictions`: [(label, [a_h^2 /
-    a_v^2 per row])], the micromechanical curves, each labelled with its zeta; by default the rows'
-    own predicted_ratio, at the zeta of the table's micromechanical columns."""
-    from .figures import _finish, _plt
+    a_v^2 per row][, line style])], the micromechanical curves, each labelled with its zeta; by
+    default the rows' own predicted_ratio, at the zeta of the table's micromechanical columns.
+    `who`: what the figure is of (figures.who_said), in its title."""
+    from .figures import _finish, _plt, entitle, legend_outside
     plt = _plt()
     sr = [m["sigma_v"] / m["sigma_h"] for m in rows]
-    fig, ax = plt.subplots(figsize=(5.8, 4.2))
+    fig, ax = plt.subplots(figsize=(8.4, 4.6))
     ax.plot(sr, [m["G_ratio"] for m in rows], "o-", label="$G_{hh}/G_{vh}$ (shear probes)")
     ax.plot(sr, [m["E_ratio_root"] for m in rows], "s-", label="$(E_h/E_v)^{0.5}$")
     if "nu_ratio" in rows[0]:
@@ -121,12 +122,12 @@ def figure(rows, path, predictions=None):
         predictions = [("$a_h^2/a_v^2$ predicted, " + (r"$\zeta$ = %g" % z if z is not None
                                                          else r"$\zeta$ of the table's columns"),
                         [m["predicted_ratio"] for m in rows])]
-    for (label, values), style in zip(predictions or (), ("k--", "k:", "k-.")):
-        ax.plot(sr, values, style, label=label)
+    for curve, style in zip(predictions or (), ("k--", "k:", "k-.")):
+        ax.plot(sr, curve[1], curve[2] if len(curve) > 2 else style, label=curve[0])
     ax.set_xlabel(r"$\sigma_v/\sigma_h$ (-)")
     ax.set_ylabel("anisotropy ratio (-)")
-    ax.set_title(r"One anisotropy in $G$, $E$ and $\nu$? (Fig. 16; $\sigma_h$ = 100 kPa)", fontsize=10)
-    ax.legend(fontsize=7)
+    entitle(fig, r"Fig. 16: one anisotropy in $G$, $E$ and $\nu$? ($\sigma_h$ = 100 kPa)", who)
+    legend_outside(ax)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)  # as --out's JSON (trueaniso.atomic)
     _finish(plt, fig, path)
 

@@ -28,9 +28,45 @@ def _save(fig, path):
 
 def _finish(plt, fig, path):
     """Lay out, write atomically and close a figure."""
-    fig.tight_layout()
+    if not fig.get_constrained_layout():
+        fig.tight_layout()
     _save(fig, path)
     plt.close(fig)
+
+
+def entitle(fig, question, who=None, detail=None):
+    """A figure's title: the question it answers (the paper's figure named in it), the numbers that
+    answer it (`detail`), then what it is of (`who`: assembly, particle count, seed), so that a figure
+    copied out of its report still says which study it shows."""
+    fig.suptitle("\n".join(t for t in (question, detail, who) if t), fontsize=9)
+
+
+def legend_outside(ax, **kw):
+    """The legend right of the axes, where it covers no point of the data."""
+    kw.setdefault("fontsize", 7)
+    return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kw)
+
+
+def legend_above(ax, ncol=2, **kw):
+    """The legend above the axes (a panel of a row, whose right is the next panel)."""
+    kw.setdefault("fontsize", 7)
+    return ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.02), borderaxespad=0.0, ncol=ncol, **kw)
+
+
+def plain_ticks(axis, n=5):
+    """Ticks at plain numbers, about `n` of them, on a log axis of a narrow range: the log scale's
+    own ticks fall at powers of ten and leave such an axis one labelled tick (a ratio of 0.5-2)."""
+    from matplotlib import ticker
+    axis.set_major_locator(ticker.MaxNLocator(n))
+    axis.set_major_formatter(ticker.FormatStrFormatter("%g"))
+    axis.set_minor_formatter(ticker.NullFormatter())
+
+
+def who_said(assembly=None, n=None, seed=None):
+    """'4000 spheres, seed 1' for a figure's title; what is not recorded said so."""
+    kind = {"sphere": "spheres", "spheres": "spheres", None: "particles"}.get(assembly, "%s clumps" % assembly)
+    size = "%d %s" % (n, kind) if n else "%s (particle count not recorded)" % kind
+    return "%s, %s" % (size, "seed %s" % seed if seed is not None else "seed not recorded")
 
 
 def modulus_vs_stress(rows, path, title="sphere assembly"):
@@ -39,7 +75,7 @@ def modulus_vs_stress(rows, path, title="sphere assembly"):
     Args:
         rows: rows of probes.csv (`results.read_probes`).
         path: the PNG to write (atomically).
-        title: the figure's title.
+        title: what the figure is of (assembly, particle count, seed: `who_said`), under its question.
 
     Example:
         >>> import os, tempfile
@@ -50,7 +86,7 @@ def modulus_vs_stress(rows, path, title="sphere assembly"):
         True
     """
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for axis, mark in zip("xyz", "os^"):
         sel = [r for r in rows if r["probe"] == axis]
         s = [float(r["sigma_" + axis]) / 1e3 for r in sel]
@@ -58,20 +94,25 @@ def modulus_vs_stress(rows, path, title="sphere assembly"):
         ax.scatter(s, e, marker=mark, label="$E_%s$" % axis, alpha=0.8)
     ax.set_xlabel(r"$\sigma_i$ (kPa)")
     ax.set_ylabel(r"$E_i$ (MPa)")
-    ax.set_title("Young's moduli against the stress in their direction\n(%s)" % title, fontsize=10)
-    ax.legend()
+    entitle(fig, "Fig. 3: does each $E_i$ rise with the stress $\\sigma_i$ in its direction?", title)
+    legend_outside(ax, fontsize=8)
     _finish(plt, fig, path)
 
 
-def scalar_moduli_vs_zm(rows, path):
+def scalar_moduli_vs_zm(rows, path, who=None, paper=None):
     """Fig. 11: K and G of the hyperelastic model against Zm, with their quadratic fits (Table 2).
 
     Args:
         rows: rows of probes.csv (`results.read_probes`).
         path: the PNG to write (atomically).
+        who: what the figure is of (`who_said`), in its title.
+        paper: the paper's Table 2 for the assembly, ``{"K": (c1, c2, c3), "G": ..., "zm": (low, high),
+            "note": text}`` (MPa), drawn dashed over the Zm range `zm` (the paper's data, where known;
+            else ours) beside our fits, `note` under the title.
 
     Returns:
-        dict: the fits drawn, ``{"K": {"c": [c1, c2, c3], "r2": R^2}, "G": {...}}`` (MPa).
+        dict: the fits drawn, ``{"K": {"c": [c1, c2, c3], "r2": R^2}, "G": {...}}`` (MPa), and
+        with `paper` ``"paper": {"K": (Zm, K), "G": (Zm, G)}``, the paper's curves as drawn.
 
     Example:
         >>> import os, tempfile
@@ -94,17 +135,24 @@ def scalar_moduli_vs_zm(rows, path):
             G.append(m["G"] / 1e6)
     if not hyperelastic.quadratic_fittable(z):
         return None
-    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    fig, ax = plt.subplots(figsize=(6.8, 4.4))
     out = {}
+    xs = np.linspace(min(z), max(z), 50)
     for vals, name, mark in ((K, "K", "o"), (G, "G", "s")):
         c, r2 = hyperelastic.quadratic_fit(z, vals)
-        xs = np.linspace(min(z), max(z), 50)
-        ax.scatter(z, vals, marker=mark, label=name)
-        ax.plot(xs, np.polyval(c, xs), label="%s fit, $R^2$ = %.3f" % (name, r2))
+        dots = ax.scatter(z, vals, marker=mark, label="$%s$, ours" % name)
+        ax.plot(xs, np.polyval(c, xs), color=dots.get_facecolor()[0], label="$%s$ fit, $R^2$ = %.3f" % (name, r2))
         out[name] = dict(c=c.tolist(), r2=r2)
+        if paper:
+            zp = np.linspace(*(paper.get("zm") or (min(z), max(z))), 50)
+            ys = np.polyval(paper[name], zp)
+            ax.plot(zp, ys, "--", color=dots.get_facecolor()[0], label="$%s$, paper's Table 2" % name)
+            out.setdefault("paper", {})[name] = (zp, ys)
     ax.set_xlabel(ZM_LABEL)
     ax.set_ylabel("$K$, $G$ (MPa)")
-    ax.legend(fontsize=8)
+    entitle(fig, "Fig. 11: do $K$ and $G$ follow the paper's quadratics in $Z_m$ (Table 2)?", who,
+            paper.get("note") if paper else None)
+    legend_outside(ax)
     _finish(plt, fig, path)
     return out
 
@@ -126,11 +174,11 @@ def _b_groups(states):
     return {b: sorted(v, key=lambda st: float(st["q"])) for b, v in sorted(groups.items())}
 
 
-def poisson_vs_q(rows, path):
+def poisson_vs_q(rows, path, who=None):
     """Fig. 5: nu_zx, nu_xz | nu_zy, nu_yz | nu_xy, nu_yx against q, one line per b. Returns
     {b: (q, nu (n, 3, 3))} in kPa and ratios."""
     plt = _plt()
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
     out = {}
     pairs = (((2, 0), (0, 2)), ((2, 1), (1, 2)), ((0, 1), (1, 0)))
     for b, sts in _b_groups(hyperelastic.states_from_rows(rows).values()).items():
@@ -145,15 +193,16 @@ def poisson_vs_q(rows, path):
                      fontsize=9)
         ax.set_xlabel("$q$ (kPa)")
         ax.set_ylabel(r"$\nu_{%s%s}$, $\nu_{%s%s}$ (-)" % ("xyz"[i], "xyz"[j], "xyz"[k], "xyz"[m]))
-    axes[2].legend(fontsize=7)
+    entitle(fig, "Fig. 5: does each $\\nu_{ij}$ follow its stress ratio along the paths of constant $b$?", who)
+    legend_outside(axes[2])
     _finish(plt, fig, path)
     return out
 
 
-def stress_ratios_vs_q(rows, path):
+def stress_ratios_vs_q(rows, path, who=None):
     """Fig. 6: sigma_z/sigma_x, sigma_z/sigma_y, sigma_x/sigma_y against q, one line per b."""
     plt = _plt()
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
     out = {}
     for b, sts in _b_groups(_by_state(rows)).items():
         q = np.array([float(st["q"]) for st in sts]) / 1e3
@@ -166,7 +215,8 @@ def stress_ratios_vs_q(rows, path):
         ax.set_title(name, fontsize=9)
         ax.set_xlabel("$q$ (kPa)")
         ax.set_ylabel(name + " (-)")
-    axes[2].legend(fontsize=7)
+    entitle(fig, "Fig. 6: which stress ratios do the paths of constant $b$ reach?", who)
+    legend_outside(axes[2])
     _finish(plt, fig, path)
     return out
 
@@ -174,11 +224,11 @@ def stress_ratios_vs_q(rows, path):
 PAPER_ZM_SPHERES = (5.94, 5.99)  # section 4.1 / Fig. 8a: the sphere assembly's Zm over the 39 states
 
 
-def zm_vs_q(rows, path, band=PAPER_ZM_SPHERES):
+def zm_vs_q(rows, path, band=PAPER_ZM_SPHERES, who=None):
     """Fig. 8: Zm against q, one line per b, the paper's band shaded; Zm counted with a gap
     tolerance of 1e-3 (r1 + r2) as open markers when the table has it."""
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(6, 4.2))
+    fig, ax = plt.subplots(figsize=(7.4, 4.4))
     if band:
         ax.axhspan(*band, color="0.85", label="paper, spheres (%.2f-%.2f)" % band)
     out, gap = {}, False
@@ -195,7 +245,9 @@ def zm_vs_q(rows, path, band=PAPER_ZM_SPHERES):
                 "$10^{-3}(r_1 + r_2)$ counted")
     ax.set_xlabel("$q$ (kPa)")
     ax.set_ylabel(ZM_LABEL)
-    ax.legend(fontsize=7)
+    entitle(fig, "Fig. 8: does $Z_m$ stay within the paper's %.2f-%.2f along the paths?" % band if band else
+            "Fig. 8: does $Z_m$ fall faster at $q$ < 0 than at $q$ > 0, as the paper's does?", who)
+    legend_outside(ax)
     _finish(plt, fig, path)
     return out
 
@@ -208,13 +260,20 @@ FABRIC_LABELS = dict(R=r"$R_{ii}$ (-)", H=r"$H_{ii}/\mathrm{tr}\,H$ (-)",
 ZM_LABEL = "$Z_m$ (-)"
 
 
-def fabric_vs_stress(rows, path, name):
+FABRIC_QUESTIONS = dict(
+    R="Fig. 9: do the contact normals' $R_{ii}$ stay close to 1/3 as $\\sigma_i$ changes?",
+    H="Fig. 10: does the branch fabric's share $H_{ii}/\\mathrm{tr}\\,H$ change with $\\sigma_i$?",
+    B="Fig. 12: do the $B_{ii}$ rise with $\\sigma_i$ in one trend for the three directions?",
+    M="Fig. 12: do the $M_{iiii}$ rise with $\\sigma_i$ in one trend for the three directions?")
+
+
+def fabric_vs_stress(rows, path, name, who=None):
     """Figs 9, 10, 12: the diagonal of a fabric tensor of the rows (R, B: name_ii; H: H_ii / tr H;
     M: M_iiii) against the stress in the same direction, one series per direction. Returns {axis:
     (sigma in kPa, values)}, the values as plotted."""
     plt = _plt()
     states = _by_state(rows)
-    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
     out = {}
     trace = np.array([sum(float(st["H_" + a * 2]) for a in "xyz") for st in states]) if name == "H" else 1.0
     for axis, mark in zip("xyz", "os^"):
@@ -226,7 +285,8 @@ def fabric_vs_stress(rows, path, name):
                    + (r"$/\mathrm{tr}\,H$" if name == "H" else ""), alpha=0.8)
     ax.set_xlabel(r"$\sigma_i$ (kPa)")
     ax.set_ylabel(FABRIC_LABELS[name])
-    ax.legend(fontsize=8)
+    entitle(fig, FABRIC_QUESTIONS[name], who)
+    legend_outside(ax, fontsize=8)
     _finish(plt, fig, path)
     return out
 

@@ -93,7 +93,7 @@ FIG13_LEGEND_COLOUR = "0.3"  # a grey: no colour of the Zm map
 FIG13_SIZE = 18  # points^2, as scatter takes it; a legend's marker takes its square root
 
 
-def fig13(tab, a2_by_zeta, path):
+def fig13(tab, a2_by_zeta, path, who=None):
     """Micromechanical against DEM a_i^2 at each zeta, coloured by Zm (the paper's Fig. 13)."""
     plt = _plt()
     fig, axes = plt.subplots(1, len(a2_by_zeta), figsize=(4.2 * len(a2_by_zeta) + 1.0, 4.4), squeeze=False,
@@ -110,38 +110,41 @@ def fig13(tab, a2_by_zeta, path):
         ax.set_title(_tex(label), fontsize=9)
         ax.set_xlabel("DEM $a_i^2$, Eq. 25 (-)")
         ax.set_ylabel("micromechanical $a_i^2$ (-)")
-        # Colour is Zm (the colour bar), so the axis is told by its marker alone: a scatter's own
-        # legend entry would take one Zm's colour for all three and suggest that Zm.
-        ax.legend(handles=[Line2D([], [], ls="none", marker=mark, markersize=np.sqrt(FIG13_SIZE),
-                                  color=FIG13_LEGEND_COLOUR, label="$a_%s^2$" % a)
-                           for a, mark in zip(AXES, FIG13_MARKERS)] + ax.get_legend_handles_labels()[0],
-                  fontsize=7)
+    # Colour is Zm (the colour bar), so the axis is told by its marker alone: a scatter's own
+    # legend entry would take one Zm's colour for all three and suggest that Zm. One legend for the
+    # panels, right of the last, off the data.
+    figures.legend_outside(axes[0][-1], handles=[Line2D([], [], ls="none", marker=mark, markersize=np.sqrt(FIG13_SIZE),
+                                                        color=FIG13_LEGEND_COLOUR, label="$a_%s^2$" % a)
+                                                 for a, mark in zip(AXES, FIG13_MARKERS)]
+                           + axes[0][-1].get_legend_handles_labels()[0])
     fig.colorbar(sc, ax=axes[0].tolist(), label=figures.ZM_LABEL)
+    figures.entitle(fig, r"Fig. 13: does the micromechanical $a_i^2$ (Eq. 37) follow the DEM's at each $\zeta$?", who)
     return _save(fig, path)
 
 
 NU_PAIRS = (((2, 0), (0, 2)), ((1, 2), (2, 1)), ((0, 1), (1, 0)))  # the paper's Fig. 15 panels (a)-(c)
 
 
-def fig14_15(tab, pred, path_E, path_nu, assembly="spheres", path_parity=None):
+def fig14_15(tab, pred, path_E, path_nu, assembly="spheres", path_parity=None, who=None):
     """Fig. 14 (E_i, predicted against DEM) and Fig. 15 as the paper draws it: nu_ij of DEM and
     predicted against the state ID, one panel per pair; the parity plot of nu_ij beside it."""
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(4.6, 4.2))
+    fig, ax = plt.subplots(figsize=(5.6, 4.6))
     for i, mark in zip(range(3), "os^"):
         ax.scatter(tab["E"][:, i] / 1e6, pred["E"][:, i] / 1e6, marker=mark, s=16, label="$E_%s$" % AXES[i])
     lo, hi = np.nanmin(tab["E"]) / 1e6 * 0.97, np.nanmax(tab["E"]) / 1e6 * 1.03
     _identity(ax, lo, hi)
     ax.set_xlabel("DEM $E_i$ (MPa)")
     ax.set_ylabel("predicted $E_i$, Eq. 21 (MPa)")
-    ax.set_title("relative RMSE %.4f" % pred["E_rel_rmse"], fontsize=9)
-    ax.legend(fontsize=7)
+    figures.entitle(fig, "Fig. 14: does Eq. 21 (Table 2 fits, fitted $\\zeta$) predict the DEM $E_i$?", who,
+                    "relative RMSE %.4f" % pred["E_rel_rmse"])
+    figures.legend_outside(ax)
     fig.tight_layout()
     names = [_save(fig, path_E)]
     order = _state_order(tab["state"])
     numbered = all(s.isdigit() for s in tab["state"])  # Table C1's ids: a missing state leaves its gap
     x = np.array([int(tab["state"][k]) for k in order]) if numbered else np.arange(len(order))
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.9), layout="constrained")
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.6), layout="constrained")
     for ax, pair in zip(axes, NU_PAIRS):
         for (i, j), mark in zip(pair, "os"):
             name = r"\nu_{%s%s}" % (AXES[i], AXES[j])
@@ -152,12 +155,13 @@ def fig14_15(tab, pred, path_E, path_nu, assembly="spheres", path_parity=None):
             ax.set_xticklabels([tab["state"][k] for k in order], fontsize=7, rotation=90)
         ax.set_xlabel("state ID, Table C1 (-)")
         ax.set_ylabel(r"$%s$, $%s$ (-)" % tuple(r"\nu_{%s%s}" % (AXES[i], AXES[j]) for i, j in pair))
-        ax.legend(fontsize=7)
-    fig.suptitle("Poisson's ratios, DEM and Eq. 22: RMSE %.4f (paper, %s: %.3f)"
-                 % (pred["nu_rmse"], assembly, chain.PAPER[assembly]["nu_rmse"]), fontsize=10)
+        figures.legend_above(ax)
+    rmse = "RMSE %.4f (paper, %s: %.3f)" % (pred["nu_rmse"], assembly, chain.PAPER[assembly]["nu_rmse"])
+    figures.entitle(fig, r"Fig. 15: does Eq. 22 predict the DEM's Poisson's ratios $\nu_{ij}$ state by state?",
+                    who, rmse)
     names.append(_save(fig, path_nu))
     if path_parity:
-        fig, ax = plt.subplots(figsize=(4.6, 4.2))
+        fig, ax = plt.subplots(figsize=(5.6, 4.6))
         for i in range(3):
             for j in range(3):
                 if i != j:
@@ -168,31 +172,36 @@ def fig14_15(tab, pred, path_E, path_nu, assembly="spheres", path_parity=None):
         _identity(ax, lo, hi)
         ax.set_xlabel(r"DEM $\nu_{ij}$ (-)")
         ax.set_ylabel(r"predicted $\nu_{ij}$, Eq. 22 (-)")
-        ax.set_title("RMSE %.4f (paper, %s: %.3f)" % (pred["nu_rmse"], assembly, chain.PAPER[assembly]["nu_rmse"]),
-                     fontsize=9)
-        ax.legend(fontsize=6, ncol=2)
+        figures.entitle(fig, r"Fig. 15: does Eq. 22 predict the DEM's $\nu_{ij}$?", who, rmse)
+        figures.legend_outside(ax)
         fig.tight_layout()
         names.append(_save(fig, path_parity))
     return names
 
 
-def fig4a(exp, path, label=r"$E_i/E_j$, $i \neq j$"):
+def fig4a(exp, path, label=r"$E_i/E_j$, $i \neq j$", who=None, panel="4a"):
+    """Fig. 4: E_i/E_j against sigma_i/sigma_j on log axes, with the power law fitted. The ratios
+    span about 0.5-2, where a log axis's own ticks (at powers of ten) label one tick: plain ticks."""
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(4.6, 4.2))
+    fig, ax = plt.subplots(figsize=(5.8, 4.4))
     x, y = np.exp(exp["log_sigma_ratio"]), np.exp(exp["log_E_ratio"])
     ax.loglog(x, y, "o", ms=3, alpha=0.7, label=label)
     xs = np.geomspace(x.min(), x.max(), 20)
     ax.loglog(xs, xs ** exp["m"], "r-", label=r"$(\sigma_i/\sigma_j)^{%.3f}$" % exp["m"])
     ax.set_xlabel(r"$\sigma_i/\sigma_j$ (-)")
     ax.set_ylabel("$E_i/E_j$ (-)")
-    ax.legend(fontsize=8)
+    figures.plain_ticks(ax.xaxis)
+    figures.plain_ticks(ax.yaxis)
+    figures.entitle(fig, r"Fig. %s: does $E_i/E_j$ follow a power of $\sigma_i/\sigma_j$?" % panel, who,
+                    "m = %.3f, $R^2$ = %.3f" % (exp["m"], exp["r2"]))
+    figures.legend_outside(ax, fontsize=8)
     fig.tight_layout()
     return _save(fig, path)
 
 
-def fig_zeta_zm(tab, zetas, path, assembly="spheres"):
+def fig_zeta_zm(tab, zetas, path, assembly="spheres", who=None):
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(4.6, 4.0))
+    fig, ax = plt.subplots(figsize=(6.2, 4.4))
     pts = [(tab["Zm"][k], zetas[s]) for k, s in enumerate(tab["state"]) if zetas.get(s) is not None]
     if pts:
         ax.plot(*zip(*pts), "o", ms=4, label="ours, per state")
@@ -200,7 +209,8 @@ def fig_zeta_zm(tab, zetas, path, assembly="spheres"):
                label="paper 0.552" if assembly == "spheres" else "paper's spheres, 0.552")
     ax.set_xlabel(figures.ZM_LABEL)
     ax.set_ylabel(r"$\zeta$ fitted on the state's contrast (-)")
-    ax.legend(fontsize=8)
+    figures.entitle(fig, r"Is $\zeta$ one number over the states, as the paper's 0.552 (section 4.2)?", who)
+    figures.legend_outside(ax, fontsize=8)
     fig.tight_layout()
     return _save(fig, path)
 
@@ -306,17 +316,17 @@ def _missing_states_line(results, rows):
                                                          "it" if one else "them"))
 
 
-def paper_figures(rows, out, tag, assembly):
+def paper_figures(rows, out, tag, assembly, who=None):
     """Figs 5, 6, 8, 9, 10 and 12 from the rows of one rotations setting, each with the paper's
-    statement beside our numbers."""
+    statement beside our numbers; `who` (figures.who_said) in each figure's title."""
     f = dict(f5="fig5-nu-vs-q%s.png" % tag, f6="fig6-stress-ratios%s.png" % tag, f8="fig8-Zm-vs-q%s.png" % tag,
              f9="fig9-R%s.png" % tag, f10="fig10-H%s.png" % tag, f12b="fig12-B%s.png" % tag,
              f12m="fig12-M%s.png" % tag)
-    nu = figures.poisson_vs_q(rows, os.path.join(out, f["f5"]))
-    figures.stress_ratios_vs_q(rows, os.path.join(out, f["f6"]))
+    nu = figures.poisson_vs_q(rows, os.path.join(out, f["f5"]), who)
+    figures.stress_ratios_vs_q(rows, os.path.join(out, f["f6"]), who)
     zm = figures.zm_vs_q(rows, os.path.join(out, f["f8"]), band=figures.PAPER_ZM_SPHERES if assembly == "spheres"
-                         else None)
-    fab = {name: figures.fabric_vs_stress(rows, os.path.join(out, f[key]), name)
+                         else None, who=who)
+    fab = {name: figures.fabric_vs_stress(rows, os.path.join(out, f[key]), name, who)
            for name, key in (("R", "f9"), ("H", "f10"), ("B", "f12b"), ("M", "f12m"))}
     span = lambda d: (min(v.min() for _, v in d.values()), max(v.max() for _, v in d.values()))  # noqa: E731
     nus = np.concatenate([v[1][:, ~np.eye(3, dtype=bool)].ravel() for v in nu.values()])
@@ -399,6 +409,71 @@ def study_size(source):
     return "%d %s" % (n, "spheres" if kind == "sphere" else kind if kind == "clumps" else kind + " clumps")
 
 
+def headline_section(heads, assembly, borrowed_b1=False):
+    """The report's first section: its headline numbers (analysis.seeds.HEADLINE_ROWS) beside the
+    paper's, each the mean +/- sample standard deviation over the seeds in `heads` (the report's
+    study first) with how many seeds it is of. `heads` None: a bare table, which records no
+    specimen; a string: why the study's could not be computed."""
+    from . import seeds
+    out = ["## Headlines against the paper (%s)" % assembly, ""]
+    if heads is None:
+        return out + ["Not for a bare probe table: the headlines need the study's directory (its metadata.json "
+                      "records the specimen's e, Zm and seed).", ""]
+    if isinstance(heads, str):
+        return out + ["Not computed for this study: %s." % heads.rstrip("."), ""]
+    if len(heads) == 1:
+        said = ("One seed: each number is this study's alone, with no spread between seeds (`--seeds DIR ...` "
+                "gives the studies of the same recipe at other seeds).")
+    else:
+        said = ("The mean +/- sample standard deviation (n - 1) over %d seeds of one recipe: `%s` (this report's "
+                "study; every figure and table after this one is of it alone), %s. Each cell says how many seeds "
+                "it is of (a study without a statics record of state 21 has no Table B1 ratio)."
+                % (len(heads), heads[0]["study"], ", ".join("`%s`" % h["study"] for h in heads[1:])))
+    out += [said, "", seeds.table([("ours", heads)], assembly, seeds.HEADLINE_ROWS, counts=True), "",
+            "e and Zm of each specimen as prepared at 100 kPa; K and G at the isotropic state (Eqs. 21-22 inverted) "
+            "beside the paper's Table 2 at our Zm where it holds (spheres); zeta fitted on the contrast over all "
+            "states, the nu_ij RMSE (Eq. 22) and the relative E_i RMSE (Eq. 21) at it, rotations free; E_z/E_x and "
+            "Table B1 from the static solve, rotations restrained, the prediction at zeta = 1 with %s. Zm's drop "
+            "and e's change over the states, and the largest reciprocity error, say whether the specimen stayed "
+            "elastic along the paths." % B1_DENSITY_SHORT]
+    if borrowed_b1 and heads[0]["B1_ratio"] is None:
+        out += ["", "This study has no statics record of state 21: its Table B1 ratios are in the Table B1 section "
+                "below, from the other studies given with --b1-data."]
+    return out + [""]
+
+
+def study_who(source, assembly=None):
+    """What a figure is of, for its title (figures.who_said): the assembly, particle count and seed
+    its study's metadata.json records (a study directory or its probes.csv); a bare table or a JSON
+    of measures records neither count nor seed, and says so."""
+    d = source if os.path.isdir(source) else os.path.dirname(os.path.abspath(source))
+    meta = read_metadata(d) if os.path.exists(os.path.join(d, "metadata.json")) else None
+    if meta is None:
+        return figures.who_said(assembly)
+    spec = meta.get("specimen") or {}
+    return figures.who_said((meta.get("fingerprint") or {}).get("assembly", "sphere"),
+                            (spec.get("summary") or {}).get("n"), spec.get("seed"))
+
+
+def paper_table2(assembly, zm):
+    """The paper's Table 2 quadratics for Fig. 11 (figures.scalar_moduli_vs_zm): for spheres over
+    the paper's own Zm, 5.94-5.99 (Fig. 8a), since below it they turn and rise again (their vertex is
+    at 5.94); for the clumps, whose Zm the paper shows in Fig. 8 only, over ours, with a note where
+    our Zm lies outside the Zm on which they rise (where the paper's data must lie)."""
+    paper = chain.PAPER[assembly]
+    if assembly == "spheres":
+        band = figures.PAPER_ZM_SPHERES
+        return dict(K=paper["K"], G=paper["G"], zm=band,
+                    note="dashed: the paper's quadratics over its $Z_m$, %.2f-%.2f (Fig. 8a)" % band)
+    low, high, why = chain.rising_range({k: paper[k] for k in ("K", "G")})
+    note = "dashed: the paper's quadratics at our $Z_m$"
+    if not (low <= float(np.min(zm)) and float(np.max(zm)) <= high):
+        # "K rises with Zm only below Zm = 7.45" -> "K below Zm = 7.45"
+        where = ", ".join("%s %s" % (w.split()[0], w.split(" only ")[1]) for w in why)
+        note += ", extrapolated:\nits fits rise only %s" % where.replace("Zm", "$Z_m$")
+    return dict(K=paper["K"], G=paper["G"], note=note)
+
+
 def _other_size(size, own):
     """The sentence that says a section's data are not the report's own study, by size."""
     if size is None:
@@ -406,30 +481,34 @@ def _other_size(size, own):
     return "" if own is None or size == own else " These are %s, not this report's %s." % (size, own)
 
 
-def fig16_section(rows, source, out, calibrated=None, material=None, own=None):
+def fig16_section(rows, source, out, calibrated=None, material=None, own=None, assembly="spheres"):
     """Fig. 16 from fig16_rows: lines of the report, its figure written into `out`. `calibrated`:
     (zeta_h, zeta_v) of the report's own study; with a study's table (not a JSON of measures) the
-    micromechanical a_h^2/a_v^2 is drawn at that zeta and at zeta = 1, each labelled."""
+    micromechanical a_h^2/a_v^2 is drawn at that zeta, at the paper's 0.552 and at zeta = 1, each
+    labelled."""
     from . import cross_anisotropy
     size = study_size(source) if not source.endswith(".json") else None
     curves, cols = None, []
     if not source.endswith(".json") and material:
         path = table_path(source)
-        zetas = [("zeta = 1 (unmodified)", 1.0, 1.0)]
+        # The paper states its zeta, 0.552, for spheres; its clump2 Fig. 16b is at a zeta_h, zeta_v it
+        # shows in Fig. 13 only, so 0.552 is the spheres' there, and said so.
+        zetas = [("zeta = %g (the paper's%s)" % (chain.PAPER_ZETA, "" if assembly == "spheres" else ", of spheres"),
+                  chain.PAPER_ZETA, chain.PAPER_ZETA, "r-"), ("zeta = 1 (unmodified)", 1.0, 1.0, "k:")]
         if calibrated is not None:
             zetas.insert(0, ("zeta_h = %.3f, zeta_v = %.3f (calibrated on this report's study)" % calibrated,
-                             calibrated[0], calibrated[1]))
+                             calibrated[0], calibrated[1], "k--"))
         curves = []
-        for label, zh, zv in zetas:
+        for label, zh, zv, style in zetas:
             by_state = cross_anisotropy.predicted_ratios(path, material["shear_modulus"], material["poisson"], zh, zv)
             values = [by_state.get(m["state"], float("nan")) for m in rows]
-            curves.append(("$a_h^2/a_v^2$ predicted, " + _tex(label), values))
+            curves.append(("$a_h^2/a_v^2$ predicted, " + _tex(label), values, style))
             cols.append((label, values))
     else:
         z = rows[0].get("predicted_zeta")
         cols = [("zeta = %g" % z if z is not None else "the zeta of the table's columns",
                  [m.get("predicted_ratio", float("nan")) for m in rows])]
-    cross_anisotropy.figure(rows, os.path.join(out, "fig16.png"), curves)
+    cross_anisotropy.figure(rows, os.path.join(out, "fig16.png"), curves, study_who(source, assembly))
     lines = ["## Fig. 16: one anisotropy in G, E and nu (cross-anisotropic states, z vertical)", "",
              "From `%s`%s.%s The paper (Fig. 16a, spheres; 16b, clump2): the predicted a_h^2/a_v^2 (at its "
              "calibrated zeta) agrees with G_hh/G_vh and (E_h/E_v)^0.5, as Eq. (24) says, while nu_hh/nu_vv follows "
@@ -517,7 +596,7 @@ def study_assembly(results):
 
 
 def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, log=print, fig16=None,
-          clumps=None, statics=False, b1_data=None, b1_other_material=False):
+          clumps=None, statics=False, b1_data=None, b1_other_material=False, seeds=None):
     """Write a study's report.md and its figures, every table and figure beside the paper's (module doc).
 
     Args:
@@ -536,6 +615,9 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         b1_data: directories of statics records of other studies, whose state 21 Table B1 shows where
             the study has none; each needs its metadata.json and the report's material.
         b1_other_material: True takes `b1_data` of another material too, marked so in Table B1.
+        seeds: directories of studies of the same recipe at other seeds: the headline table, the
+            report's first section, gives each number as the mean and sample standard deviation over
+            them and the study (analysis.seeds); the figures and the other tables stay the study's.
 
     Returns:
         (path, numbers): the report's path, and the numbers it shows by rotations setting.
@@ -599,8 +681,27 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
             raise ResultsError(problem)
         if problem:
             other_material[d] = meta["specimen"]["material"]
+    seeds = [seeds] if isinstance(seeds, str) else list(seeds or ())
+    if seeds and not os.path.isdir(results):
+        raise ResultsError("--seeds needs the report's study as a directory with its metadata.json (a bare probe "
+                           "table records no specimen or seed to set beside the others)")
     if statics:
         solve_statics(results, log=log)
+    # The headlines of the study and of its other seeds, read and checked before anything is written.
+    from . import seeds as seeds_mod
+    heads = None
+    if os.path.isdir(results):
+        try:
+            heads = [seeds_mod.headlines(results)]
+        except ResultsError as exc:
+            if seeds:  # asked for the table over seeds: refused, said why
+                raise
+            heads = str(exc)  # a study without what they need (no complete state, no specimen summary)
+        if seeds:
+            heads += [seeds_mod.headlines(d) for d in seeds]
+            problem = seeds_mod.recipe_problem(heads)
+            if problem:
+                raise ResultsError("--seeds: %s" % problem)
     rows = read_probes(csv_path, need=zeta_contrast.NEEDED + ["Zm", "b", "q", "nu_1", "nu_2", "nu_1_name",
                                                             "nu_2_name"], material=material)
     if os.path.isdir(results):
@@ -616,9 +717,11 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     for line in (_study_line(results, rows), _missing_states_line(results, rows), left_out):
         if line:
             lines += [line, ""]
+    lines += headline_section(heads, assembly, borrowed_b1=bool(b1_data))
     os.makedirs(out, exist_ok=True)
     numbers = {}
     own_size = study_size(results) if os.path.isdir(results) else None
+    who = study_who(results, assembly)
     for rot in sorted({r["rotations"] for r in rows}):
         sel = [r for r in rows if r["rotations"] == rot]
         tab = chain.state_table(sel)
@@ -654,16 +757,18 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
         exp = chain.stress_ratio_exponent(tab, chain.ALL_PAIRS if sphere else chain.HORIZONTAL_PAIRS)
         exp_v = None if sphere else chain.stress_ratio_exponent(tab, chain.VERTICAL_PAIRS)
         zetas = chain.zeta_per_state(tab, parts, ref)
-        figs = dict(f13=fig13(tab, a2, os.path.join(out, "fig13-a2%s.png" % tag)),
+        who_rot = "%s; rotations %s" % (who, rot)
+        figs = dict(f13=fig13(tab, a2, os.path.join(out, "fig13-a2%s.png" % tag), who_rot),
                     f1415=fig14_15(tab, preds[2][1], os.path.join(out, "fig14-E%s.png" % tag),
                                    os.path.join(out, "fig15-nu%s.png" % tag), assembly,
-                                   os.path.join(out, "fig15-nu-parity%s.png" % tag)),
+                                   os.path.join(out, "fig15-nu-parity%s.png" % tag), who_rot),
                     f4=fig4a(exp, os.path.join(out, "fig4a%s.png" % tag),
-                             r"$E_i/E_j$, $i \neq j$" if sphere else "$E_x/E_y$, $E_y/E_x$") if exp else None,
-                    fz=fig_zeta_zm(tab, zetas, os.path.join(out, "zeta-vs-Zm%s.png" % tag), assembly),
+                             r"$E_i/E_j$, $i \neq j$" if sphere else "$E_x/E_y$, $E_y/E_x$", who_rot,
+                             "4a" if sphere else "4b" if assembly == "clump1" else "4c") if exp else None,
+                    fz=fig_zeta_zm(tab, zetas, os.path.join(out, "zeta-vs-Zm%s.png" % tag), assembly, who_rot),
                     f3="fig3-E-vs-sigma%s.png" % tag, f11="fig11-K-G-vs-Zm%s.png" % tag)
-        figures.modulus_vs_stress(sel, os.path.join(out, figs["f3"]), "%s, rotations %s" % (assembly, rot))
-        figures.scalar_moduli_vs_zm(sel, os.path.join(out, figs["f11"]))
+        figures.modulus_vs_stress(sel, os.path.join(out, figs["f3"]), who_rot)
+        figures.scalar_moduli_vs_zm(sel, os.path.join(out, figs["f11"]), who_rot, paper_table2(assembly, tab["Zm"]))
         zm = tab["Zm"]
         lines += ["Zm from %.3f to %.3f (paper, %s); reference (isotropic) state %s."
                   % (zm.min(), zm.max(), "spheres: 5.94-5.99" if sphere else
@@ -760,7 +865,7 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
             lines += ["### Fig. 4%s: E_i/E_j = (sigma_i/sigma_j)^m" % ("b" if assembly == "clump1" else "c"), "",
                       "Not measurable from these states: sigma_x/sigma_y stays within 1 % of 1 in all of them "
                       "(b = 0 only), so E_x/E_y has no stress ratio to follow.", ""]
-        lines += paper_figures(sel, out, tag, assembly)
+        lines += paper_figures(sel, out, tag, assembly, who_rot)
         numbers[rot] = dict(states=n, Zm=(float(zm.min()), float(zm.max())), table2=fits, zeta=(zh, zv),
                             nu_floor=floor, slopes=slopes,
                             zeta_common=contrast["zeta"], nu_rmse={l: p["nu_rmse"] for l, p in preds},
@@ -776,7 +881,8 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
                                               if assembly == "clump2" else ""), ""]
     if fig16:
         free = numbers.get("free") or next(iter(numbers.values()), None)
-        f16, numbers["fig16_worst"] = fig16_section(f16_rows, fig16, out, free and free["zeta"], material, own_size)
+        f16, numbers["fig16_worst"] = fig16_section(f16_rows, fig16, out, free and free["zeta"], material, own_size,
+                                                    assembly)
         lines += f16
     if clumps:
         cl, numbers["clump_ratios"] = clumps_section(clump_rows, clumps, own_size)
@@ -805,6 +911,15 @@ def _slopes_undetermined(fits, zm):
     return ["", "Over a Zm range of %.3f the quadratics explain R^2 = %.2f of K's and %.2f of G's variation (below "
             "%.1f): these slopes are undetermined by our states, not a departure from the paper's."
             % (zm.max() - zm.min(), r2["K"], r2["G"], SLOPE_R2_FLOOR)]
+
+
+# Which N_c/V Table B1's prediction uses: statics.rotation_factor's E_kinematic is Eq. (40) of the
+# static solve's affine stiffness, (1/V) sum over the contacts (engines/statics/NetworkMatrix.cpp).
+B1_DENSITY_SHORT = "the counted N_c/V"
+B1_DENSITY = ("Our predicted row (zeta = 1) uses the counted N_c/V: it is Eq. (40) of the kinematic stiffness (1/V) "
+              "sum over every contact carrying a normal force of k_n L n L n + k_s (L L delta - L n L n), each "
+              "contact with its own branch vector and stiffness (docs/statics.md, section 6), i.e. Eq. (37) with "
+              "N_c/V = Z Np/(2V), not Eq. (36)'s Zm Np/(2V), which is larger by Zm/Z (docs/fabric.md).")
 
 
 def _b1_cells(E):
@@ -899,7 +1014,7 @@ def table_b1(results, paper, own_size=None, others=(), other_material=None):
             " (%s%s)" % (size or "size not recorded", state), " (a ratio between states holds within one specimen "
                                                                  "only)" if len(sizes) == 1 else "", note))
     out += [" ".join(said) + " a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (Eq. 25) of each row; the paper prints its "
-            "a_i^2 to two decimals, here computed from its printed E_i.", "",
+            "a_i^2 to two decimals, here computed from its printed E_i. " + B1_DENSITY, "",
             "| state | | E_x (a_x^2) | E_y (a_y^2) | E_z (a_z^2) | predicted / DEM, mean E_i | largest \\|a_i^2 "
             "predicted - DEM\\| |", "|---|---|---|---|---|---|---|"]
     shown = set(found)
@@ -986,6 +1101,10 @@ def parser():
                         "metadata.json of another study, e.g. of another size: Table B1 shows its state 21, "
                         "beside its own isotropic state, where the study has no record of state 21 (repeatable); "
                         "its records must be its study's and its particles this study's material")
+    p.add_argument("--seeds", metavar="DIR", nargs="+",
+                   help="studies of the same recipe at other seeds (run_study.py or run_states.py directories): the "
+                        "report's first section gives each headline as the mean +/- sample standard deviation over "
+                        "them and the study; the figures and other tables stay the study's")
     p.add_argument("--b1-other-material", action="store_true",
                    help="show --b1-data of particles of another material than this study's, marked so in Table "
                         "B1, instead of refusing it")
@@ -1004,7 +1123,8 @@ def main(argv=None):
     try:
         path, _ = build(o.results, o.out, o.assembly, o.shear_modulus, o.poisson,
                         log=lambda m: sys.stderr.write(m + "\n"), fig16=o.fig16, clumps=o.clumps,
-                        statics=o.statics, b1_data=o.b1_data, b1_other_material=o.b1_other_material)
+                        statics=o.statics, b1_data=o.b1_data, b1_other_material=o.b1_other_material,
+                        seeds=o.seeds)
     except (OSError, RuntimeError) as exc:  # a file unreadable, a disk full, a static solve that failed
         raise ResultsError(said(exc)) from None
     cli.work_done()

@@ -72,6 +72,39 @@ def _specimen_record(study, meta):
 
 
 
+# What makes a specimen's recipe, of its preparation's parameters (specimen.json): its seed, size,
+# steps and wall time differ between the seeds of one recipe; these do not.
+RECIPE_KEYS = ("pressure", "mu_prep", "mu_final", "switch_pressure", "unloaded_from", "phi_cell", "inertial_number",
+               "d50", "cu", "time_step", "gain")
+
+
+def recipe_problem(hs):
+    """Why the studies of `hs` (headlines) are not seeds of one recipe, or None: another assembly,
+    one seed at one size twice (it would shrink the sd), or a preparation setting that differs
+    where both specimens record it (a study without specimen.json is not compared)."""
+    kinds = {h["assembly"] for h in hs}
+    if len(kinds) > 1:
+        return "the studies are of %s: seeds of one recipe are of one assembly" % ", ".join(sorted(map(str, kinds)))
+    first = next((h for h in hs if h["recipe_settings"]), None)
+    for h in hs:
+        if not h["recipe_settings"] or h is first:
+            continue
+        if h["recipe"] != first["recipe"]:
+            return "%s is of the recipe %r, %s of %r" % (h["study"], h["recipe"], first["study"], first["recipe"])
+        for k in RECIPE_KEYS:
+            a, b = first["recipe_settings"].get(k), h["recipe_settings"].get(k)
+            if a is not None and b is not None and a != b:
+                return "%s was prepared with %s %s, %s with %s: not one recipe" % (h["study"], k, b, first["study"], a)
+    seen = {}
+    for h in hs:
+        key = (h["n"], h["seed"])
+        if key in seen:
+            return "%s and %s are both seed %s of %s particles: one specimen counted twice" % (
+                seen[key], h["study"], h["seed"], h["n"])
+        seen[key] = h["study"]
+    return None
+
+
 def preparation_steps(params):
     """Every step of a preparation its parameters record (expansion, unloading, consolidation), or None."""
     keys = [k for k in params if k.startswith("steps_")]
@@ -81,6 +114,12 @@ def preparation_steps(params):
 def headlines(study):
     """The headline numbers of one study directory (module doc), a dict; None for what it lacks."""
     meta = read_metadata(study, required=True)
+    spec = meta.get("specimen") or {}
+    summary = spec.get("summary") or {}
+    lacks = [k for k in ("n", "void_ratio", "Zm") if k not in summary] + ([] if spec.get("material") else ["material"])
+    if lacks:
+        raise ResultsError("%s: its metadata.json records no specimen %s (a specimen saved without its summary, "
+                           "or a study written by hand)" % (study, ", ".join(lacks)))
     csv_path = os.path.join(study, "probes.csv")
     rows = read_probes(csv_path, need=["state", "probe", "E", "Zm", "void_ratio", "rotations", "state_steps",
                                        "probe_steps", "nu_1", "nu_2", "nu_1_name", "nu_2_name"])
@@ -98,7 +137,9 @@ def headlines(study):
     e1 = number(per_state[tab["state"][ref]], "void_ratio", csv_path)
     mat = meta["specimen"]["material"]
     out = dict(study=study, n=summary.get("n"), seed=meta["specimen"].get("seed"), states=len(tab["state"]),
+               assembly=(meta.get("fingerprint") or {}).get("assembly", "sphere"),
                recipe=params.get("recipe", "default" if params else None),
+               recipe_settings={k: params[k] for k in RECIPE_KEYS if k in params},
                e=summary["void_ratio"], Zm=summary["Zm"], rattlers=summary.get("Np0"),
                Zm_drop=float(zm.max() - zm.min()), e_change=float(np.max(np.abs(e - e1))),
                reciprocity=float(np.max(reciprocity_errors(tab))))
@@ -161,14 +202,16 @@ def paper_K_G(assembly, zm):
     return float(np.polyval(p["K"], zm)), float(np.polyval(p["G"], zm))
 
 
-def mean_sd(values, fmt="%.3f"):
-    """'m +/- s' over the values (sample sd, n - 1); one value alone as it is; '-' for none."""
+def mean_sd(values, fmt="%.3f", count=False):
+    """'m +/- s' over the values (sample sd, n - 1); one value alone as it is; '-' for none.
+    `count`: followed by how many values it is of, '(3 seeds)', since a study may lack a value that
+    the others have (Table B1 of a study not solved at state 21)."""
     v = [x for x in values if x is not None]
     if not v:
         return "-"
-    if len(v) == 1:
-        return fmt % v[0]
-    return ("%s +/- %s" % (fmt, fmt)) % (float(np.mean(v)), float(np.std(v, ddof=1)))
+    text = fmt % v[0] if len(v) == 1 else \
+        ("%s +/- %s" % (fmt, fmt)) % (float(np.mean(v)), float(np.std(v, ddof=1)))
+    return text + (" (%d seed%s)" % (len(v), "" if len(v) == 1 else "s") if count else "")
 
 
 # (label, key, format, scale): the rows of the table, in the issue's order.
@@ -203,13 +246,24 @@ def _paper_cell(paper, key, fmt):
     return v if isinstance(v, str) else fmt % v
 
 
-def table(groups, assembly):
-    """Markdown: one column per (label, [headlines of its studies]), mean +/- sd, the paper's beside."""
+# The report's headline table (report.py, its first section): the numbers the paper states for an
+# assembly and that a reader compares first; the preparation's bookkeeping stays in the manual's table.
+HEADLINE_KEYS = ("e", "Zm", "K_iso", "G_iso", "zeta", "zeta_h", "zeta_v", "nu_rmse", "E_rmse", "Ez_Ex",
+                 ("B1_ratio", 0), ("B1_ratio", 1), ("B1_ratio", 2), "B1_pred_dem_iso", "B1_pred_dem_21",
+                 "Zm_drop", "e_change", "reciprocity")
+HEADLINE_ROWS = tuple(sorted((r for r in ROWS if r[1] in HEADLINE_KEYS), key=lambda r: HEADLINE_KEYS.index(r[1])))
+
+
+def table(groups, assembly, rows=ROWS, counts=False):
+    """Markdown: one column per (label, [headlines of its studies]), mean +/- sd, the paper's beside.
+    `rows`: which of ROWS (HEADLINE_ROWS: the report's); `counts`: each cell says how many seeds it
+    is of (mean_sd)."""
     paper = paper_values(assembly)
-    head = "| | %s | paper |" % " | ".join("%s (%s)" % (label, _seeds_said(hs)) for label, hs in groups)
+    head = "| | %s | paper |" % " | ".join("%s (%s)" % (label, _seeds_said(hs)) if label else _seeds_said(hs)
+                                          for label, hs in groups)
     out = [head, "|---|%s---|" % ("---|" * len(groups))]
-    for label, key, fmt in ROWS:
-        cells = [mean_sd([_value(h, key) for h in hs], fmt) for _, hs in groups]
+    for label, key, fmt in rows:
+        cells = [mean_sd([_value(h, key) for h in hs], fmt, counts) for _, hs in groups]
         if all(c == "-" for c in cells):
             continue
         pc = _paper_cell(paper, key, fmt)
