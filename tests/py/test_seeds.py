@@ -65,3 +65,15 @@ def test_the_table_puts_the_paper_beside_each_label(tmp_path):
     assert doc.read_text() == "before\n<!-- t:begin -->\n%s\n<!-- t:end -->\nafter\n" % text
     with pytest.raises(seeds.ResultsError):
         seeds.write_block(str(doc), "other", text)
+
+
+def test_the_default_recipe_s_committed_seeds_give_what_the_manual_quotes():
+    """docs/data/spheres-4000/s1-s3, the sphere report's three seeds: the numbers docs/departures.md,
+    path-fidelity.md, statics.md and specimens.md quote (mean +/- sample sd, to the digits printed)."""
+    rows = [seeds.headlines(os.path.join(DATA, "spheres-4000", "s%d" % s)) for s in (1, 2, 3)]
+    assert all(r["states"] == 39 and r["recipe"] == "default" for r in rows)
+    assert seeds.mean_sd([r["Zm_drop"] for r in rows], "%.3f") == "0.043 +/- 0.005"
+    assert seeds.mean_sd([r["zeta"] for r in rows], "%.3f") == "0.551 +/- 0.038"
+    assert seeds.mean_sd([r["e"] for r in rows], "%.4f") == "0.5788 +/- 0.0030"
+    assert seeds.mean_sd([r["Zm"] for r in rows], "%.3f") == "5.920 +/- 0.011"
+    assert all(r["reversals"] == 0 for r in rows)
