@@ -68,6 +68,16 @@ def replace_block(path, name, body, heading=None):
         f.write(text)
 
 
+def time_step_rules(text):
+    """--rules of the time-step benchmarks: at least two rules of dem.TIME_STEP_RULES, comma separated,
+    the first the reference; refused in one line otherwise."""
+    from trueaniso import cli, dem
+    rules = text.split(",")
+    if len(rules) < 2 or any(r not in dem.TIME_STEP_RULES for r in rules):
+        cli.fail("--rules: at least two of %s, comma separated" % ", ".join(dem.TIME_STEP_RULES))
+    return rules
+
+
 def sphere_specimen(path):
     """The number of spheres of the sphere specimen file `path`, checked before any run: a file
     that is not a specimen would fail inside a worker, with its traceback, and a clump specimen be

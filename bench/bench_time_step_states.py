@@ -32,10 +32,7 @@ def options():
     p.add_argument("--doc", help="Markdown file whose table between <!-- BLOCK:begin/end --> is replaced")
     p.add_argument("--block", default="time-step-states", help="the block of --doc (default time-step-states)")
     o = cli.parse(p)
-    from trueaniso import dem
-    o.rules = o.rules.split(",")
-    if len(o.rules) < 2 or any(r not in dem.TIME_STEP_RULES for r in o.rules):
-        cli.fail("--rules: at least two of %s, comma separated" % ", ".join(dem.TIME_STEP_RULES))
+    o.rules = _bench.time_step_rules(o.rules)
     if not os.path.isfile(o.specimen):
         cli.fail("--specimen %s: no such file" % o.specimen)
     if o.doc:
