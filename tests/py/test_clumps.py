@@ -539,7 +539,7 @@ def test_clump2_recipe_screen_table_is_that_of_its_data(tmp_path):
     doc = tmp_path / "clumps.md"
     shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
     import _bench
-    _bench.replace_block(str(doc), "clump2-recipes", screen.table(data, screen.ROWS))
+    _bench.replace_block(str(doc), "clump2-recipes", screen.table(data, screen.ROWS, screen.PAPER))
     assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
     with open(os.path.join(data, "default-1000-s1", "probes.csv")) as f:
         e = {r["state"]: float(r["void_ratio"]) for r in csv.DictReader(f)}
