@@ -154,15 +154,18 @@ def _row(d):
         per_state.setdefault(r["state"], r)
     steps = [int(float(r["state_steps"])) for s, r in per_state.items() if s != "1"]
     ezex = prep.get("Ez_Ex", h.get("Ez_Ex"))
+    prep_steps = None if not prep else (prep["steps_expansion"] + (prep.get("steps_unloading") or 0)
+                                        + prep["steps_consolidation"])
+    if prep_steps is None and os.path.exists(os.path.join(d, "specimen.json")):  # a study with its specimen's record
+        with open(os.path.join(d, "specimen.json")) as f:
+            prep_steps = seeds.preparation_steps(json.load(f).get("parameters") or {})
     zeta = h.get("zeta")
     zeta_said = "-" if zeta is None else "%.3f%s" % (zeta, " (h %.3f, v %.3f%s)" % (
         h["zeta_h"], h["zeta_v"], ", at a bound" if h.get("zeta_at_bound") else ""))
     recip = max(seeds.reciprocity_errors(tab)) if tab["state"] else float("nan")
     return [h.get("n") or prep.get("n"), "%.4f" % h["e"], "%.2f" % h["Zm"], str(h.get("rattlers")),
             _states(sorted(per_state, key=int)), "%.4f" % h["e_change"], "%.2f %%" % (100 * recip), zeta_said,
-            "-" if ezex is None else "%.3f" % ezex,
-            "-" if not prep else "{:,}".format(prep["steps_expansion"] + (prep.get("steps_unloading") or 0)
-                                               + prep["steps_consolidation"]),
+            "-" if ezex is None else "%.3f" % ezex, "-" if prep_steps is None else "{:,}".format(prep_steps),
             _steps(steps)]
 
 
@@ -174,7 +177,7 @@ def _steps(steps):
 
 def _states(ids):
     """The states of a row: listed when few, else their count and those missing."""
-    if len(ids) <= 6:
+    if len(ids) <= 9:
         return ", ".join(ids)
     missing = sorted(set(range(1, 40)) - {int(i) for i in ids})
     return "%d of 39%s" % (len(ids), " (not %s)" % ", ".join(map(str, missing)) if missing else "")
