@@ -173,7 +173,7 @@ def _bench_names(path):
     the headings it writes under."""
     with open(path) as f:
         text = f.read()
-    names = set(re.findall(r'replace_block\([^,]+,\s*"([\w-]+)"', text))
+    names = set(re.findall(r'(?:replace_block|publish)\([^,]+,\s*"([\w-]+)"', text))
     names |= set(re.findall(r'"--block",\s*default="([\w-]+)"', text))
     headings = set(re.findall(r'heading="(#+ [^"]+)"', text))
     return names, headings
