@@ -89,7 +89,7 @@ def test_bench_stepper_refuses_bad_input_before_any_run(specimen_100):
 
 
 def test_bench_state_split_on_the_isotropic_state(specimen_100):
-    """The ramp and hold split (docs/runs.md, clump2's steps) adds up, and bad ids are one line."""
+    """The ramp and hold split (docs/studies/paper-size.md, clump2's steps) adds up, and bad ids are one line."""
     import json
     from conftest import one_line_error, run_script
     proc = run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100, "--ids", "1",
