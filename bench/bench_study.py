@@ -130,9 +130,11 @@ def options(argv=None):
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--tree", action="append", default=None,
                    help="a built checkout to time (default: this one); give it again for another, each with --label")
-    p.add_argument("--label", action="append", default=None, help="the name of each --tree in the table")
+    p.add_argument("--label", action="append", default=None,
+                   help="the name of each --tree in the table; with --tabulate alone, the codes' order (the first is "
+                        "the reference of the speed-up)")
     p.add_argument("--specimen", help="specimen file (.npz) the study runs on")
-    p.add_argument("--ids", default="1-39", help="Table C1 states of this run: numbers and ranges (default: 1-39)")
+    p.add_argument("--ids", default="1-39", help="Table C1 states of this run: numbers and ranges")
     p.add_argument("--time-step", choices=("smallest-inertia", "per-axis"),
                    help="run_study.py --time-step for the states and probes (default: the tree's own default)")
     p.add_argument("--prepare", action="store_true", help="time the preparation of a specimen instead of a study")
@@ -275,6 +277,16 @@ def study_times(out, ids, since):
                     "time_step", "smallest-inertia"))
 
 
+def untimed_states(out, ids):
+    """The states of `ids` whose rows the study in `out` already holds."""
+    try:
+        with open(os.path.join(out, "probes.csv")) as f:
+            have = {r["state"] for r in csv.DictReader(f)}
+    except OSError:
+        return set()
+    return {i for i in ids if str(i) in have}
+
+
 def record_path(runs, label, name):
     return os.path.join(runs, label, name + ".json")
 
@@ -310,6 +322,10 @@ def run_study(o, tree, label):
     if not todo:
         print("%s: states %s of %s already timed (%s)" % (label, ",".join(map(str, o.ids)), name, path))
         return record
+    untimed = sorted(untimed_states(out, todo))
+    if untimed:  # a run interrupted after some states: the study would skip them, and the clock undercount
+        cli.fail("%s already has rows of states %s that no timed run of %s recorded (a run interrupted?): remove %s, "
+                 "or give another --runs" % (out, said_ids(untimed), path, out))
     os.makedirs(out, exist_ok=True)
     prof = os.path.join(o.runs, label, "%s-%d.prof" % (name, len(record["parts"]) + 1))
     log = os.path.join(o.runs, label, "%s-%d.log" % (name, len(record["parts"]) + 1))

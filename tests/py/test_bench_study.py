@@ -111,3 +111,14 @@ def test_each_function_belongs_to_one_part():
     assert bench_study.part_of("/usr/lib/python3/dist-packages/matplotlib/figure.py", "savefig") == "analysis"
     assert bench_study.part_of("~", "<built-in method builtins.compile>") == "python"
     assert bench_study.parse_ids("1-3,21") == [1, 2, 3, 21]
+
+
+def test_an_interrupted_run_is_not_timed_again_as_if_whole(tmp_path, specimen_150):
+    """A study that holds rows no timed run recorded (a run killed after its first states) would be
+    continued, its clock counting only the rest: refused, naming the folder to remove."""
+    runs = tmp_path / "runs"
+    proc = bench("--tree", REPO, "--label", "a", "--specimen", specimen_150, "--runs", runs, "--ids", "1")
+    assert proc.returncode == 0, proc.stderr
+    (runs / "a" / "spheres-150-s4.json").unlink()  # as if the run had been killed before its record
+    proc = bench("--tree", REPO, "--label", "a", "--specimen", specimen_150, "--runs", runs, "--ids", "1,21")
+    one_line_error(proc, "already has rows of states 1", "remove")
