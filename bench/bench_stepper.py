@@ -249,8 +249,8 @@ def main():
              "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
              "Figures in M particle-steps/s (medians); ratios: ours / theirs in the same round, median and range "
              "over the rounds; x %d thread%s: ours / ours on %d thread%s in the same round, median and range. "
-             "Build: the x86-64 level ours was compiled for (TRUEANISO_ARCH; x86-64 is the "
-             "portable default)."
+             "Build: the x86-64 level of the engines ours ran (the package loads the fastest the processor "
+             "runs; TRUEANISO_LEVEL chooses another)."
              % (_bench.machine(), n, (" (%s tiled %d x %d x %d)" % (os.path.basename(o.specimen), o.tile, o.tile, o.tile)
                                       if o.tile > 1 else ""), meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d"), threads[0], plural, threads[0], plural), "",
