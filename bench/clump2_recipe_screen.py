@@ -1,12 +1,16 @@
-"""The clump2 recipes screened along Table C1: one preparation with some recipe settings changed
+"""The clump recipes screened along Table C1: one preparation with some recipe settings changed
 (as clump_recipe_variants.py makes it), its isotropic state's static E_i with rotations
-restrained, and a run_study.py study of a few states on it; the table of docs/studies/clumps.md
-("clump2 consolidated at friction 0.5") from the committed data.
+restrained, and a run_study.py study of a few states on it; the tables of docs/studies/clumps.md
+("clump2 consolidated at friction 0.5", "clump1's growth friction") from the committed data.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 bench/clump2_recipe_screen.py --label NAME --n 1000 --seed 1 \\
         [--set stage1_pressure=5e3 --set mu_free=0.25 ...] --ids 1,9,21,33 --work /tmp/screen \\
         --data docs/data/clump2-recipes
     /usr/bin/python3 bench/clump2_recipe_screen.py --doc docs/studies/clumps.md --data docs/data/clump2-recipes
+    OMP_NUM_THREADS=1 /usr/bin/python3 bench/clump2_recipe_screen.py --assembly clump1 --label mu-prep-0.01 \\
+        --set mu_prep=0.01 --ids 1,9,21,33 --work /tmp/screen --data docs/data/clump1-recipes
+    /usr/bin/python3 bench/clump2_recipe_screen.py --assembly clump1 --doc docs/studies/clumps.md \\
+        --data docs/data/clump1-recipes
 
 The first form prepares WORK/NAME/specimen.npz (one thread), solves its isotropic state, runs
 `run_study.py --specimen ... --ids IDS --time-step per-axis --threads 1` into WORK/NAME/study and
@@ -42,7 +46,7 @@ def value(text):
         return text
 
 
-def prepare(label, n, seed, settings, work):
+def prepare(assembly, label, n, seed, settings, work):
     """The preparation and its restrained static solve: WORK/LABEL/specimen.npz and a dict."""
     from trueaniso import clump_specimen, engines, provenance, specimen, specimen_file, statics
     engines.set_threads(1)
@@ -50,14 +54,14 @@ def prepare(label, n, seed, settings, work):
     d = os.path.join(work, label)
     os.makedirs(d, exist_ok=True)
     t0 = time.time()
-    scene, log = clump_specimen.prepare_clumps("clump2", n, seed=seed, **settings)
+    scene, log = clump_specimen.prepare_clumps(assembly, n, seed=seed, **settings)
     log["threads"] = 1
     st = specimen.state(scene)
     specimen_file.save(os.path.join(d, "specimen.npz"), scene, seed=seed, parameters=log, summary=st)
     wall = time.time() - t0
     r = statics.static_stiffness(scene, rotations=False)
     E = [float(x) for x in r["E"]]
-    return dict(label=label, n=n, seed=seed, settings=settings, e=st["void_ratio"], Zm=st["Zm"], Np0=st["Np0"],
+    return dict(assembly=assembly, label=label, n=n, seed=seed, settings=settings, e=st["void_ratio"], Zm=st["Zm"], Np0=st["Np0"],
                 steps_expansion=log["steps_expansion"], steps_unloading=log.get("steps_unloading", 0),
                 steps_consolidation=log["steps_consolidation"], wall_prep=wall, E_restrained=E,
                 Ez_Ex=E[2] / (0.5 * (E[0] + E[1])), rattlers_restrained=len(r["rattlers"]))
@@ -150,15 +154,18 @@ def _row(d):
         per_state.setdefault(r["state"], r)
     steps = [int(float(r["state_steps"])) for s, r in per_state.items() if s != "1"]
     ezex = prep.get("Ez_Ex", h.get("Ez_Ex"))
+    prep_steps = None if not prep else (prep["steps_expansion"] + (prep.get("steps_unloading") or 0)
+                                        + prep["steps_consolidation"])
+    if prep_steps is None and os.path.exists(os.path.join(d, "specimen.json")):  # a study with its specimen's record
+        with open(os.path.join(d, "specimen.json")) as f:
+            prep_steps = seeds.preparation_steps(json.load(f).get("parameters") or {})
     zeta = h.get("zeta")
     zeta_said = "-" if zeta is None else "%.3f%s" % (zeta, " (h %.3f, v %.3f%s)" % (
         h["zeta_h"], h["zeta_v"], ", at a bound" if h.get("zeta_at_bound") else ""))
     recip = max(seeds.reciprocity_errors(tab)) if tab["state"] else float("nan")
     return [h.get("n") or prep.get("n"), "%.4f" % h["e"], "%.2f" % h["Zm"], str(h.get("rattlers")),
             _states(sorted(per_state, key=int)), "%.4f" % h["e_change"], "%.2f %%" % (100 * recip), zeta_said,
-            "-" if ezex is None else "%.3f" % ezex,
-            "-" if not prep else "{:,}".format(prep["steps_expansion"] + (prep.get("steps_unloading") or 0)
-                                               + prep["steps_consolidation"]),
+            "-" if ezex is None else "%.3f" % ezex, "-" if prep_steps is None else "{:,}".format(prep_steps),
             _steps(steps)]
 
 
@@ -170,13 +177,13 @@ def _steps(steps):
 
 def _states(ids):
     """The states of a row: listed when few, else their count and those missing."""
-    if len(ids) <= 6:
+    if len(ids) <= 9:
         return ", ".join(ids)
     missing = sorted(set(range(1, 40)) - {int(i) for i in ids})
     return "%d of 39%s" % (len(ids), " (not %s)" % ", ".join(map(str, missing)) if missing else "")
 
 
-def table(data, order):
+def table(data, order, paper):
     out = ["| recipe | clumps | e | Zm | rattlers | states | largest abs(e - e(1)) | largest reciprocity error | "
            "zeta fitted | E_z/E_x restrained | steps to prepare | steps to reach a state |",
            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -184,7 +191,7 @@ def table(data, order):
         d = os.path.join(REPO, label) if label.startswith("docs/") else os.path.join(data, label)
         if os.path.isdir(d):
             out.append("| %s | %s |" % (said, " | ".join(str(x) for x in _row(d))))
-    out.append("| paper | 53,004 | 0.636 | | | 39 | approximately constant | | Fig. 13f only | 0.855 | | |")
+    out.append(paper)
     return "\n".join(out)
 
 
@@ -198,10 +205,21 @@ ROWS = (("docs/data/clump2-4000-s1", "grown to 100 kPa at 0.01, rotations blocke
         ("free-0.25-at-5kPa", "blocked at 0.01 to 5 kPa, then free at 0.25"),
         ("free-0.25-at-5kPa-w0.3", "the same, long axes weighted 0.3"),
         ("default-1000-s1", "**the default**: the same, by run_study.py, all 39 states"))
+PAPER = "| paper | 53,004 | 0.636 | | | 39 | approximately constant | | Fig. 13f only | 0.855 | | |"
+
+# clump1's growth friction (mu_prep, also the unloading's), the pentamer recipe otherwise.
+ROWS1 = (("default-1000-s1", "mu_prep 0.002 (the pentamer recipe before), by run_study.py, nine states"),
+         ("mu-prep-0.005", "mu_prep 0.005"),
+         ("mu-prep-0.01", "mu_prep 0.01"),
+         ("mu-prep-0.02", "mu_prep 0.02"),
+         ("mu-prep-0.01-s2", "mu_prep 0.01, seed 2"))
+PAPER1 = "| paper | 53,004 | 0.445 | | | 39 | approximately constant | | | 1.90 | | |"
+TABLES = {"clump2": ("clump2-recipes", ROWS, PAPER), "clump1": ("clump1-recipes", ROWS1, PAPER1)}
 
 
 def main():
     p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--assembly", default="clump2", choices=sorted(TABLES), help="the clump assembly screened")
     p.add_argument("--label", help="name of the row (a directory under --data)")
     p.add_argument("--n", type=int, default=1000, help="number of clumps")
     p.add_argument("--seed", type=int, default=1, help="seed of the random packing")
@@ -216,7 +234,8 @@ def main():
     p.add_argument("--doc", help="rewrite the table of this Markdown file from --data instead")
     o = cli.parse(p)
     if o.doc:
-        _bench.replace_block(o.doc, "clump2-recipes", table(o.data, ROWS))
+        block, rows, paper = TABLES[o.assembly]
+        _bench.replace_block(o.doc, block, table(o.data, rows, paper))
         return
     if not o.label:
         raise cli.InputError("give --label (or --doc)")
@@ -231,7 +250,7 @@ def main():
     for item in o.set:
         k, _, v = item.partition("=")
         settings[k] = value(v)
-    prep = prepare(o.label, o.n, o.seed, settings, o.work)
+    prep = prepare(o.assembly, o.label, o.n, o.seed, settings, o.work)
     d = os.path.join(o.work, o.label)
     code = study(os.path.join(d, "specimen.npz"), o.ids, os.path.join(d, "study"))
     prep["study_returncode"] = code

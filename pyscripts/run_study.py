@@ -346,8 +346,9 @@ def main(argv=None):
         fig_dir = os.path.join(o.out, "figures")
         os.makedirs(fig_dir, exist_ok=True)
         rows = study.read_rows(csv_path)
-        figures.modulus_vs_stress(rows, os.path.join(fig_dir, "E_vs_sigma.png"))
-        fits = figures.scalar_moduli_vs_zm(rows, os.path.join(fig_dir, "K_G_vs_Zm.png"))
+        who = figures.study_who(o.out)
+        figures.modulus_vs_stress(rows, os.path.join(fig_dir, "E_vs_sigma.png"), who)
+        fits = figures.scalar_moduli_vs_zm(rows, os.path.join(fig_dir, "K_G_vs_Zm.png"), who)
         report_path, _ = report.build(o.out, os.path.join(o.out, "report"), log=log)
         atomic.write_json(os.path.join(o.out, "summary.json"), dict(
             specimen=st, states=len({r["state"] for r in rows}), probes=len(rows), statics=sres, K_G_fits=fits,

@@ -187,6 +187,20 @@ def test_a_clump_report_names_its_clumps_and_draws_the_papers_quadratics(tmp_pat
     assert "extrapolated" in seen["fig11-K-G-vs-Zm.png"]["title"]  # our Zm is past the vertex of its fit
 
 
+def test_the_quick_figures_of_a_clump_study_name_its_clumps(tmp_path, monkeypatch):
+    """run_study.py's figures/ and `python3 -m trueaniso.analysis.figures` title their figures as the
+    report does: the assembly, particle count and seed of the study's metadata.json (they said
+    "sphere assembly" whatever the study was)."""
+    study = _cut_study(os.path.join(DATA, "clump2-4000", "s1"), str(tmp_path / "clump2"))
+    seen = _capture(monkeypatch)
+    assert figures.main([os.path.join(study, "probes.csv"), "--out", str(tmp_path / "f")]) == 0
+    assert sorted(seen) == ["E_vs_sigma.png", "K_G_vs_Zm.png"]
+    assert all("4000 clump2 clumps, seed 1" in f["title"] and "sphere" not in f["title"] for f in seen.values())
+    seen.clear()
+    assert figures.main([os.path.join(study, "probes.csv"), "--out", str(tmp_path / "g"), "--title", "my packing"]) == 0
+    assert all(f["title"].endswith("my packing") for f in seen.values())
+
+
 def test_a_bare_table_says_what_it_does_not_record(small_table, tmp_path, monkeypatch):
     seen = _capture(monkeypatch)
     text = open(report.build(small_table, str(tmp_path / "rep"), log=lambda m: None)[0]).read()

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 
 from . import hyperelastic
-from .results import ResultsError, number, read_probes, said
+from .results import ResultsError, number, read_metadata, read_probes, said
 
 __all__ = ["modulus_vs_stress", "scalar_moduli_vs_zm"]
 
@@ -69,13 +69,27 @@ def who_said(assembly=None, n=None, seed=None):
     return "%s, %s" % (size, "seed %s" % seed if seed is not None else "seed not recorded")
 
 
-def modulus_vs_stress(rows, path, title="sphere assembly"):
+def study_who(source, assembly=None):
+    """What a figure is of, for its title (`who_said`): the assembly, particle count and seed its
+    study's metadata.json records (a study directory or its probes.csv); a bare table or a JSON of
+    measures records neither count nor seed, and says so (`assembly` names what the caller knows)."""
+    d = source if os.path.isdir(source) else os.path.dirname(os.path.abspath(source))
+    meta = read_metadata(d) if os.path.exists(os.path.join(d, "metadata.json")) else None
+    if meta is None:
+        return who_said(assembly)
+    spec = meta.get("specimen") or {}
+    return who_said((meta.get("fingerprint") or {}).get("assembly", "sphere"),
+                    (spec.get("summary") or {}).get("n"), spec.get("seed"))
+
+
+def modulus_vs_stress(rows, path, who=None):
     """Fig. 3: each Young's modulus E_i against the stress sigma_i in its direction, one series per axis.
 
     Args:
         rows: rows of probes.csv (`results.read_probes`).
         path: the PNG to write (atomically).
-        title: what the figure is of (assembly, particle count, seed: `who_said`), under its question.
+        who: what the figure is of (assembly, particle count, seed: `who_said`, `study_who`), under its
+            question.
 
     Example:
         >>> import os, tempfile
@@ -94,7 +108,7 @@ def modulus_vs_stress(rows, path, title="sphere assembly"):
         ax.scatter(s, e, marker=mark, label="$E_%s$" % axis, alpha=0.8)
     ax.set_xlabel(r"$\sigma_i$ (kPa)")
     ax.set_ylabel(r"$E_i$ (MPa)")
-    entitle(fig, "Fig. 3: does each $E_i$ rise with the stress $\\sigma_i$ in its direction?", title)
+    entitle(fig, "Fig. 3: does each $E_i$ rise with the stress $\\sigma_i$ in its direction?", who)
     legend_outside(ax, fontsize=8)
     _finish(plt, fig, path)
 
@@ -296,7 +310,8 @@ def main(argv=None):
     p = cli.Parser(prog="python3 -m trueaniso.analysis.figures", description="figures from a probes.csv")
     p.add_argument("csv", help="probe table of run_states.py or run_study.py")
     p.add_argument("--out", required=True, help="directory for the PNG files")
-    p.add_argument("--title", default="sphere assembly", help="assembly named in the titles")
+    p.add_argument("--title", help="what the figures are of, in their titles (default: the assembly, particle count "
+                                   "and seed of the study's metadata.json beside the table)")
     o = p.parse_args(argv)
     try:
         problem = cli.output_problem(o.out)  # before any work: a refusal at the end would lose it
@@ -315,8 +330,9 @@ def main(argv=None):
         if rows.note:
             sys.stderr.write("note: %s\n" % rows.note)
         os.makedirs(o.out, exist_ok=True)
-        modulus_vs_stress(rows, os.path.join(o.out, "E_vs_sigma.png"), o.title)
-        fits = scalar_moduli_vs_zm(rows, os.path.join(o.out, "K_G_vs_Zm.png"))
+        who = o.title or study_who(o.csv)
+        modulus_vs_stress(rows, os.path.join(o.out, "E_vs_sigma.png"), who)
+        fits = scalar_moduli_vs_zm(rows, os.path.join(o.out, "K_G_vs_Zm.png"), who)
     except (ResultsError, OSError, ValueError) as exc:
         sys.stderr.write("error: %s\n" % said(exc))
         return 2

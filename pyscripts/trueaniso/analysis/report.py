@@ -442,17 +442,7 @@ def headline_section(heads, assembly, borrowed_b1=False):
     return out + [""]
 
 
-def study_who(source, assembly=None):
-    """What a figure is of, for its title (figures.who_said): the assembly, particle count and seed
-    its study's metadata.json records (a study directory or its probes.csv); a bare table or a JSON
-    of measures records neither count nor seed, and says so."""
-    d = source if os.path.isdir(source) else os.path.dirname(os.path.abspath(source))
-    meta = read_metadata(d) if os.path.exists(os.path.join(d, "metadata.json")) else None
-    if meta is None:
-        return figures.who_said(assembly)
-    spec = meta.get("specimen") or {}
-    return figures.who_said((meta.get("fingerprint") or {}).get("assembly", "sphere"),
-                            (spec.get("summary") or {}).get("n"), spec.get("seed"))
+study_who = figures.study_who  # what a figure is of, for its title
 
 
 def paper_table2(assembly, zm):
