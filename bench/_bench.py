@@ -68,6 +68,17 @@ def replace_block(path, name, body, heading=None):
         f.write(text)
 
 
+def publish(doc, name, lines, heading=None):
+    """A benchmark's result printed, and put into the page `doc` between the NAME markers when one
+    was given (--doc; replace_block, with its `heading`): `lines`, joined, or one text. Returns
+    the text."""
+    text = lines if isinstance(lines, str) else "\n".join(lines)
+    print(text)
+    if doc:
+        replace_block(doc, name, text, heading=heading)
+    return text
+
+
 def time_step_rules(text):
     """--rules of the time-step benchmarks: at least two rules of dem.TIME_STEP_RULES, comma separated,
     the first the reference; refused in one line otherwise."""

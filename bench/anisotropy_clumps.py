@@ -4,7 +4,7 @@ E_x, E_y, E_z with particle rotations restrained and free, from the exact static
 (docs/statics.md) and from the dynamic stress probes (Eq. 10, gamma = 1e-6, the study's settings).
 
     /usr/bin/python3 bench/anisotropy_clumps.py --specimen specimens/clump1-4000-s1.npz \
-        --specimen specimens/clump2-4000-s1.npz [--doc docs/specimens.md] [--json out.json]
+        --specimen specimens/clump2-4000-s1.npz [--doc docs/studies/specimens.md] [--json out.json]
 
 With --doc the table between <!-- anisotropy:begin --> and <!-- anisotropy:end --> is replaced.
 """

@@ -217,10 +217,7 @@ def main():
     lines = state_table(o, names) if o.state else stepper_table(o, names)
     lines += ["", "Reproduce: `/usr/bin/python3 bench/bench_builds.py %s`"
               % " ".join(shlex.quote(a if not os.path.exists(a) else os.path.relpath(a)) for a in sys.argv[1:])]
-    table = "\n".join(lines)
-    print(table)
-    if o.doc:
-        _bench.replace_block(o.doc, o.block, table, heading="## Stepper changes")
+    _bench.publish(o.doc, o.block, lines, heading="## Stepper changes")
 
 
 if __name__ == "__main__":

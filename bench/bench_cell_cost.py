@@ -114,10 +114,7 @@ def main(argv=None):
                       "held, the orthorhombic servo).", ""] + steps
     lines += ["", "Reproduce: `/usr/bin/python3 bench/bench_cell_cost.py --specimen %s --doc docs/studies/benchmarks.md`"
               % os.path.relpath(o.specimen)]
-    table = "\n".join(lines)
-    print(table)
-    if o.doc:
-        _bench.replace_block(o.doc, "cell-cost", table)
+    _bench.publish(o.doc, "cell-cost", lines)
 
 
 if __name__ == "__main__":

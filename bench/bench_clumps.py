@@ -101,10 +101,7 @@ def main():
               "--repeats %d%s --doc docs/studies/benchmarks.md`"
               % (" ".join("--specimen %s" % os.path.relpath(p) for p in o.specimen), o.threads, o.repeats,
                  " --shared" if o.shared else "")]
-    table = "\n".join(lines)
-    print(table)
-    if o.doc:
-        _bench.replace_block(o.doc, "clumps", table, heading="## Clump assemblies")
+    _bench.publish(o.doc, "clumps", lines, heading="## Clump assemblies")
 
 
 if __name__ == "__main__" or cli.in_yade():

@@ -120,10 +120,7 @@ def main():
               "Reproduce: `/usr/bin/python3 bench/bench_hosts.py --specimen %s --ids %s --repeats %d --doc "
               "docs/benchmarks.md`" % (os.path.relpath(o.specimen, REPO) if o.specimen.startswith(REPO) else o.specimen,
                                        o.ids, o.repeats)]
-    table = "\n".join(lines)
-    print(table)
-    if o.doc:
-        _bench.replace_block(o.doc, "hosts", table, heading="## The study on each host")
+    _bench.publish(o.doc, "hosts", lines, heading="## The study on each host")
 
 
 if __name__ == "__main__":

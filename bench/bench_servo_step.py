@@ -210,13 +210,9 @@ def main():
     o = options()
     table, how = counted(o) if o.callgrind else timed(o)
     load = os.getloadavg()
-    text = ("Machine: %s; load average %.1f at the end; %s, one process at a time, %s.\n\n%s\n\n"
-            "Reproduce: `/usr/bin/python3 bench/bench_servo_step.py %s`"
-            % (_bench.machine(), load[1], how, time.strftime("%Y-%m-%d"), table,
-               shlex.join(sys.argv[1:])))
-    print(text)
-    if o.doc:
-        _bench.replace_block(o.doc, o.block, text)
+    _bench.publish(o.doc, o.block, "Machine: %s; load average %.1f at the end; %s, one process at a time, %s.\n\n%s\n\n"
+                   "Reproduce: `/usr/bin/python3 bench/bench_servo_step.py %s`"
+                   % (_bench.machine(), load[1], how, time.strftime("%Y-%m-%d"), table, shlex.join(sys.argv[1:])))
 
 
 if __name__ == "__main__":

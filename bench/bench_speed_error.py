@@ -180,10 +180,7 @@ def write(o, results):
             r["time"]))
     lines += ["", "Reproduce: `/usr/bin/python3 bench/bench_speed_error.py --specimens %s --doc %s --plot %s`"
               % (" ".join(os.path.relpath(p) for p in o.specimens), o.doc, o.plot)]
-    table = "\n".join(lines)
-    print(table)
-    if o.doc:
-        _bench.replace_block(o.doc, "speed", table)
+    _bench.publish(o.doc, "speed", lines)
     if o.plot:
         import matplotlib
         matplotlib.use("Agg")

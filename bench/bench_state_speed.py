@@ -116,11 +116,7 @@ def main():
                      % (way_name(way), way_name(o.ways[0]), steps0, steps1, steps0 / max(steps1, 1), within, len(fast),
                         PROBE_ERROR_E, PROBE_ERROR_NU, max(t[9] for t in fast), max(t[10] for t in fast),
                         max(t[8] for t in fast), max(t[11] for t in fast)))
-    text = "\n".join(lines)
-    print(text)
-    if o.doc:
-        _bench.replace_block(o.doc, o.block, text,
-                              heading=None if os.path.exists(o.doc) else "# Steps to reach a state")
+    _bench.publish(o.doc, o.block, lines, heading=None if o.doc and os.path.exists(o.doc) else "# Steps to reach a state")
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import runs nothing

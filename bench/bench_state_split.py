@@ -12,7 +12,7 @@ rest, until every stress is within 100 Pa and the unbalanced force below 1e-4 fo
 While loading, looked at every chunk: the largest lag of a stress behind the goal (max_lag) and
 the largest distance of the normal stresses from the straight path (off_path), in Pa.
 --feed-forward off,on runs each gain with the servo's feed-forward off and on (docs/triaxial.md).
-One JSON line per state, gain and setting (docs/runs.md, "Where clump2's steps to a state go").
+One JSON line per state, gain and setting (docs/studies/paper-size.md, "Where clump2's steps to a state go").
 """
 import json
 import os

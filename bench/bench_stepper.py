@@ -265,10 +265,7 @@ def main():
 
     lines += ["", "Reproduce: `/usr/bin/python3 bench/bench_stepper.py %s`"
               % " ".join(os.path.relpath(a) if os.path.isfile(a) else ("'%s'" % a if " " in a else a) for a in sys.argv[1:])]
-    table = "\n".join(lines)
-    print(table)
-    if o.doc:
-        _bench.replace_block(o.doc, o.block, table)
+    _bench.publish(o.doc, o.block, lines)
 
 
 if __name__ == "__main__":  # also under yade-double -x; an import runs nothing

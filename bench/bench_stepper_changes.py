@@ -119,10 +119,7 @@ def main():
         lines.append("| loops of >= %d items (default) | %.0f |" % (minimum, statistics.median(res["default"])))
     lines += ["", "Reproduce: `/usr/bin/python3 bench/bench_stepper_changes.py %s`"
               % " ".join(a if not os.path.isfile(a) else os.path.relpath(a) for a in sys.argv[1:])]
-    table = "\n".join(lines)
-    print(table)
-    if o.doc:
-        _bench.replace_block(o.doc, "stepper-changes", table, heading="## Stepper changes")
+    _bench.publish(o.doc, "stepper-changes", lines, heading="## Stepper changes")
 
 
 if __name__ == "__main__":

@@ -121,10 +121,7 @@ def main():
                          r, o.rules[0], totals[o.rules[0]], totals[r], totals[o.rules[0]] / max(totals[r], 1),
                          worst[r][0], worst[r][1], errors[r][0], errors[r][1], o.rules[0], errors[o.rules[0]][0],
                          errors[o.rules[0]][1], PROBE_ERROR_E, PROBE_ERROR_NU))
-    text = "\n".join(lines)
-    print(text)
-    if o.doc:
-        _bench.replace_block(o.doc, o.block, text)
+    _bench.publish(o.doc, o.block, lines)
 
 
 if __name__ == "__main__":

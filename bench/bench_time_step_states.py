@@ -87,10 +87,7 @@ def main():
                      "(the default probe's own error: %.1e, %.1e)." % (
                          r, o.rules[0], totals[o.rules[0]][0], totals[r][0], totals[o.rules[0]][0] / max(totals[r][0], 1),
                          totals[o.rules[0]][1], totals[r][1], worst[r][0], worst[r][1], PROBE_ERROR_E, PROBE_ERROR_NU))
-    text = "\n".join(lines)
-    print(text)
-    if o.doc:
-        _bench.replace_block(o.doc, o.block, text)
+    _bench.publish(o.doc, o.block, lines)
 
 
 if __name__ == "__main__":

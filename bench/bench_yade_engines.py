@@ -122,10 +122,7 @@ def main():
                  % (statistics.median(ratios), min(ratios), max(ratios)))
     lines += ["", "Reproduce: `/usr/bin/python3 bench/bench_yade_engines.py %s`"
               % " ".join(os.path.relpath(a) if os.path.isfile(a) else a for a in sys.argv[1:])]
-    table = "\n".join(lines)
-    print(table)
-    if o.doc:
-        _bench.replace_block(o.doc, BLOCK, table)
+    _bench.publish(o.doc, BLOCK, lines)
 
 
 if __name__ == "__main__":  # also under yade-double -x

@@ -112,10 +112,7 @@ def main():
     lines += ["", "Steps, all states and seeds: %d -> %d (%.2fx fewer). The largest ratio of the rule's change to the "
               "seeds' scatter at a state: %s." % (total[RULES[0]], total[RULES[1]], total[RULES[0]] / total[RULES[1]],
                                                    ", ".join("%s %.2g" % (q, worst[q]) for q, _ in QUANTITIES))]
-    text = "\n".join(lines)
-    print(text)
-    if o.doc:
-        _bench.replace_block(o.doc, o.block, text)
+    _bench.publish(o.doc, o.block, lines)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 #pragma once
-// Lattices with closed-form elastic constants (docs/statics.md section 4): the simple cubic and the
+// Lattices with closed-form elastic constants (docs/studies/statics.md, "Closed forms the tests compare with"): the simple cubic and the
 // FCC lattice at uniform overlap, built in an orthorhombic cell of conventional cells, and the FCC
 // lattice also in the sheared cell of its primitive vectors. Shared by the statics, the probes and
 // the cell tests.
@@ -49,7 +49,7 @@ inline ContactLaw law(const Material& m, Real delta, Real r = kR) {
   return {N, m.Cn() * std::cbrt(r * N), m.Cs() * std::cbrt(r * N)};
 }
 
-// Closed form of an orthorhombic simple cubic lattice (docs/statics.md, "Simple cubic"): every
+// Closed form of an orthorhombic simple cubic lattice (docs/studies/statics.md, "Simple cubic"): every
 // sphere is an inversion centre, so translations stay affine; the rotations are uniform and
 // set by moment balance, a series combination of the two shear springs of each shear plane.
 inline Mat6 simpleCubicStiffness(const Material& m, const Vec3& delta, bool rotations, Real r = kR) {
@@ -74,7 +74,7 @@ inline Mat6 simpleCubicStiffness(const Material& m, const Vec3& delta, bool rota
   return C;
 }
 
-// Closed form of an FCC lattice at uniform overlap (docs/statics.md, "FCC").
+// Closed form of an FCC lattice at uniform overlap (docs/studies/statics.md, "FCC").
 inline Mat6 fccStiffness(const Material& m, Real delta, Real r = kR) {
   const ContactLaw c = law(m, delta, r);
   const Real l = 2 * r - delta, f = std::sqrt(2.0) / l, g = c.N / l;

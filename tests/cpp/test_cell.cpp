@@ -381,7 +381,7 @@ TEST(ShearedCell, AffineVelocityOfAFullGradient) {
 
 // The FCC lattice in the sheared cell of its primitive vectors (60 degrees apart): the same
 // lattice as the conventional cubic description, so the static stiffness is the closed form of
-// docs/statics.md 4.2 in the cube axes, C_44 = sqrt2/l ((k_n + k_s)/2 - 3N/(2l)) included. Checks
+// docs/studies/statics.md, "FCC", in the cube axes, C_44 = sqrt2/l ((k_n + k_s)/2 - 3N/(2l)) included. Checks
 // the images, the volume and the Love-Weber sum of a non-orthogonal cell through the statics.
 // Tolerance as for the orthorhombic lattices (1e-9: round-off of the sparse solve).
 TEST(ShearedCell, FaceCentredCubicInItsPrimitiveCellHasTheClosedForm) {

@@ -91,7 +91,7 @@ TEST(Micromechanics, AxialComponentsEqualAffineStiffness) {
   const Vec6 affine = affineStiffness(*s);
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(C(4 * k, 4 * k), affine[k], 1e-12 * affine[k]);
   // The shear components: the minor-symmetrised C_ijij of the engineering shear strain
-  // (docs/statics.md section 5), (C_ijij + C_jiji + C_ijji + C_jiij) / 4.
+  // (docs/studies/statics.md, "Eq. (32) and the paper's Appendix A"), (C_ijij + C_jiji + C_ijji + C_jiij) / 4.
   for (int I = 3; I < 6; ++I) {
     const int i = voigt::kRow[I], j = voigt::kCol[I], ij = pairIndex(i, j), ji = pairIndex(j, i);
     const Real minor = 0.25 * (C(ij, ij) + C(ji, ji) + C(ij, ji) + C(ji, ij));

@@ -41,6 +41,20 @@ def test_a_new_block_goes_into_its_headings_section(tmp_path):
     assert doc.read_text().endswith("## Next\n\ntext\n\n<!-- c:begin -->\nC\n<!-- c:end -->\n")
     assert doc.read_text().count("## Changes") == 1
 
+
+def test_publish_prints_the_table_and_writes_it_only_where_asked(tmp_path, capsys):
+    """What every benchmark does with its table: print it, and put it between its markers only in
+    the page --doc named (none: no file is written)."""
+    assert _bench.publish(None, "speed", ["| a |", "| 1 |"]) == "| a |\n| 1 |"
+    assert capsys.readouterr().out == "| a |\n| 1 |\n"
+    assert os.listdir(tmp_path) == []
+    doc = tmp_path / "bench.md"
+    doc.write_text("# T\n\n## Speed\n\ntext\n")
+    _bench.publish(str(doc), "speed", "one text", heading="## Speed")
+    assert doc.read_text() == "# T\n\n## Speed\n\ntext\n\n<!-- speed:begin -->\none text\n<!-- speed:end -->\n"
+    assert capsys.readouterr().out == "one text\n"
+
+
 def test_machine_names_cpu_and_cores():
     line = _bench.machine()
     assert "%d cores" % os.cpu_count() in line
@@ -75,7 +89,7 @@ def test_bench_stepper_refuses_bad_input_before_any_run(specimen_100):
 
 
 def test_bench_state_split_on_the_isotropic_state(specimen_100):
-    """The ramp and hold split (docs/runs.md, clump2's steps) adds up, and bad ids are one line."""
+    """The ramp and hold split (docs/studies/paper-size.md, clump2's steps) adds up, and bad ids are one line."""
     import json
     from conftest import one_line_error, run_script
     proc = run_script(os.path.join("bench", "bench_state_split.py"), "--specimen", specimen_100, "--ids", "1",

@@ -14,7 +14,7 @@ from conftest import REPO
 SCRIPTS = sorted(glob.glob(os.path.join(REPO, "bench", "*.py")))
 # calls that write the file their argument names (open: with a writing mode)
 WRITERS = {"atomic_open", "write_json", "write_csv", "savefig", "save", "savez", "replace", "copy", "copyfile",
-           "makedirs", "replace_block", "rename"}
+           "makedirs", "replace_block", "publish", "rename"}
 
 
 def _name(call):
@@ -137,13 +137,13 @@ def problems(path):
                         used |= {n.attr for v in values for n in ast.walk(v) if isinstance(n, ast.Attribute)}
                 if used & from_docs:
                     found.append("%s writes to --%s, whose default is under docs/" % (where, sorted(used & from_docs)[0]))
-                if _name(call) == "replace_block":
+                if _name(call) in ("replace_block", "publish"):
                     text = ast.unparse(arg)
                     if text != "o.doc" and not (isinstance(arg, ast.Name) and arg.id in params):
                         found.append("%s replaces a block of %s, not of --doc" % (where, text))
     # a function that hands its parameter to replace_block is called with --doc only
     for function in _functions(tree):
-        blocks = [c for c in ast.walk(function) if isinstance(c, ast.Call) and _name(c) == "replace_block"
+        blocks = [c for c in ast.walk(function) if isinstance(c, ast.Call) and _name(c) in ("replace_block", "publish")
                   and c.args and isinstance(c.args[0], ast.Name)]
         params = [a.arg for a in function.args.args]
         for block in blocks:

@@ -248,7 +248,7 @@ def test_every_option_must_have_help():
 
 def test_memory_estimate_bounds_the_measured_peak():
     """The preparation estimate bounds the measured peak without being wrong by a factor: 53,004
-    spheres peaked at 162.6 MB under python3 (docs/specimens.md); the bound may be up to 1.5x."""
+    spheres peaked at 162.6 MB under python3 (docs/studies/specimens.md); the bound may be up to 1.5x."""
     from trueaniso import resources
     memory, _ = resources.preparation_estimate(53004, 1)
     assert 162.6e6 < memory < 1.5 * 162.6e6

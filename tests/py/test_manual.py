@@ -173,7 +173,7 @@ def _bench_names(path):
     the headings it writes under."""
     with open(path) as f:
         text = f.read()
-    names = set(re.findall(r'replace_block\([^,]+,\s*"([\w-]+)"', text))
+    names = set(re.findall(r'(?:replace_block|publish)\([^,]+,\s*"([\w-]+)"', text))
     names |= set(re.findall(r'"--block",\s*default="([\w-]+)"', text))
     headings = set(re.findall(r'heading="(#+ [^"]+)"', text))
     return names, headings
@@ -266,8 +266,8 @@ CHROMIUM = ("chromium", "--headless", "--no-sandbox", "--disable-gpu", "--no-fir
 # Loads each page in turn in an iframe of the width of a laptop's browser (1280 px), waits for the
 # theme's script (it wraps every table in its scrolling box) and MathJax (a formula widens its
 # cell), and writes what it measures into the page, which chromium --dump-dom prints: a table
-# wider than its box (the theme lets it scroll, which hides the right-hand columns) or a cell
-# whose content overflows it.
+# wider than its box (the theme lets it scroll, which hides the right-hand columns), a cell
+# whose content overflows it, or an entry of the side menu cut off at its edge.
 MEASURE = """<!DOCTYPE html><html><body><pre id="result">running</pre>
 <iframe id="f" style="width:1280px;height:900px;border:0"></iframe>
 <script>
@@ -283,6 +283,11 @@ function measure(doc, page) {
         found.push("table " + k + ": a cell overflows (" + c.scrollWidth + " px in " + c.clientWidth + "): "
                    + c.textContent.trim().slice(0, 60));
     });
+  });
+  // the side menu's entries wrap too (a YADE class's long name in code ran under the page)
+  doc.querySelectorAll(".wy-menu-vertical a").forEach(a => {
+    if (a.scrollWidth > a.clientWidth + 1)
+      found.push("menu entry overflows (" + a.scrollWidth + " px in " + a.clientWidth + "): " + a.textContent.trim().slice(0, 60));
   });
   const wrapped = doc.querySelectorAll(".wy-table-responsive table").length;
   return {page: page, tables: doc.querySelectorAll("table").length, wrapped: wrapped, found: found,
@@ -326,8 +331,9 @@ def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
     """Every table of every built page fits its column at a laptop's width (1280 px) in chromium:
     the theme keeps each cell on one line and lets a wide table scroll in its box, which hid the
     equation map's code and tests and the schemas' descriptions; docs/_static/trueaniso.css makes
-    cells wrap. A table wider than its box, or a cell whose content overflows, fails here; so does a
-    formula of these pages that MathJax (Debian's, copied into the manual) did not typeset."""
+    cells wrap. A table wider than its box, a cell whose content overflows, or a side-menu entry cut
+    off (a long class name in code) fails here; so does a formula of these pages that MathJax
+    (Debian's, copied into the manual) did not typeset."""
     proc, out = manual
     assert proc.returncode == 0
     pages = _pages_with_tables(out)
@@ -349,7 +355,7 @@ def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
     # measured is what a reader sees
     assert all(r["wrapped"] == r["tables"] or r["wrapped"] > 0 for r in results), results
     clipped = ["%s: %s" % (r["page"], line) for r in results for line in r["found"]]
-    assert not clipped, "tables clipped at 1280 px:\n" + "\n".join(clipped)
+    assert not clipped, "clipped at 1280 px:\n" + "\n".join(clipped)
     # the formulas are typeset by the MathJax copied into the manual (no network here)
     equations = results[pages.index("equations.html")]
     assert equations["formulas"] >= 30, equations

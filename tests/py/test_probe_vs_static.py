@@ -91,7 +91,7 @@ def test_affine_static_equals_micromechanics_at_zeta_1(held):
     C = np.asarray(pred["voigt"])  # Appendix A, from B and M of Eqs. 33-34
     affine = np.asarray(st["affine_normal"]) + np.asarray(st["affine_shear"])  # Eq. 32, no prestress terms
     # Normal 3x3 block (the part Eqs. 40-42 use): two independent assemblies of the same sum.
-    # (The shear block differs by the factor ~2 of Appendix A's C44-C66: docs/statics.md section 5.)
+    # (The shear block differs by the factor ~2 of Appendix A's C44-C66: docs/statics.md, "Eq. (32) and Appendix A".)
     np.testing.assert_allclose(C[:3, :3], affine[:3, :3], rtol=1e-10, atol=1e-10 * np.abs(affine).max())
 
 
@@ -100,7 +100,7 @@ def test_shear_block_conventions_are_the_documented_ones(held):
     unsymmetrised T_ijkl = (1/V) sum L_i K_jl L_k (K = k_n n n + k_s (I - n n)), the static
     affine part takes the minor-symmetrised (T_ijij + T_jiji + T_ijji + T_jiij)/4 of the
     engineering shear strain, Appendix A (A7-A9) takes (T_ijij + T_jiji)/2 (docs/statics.md
-    section 5): the ~1.965x between them is that convention, nothing else. The study CSV's
+    "Eq. (32) and Appendix A"): the ~1.965x between them is that convention, nothing else. The study CSV's
     mic_G_* columns carry Appendix A's."""
     scene = held[0].copy()
     dem.refresh(scene)  # both computations and the brute force read the same contact state

@@ -77,3 +77,14 @@ def test_the_default_recipe_s_committed_seeds_give_what_the_manual_quotes():
     assert seeds.mean_sd([r["e"] for r in rows], "%.4f") == "0.5788 +/- 0.0030"
     assert seeds.mean_sd([r["Zm"] for r in rows], "%.3f") == "5.920 +/- 0.011"
     assert all(r["reversals"] == 0 for r in rows)
+    quoted = {"Zm_drop": ("%.3f", "0.043 +/- 0.005"), "zeta": ("%.3f", "0.551 +/- 0.038"),
+              "e": ("%.4f", "0.5788 +/- 0.0030"), "Zm": ("%.3f", "5.920 +/- 0.011")}
+    for key, (form, text) in quoted.items():
+        assert seeds.mean_sd([r[key] for r in rows], form) == text
+    # the explanation pages quote them as computed here (a page edited apart from the data fails)
+    for page, keys in (("specimens.md", ("Zm_drop", "zeta", "e", "Zm")), ("path-fidelity.md", ("Zm_drop", "zeta")),
+                       ("statics.md", ("zeta",))):
+        with open(os.path.join(REPO, "docs", page)) as f:
+            text = f.read()
+        for key in keys:
+            assert quoted[key][1] in text, "docs/%s does not quote %s as %s" % (page, key, quoted[key][1])

@@ -1,4 +1,4 @@
-"""The O.engines block of docs/yade-peer.md (section 2), run as written on a specimen moved into
+"""The O.engines block of docs/yade-peer.md ("O.engines"), run as written on a specimen moved into
 YADE: the page's servo reaches state 21 (test_yade_plugin.py::test_the_yade_page_runs_as_written).
 
 Usage: YADE_PREFIX=... yade-double -n -x page_engines.py SPECIMEN.npz PAGE.md OUT.json

@@ -1,5 +1,5 @@
 """A StressProbe saved mid-probe with O.save and loaded with O.load in a new process, against the
-same probe run on in the first process (docs/yade-peer.md, "Saving, loading").
+same probe run on in the first process (docs/yade-peer.md, "The classes").
 
 Usage: YADE_PREFIX=... yade-double -n -x plugin_probe_save.py SPECIMEN.npz MODE OUT.json
 MODE:

@@ -1,0 +1,124 @@
+"""bench_study.py, the whole study's clock (docs/benchmarks.md, "The whole study's clock"): what it
+refuses before any run, and that its tables add up what the runs recorded (steps from probes.csv,
+parts of a study timed in two runs added, the speed-up the first code's time over the other's, no
+speed-up between runs of other states). Timings are printed, never asserted."""
+import csv
+import json
+import os
+import shutil
+import sys
+
+from conftest import REPO, one_line_error, run_script
+
+sys.path.insert(0, os.path.join(REPO, "bench"))
+
+
+def bench(*args, timeout=600):
+    return run_script("bench/bench_study.py", *args, timeout=timeout)
+
+
+def test_refused_before_any_run(tmp_path, specimen_150):
+    runs = tmp_path / "runs"
+    for args, words in (
+            ((), "nothing to do"),
+            (("--prepare", "--specimen", specimen_150), "give one of them"),
+            (("--specimen", specimen_150, "--assembly", "clump2"), "with --prepare"),
+            (("--specimen", specimen_150, "--tree", REPO, "--tree", REPO, "--label", "a"), "one for each --tree"),
+            (("--specimen", specimen_150, "--tree", REPO, "--tree", REPO, "--label", "a", "--label", "a"), "each once"),
+            (("--specimen", specimen_150, "--ids", "0,1"), "states of Table C1"),
+            (("--specimen", specimen_150, "--ids", "1,1"), "each once"),
+            (("--specimen", specimen_150, "--ids", "1-x"), "numbers and ranges"),
+            (("--specimen", specimen_150, "--doc", tmp_path / "b.md"), "with --tabulate"),
+            (("--specimen", specimen_150, "--tree", tmp_path), "not a trueaniso checkout"),
+            (("--specimen", tmp_path / "missing.npz"), "missing.npz"),
+            (("--tabulate", "--tree", REPO), "give --specimen or --prepare"),
+            (("--specimen", specimen_150, "--runs", tmp_path / "other"), "one folder for a run"),
+            (("--prepare", "--time-step", "per-axis"), "without --prepare"),
+    ):
+        proc = bench(*args, "--runs", runs)
+        one_line_error(proc, words)
+    proc = bench("--tabulate", "--runs", runs)
+    assert proc.returncode == 2 and "no runs recorded" in proc.stderr
+    assert not runs.exists() or not os.listdir(runs)
+
+
+def _rows(text, first_cell):
+    return [[c.strip() for c in ln.split("|")[1:-1]] for ln in text.splitlines() if ln.startswith("| %s |" % first_cell)]
+
+
+def test_the_tables_add_up_the_runs(tmp_path, specimen_150):
+    """Two labels of this tree on the 150-sphere specimen: 'a' times states 1 and 21 in two runs
+    (a study continued), 'b' both at once, 'c' state 1 alone. The table's steps are probes.csv's,
+    a's wall and CPU the sum of its two runs, b's speed-up a's time over b's, c's none."""
+    runs, doc = tmp_path / "runs", tmp_path / "bench.md"
+    doc.write_text("# B\n\n<!-- study-clock:begin -->\nold\n<!-- study-clock:end -->\n\nafter\n")
+    for args in (("--label", "a", "--ids", "1"), ("--label", "a", "--ids", "1,21"), ("--label", "b", "--ids", "1,21"),
+                 ("--label", "c", "--ids", "1")):
+        proc = bench("--tree", REPO, "--specimen", specimen_150, "--runs", runs, *args)
+        assert proc.returncode == 0, proc.stderr
+    again = bench("--tree", REPO, "--label", "b", "--specimen", specimen_150, "--runs", runs, "--ids", "21")
+    assert again.returncode == 0 and "already timed" in again.stdout  # nothing run twice
+    proc = bench("--tabulate", "--runs", runs, "--label", "a", "--doc", doc, "--note", "nothing paused")
+    assert proc.returncode == 0, proc.stderr
+    text = doc.read_text()
+    assert text.startswith("# B\n\n<!-- study-clock:begin -->\nMachine: ") and text.endswith("<!-- study-clock:end -->\n\nafter\n")
+    assert "nothing paused" in text and "timed in 2 runs (states 1; 21)" in text and "c ran states 1, a no round of the same: not compared" in text
+
+    record = {lb: json.loads((runs / lb / "spheres-150-s4.json").read_text()) for lb in "abc"}
+    assert [p["ids"] for p in record["a"]["parts"]] == [[1], [21]]
+    with open(runs / "b" / "spheres-150-s4" / "probes.csv") as f:
+        rows = list(csv.DictReader(f))
+    state_steps = sum({r["state"]: int(r["state_steps"]) for r in rows}.values())
+    probe_steps = sum(int(r["probe_steps"]) for r in rows)
+    clock = {r[2].split(" ")[0]: r for r in _rows(text, "sphere") if r[1] == "150"}
+    assert set(clock) == {"a", "b", "c"}
+    a, b, c = clock["a"], clock["b"], clock["c"]
+    assert a[3] == b[3] == "1,21" and c[3] == "1" and a[6] == "1"
+    assert (int(b[4]), int(b[5])) == (state_steps, probe_steps) == (int(a[4]), int(a[5]))  # the same study
+    wall = {lb: sum(p["wall"] for p in record[lb]["parts"]) for lb in "abc"}
+    cpu = {lb: sum(p["cpu"] for p in record[lb]["parts"]) for lb in "abc"}
+    assert abs(float(a[7]) - wall["a"]) <= 0.5 and abs(float(a[8]) - cpu["a"]) <= 0.5
+    assert a[9] == a[10] == "1.00" and c[9] == c[10] == "-"
+    assert float(b[9]) == round(wall["a"] / wall["b"], 2) and float(b[10]) == round(cpu["a"] / cpu["b"], 2)
+
+    # A second round (another --runs folder) of b alone: b's times are the median of its two rounds,
+    # its speed-up only the round a also ran.
+    shutil.copytree(runs / "b", tmp_path / "round2" / "b")
+    moved = json.loads((tmp_path / "round2" / "b" / "spheres-150-s4.json").read_text())
+    moved["parts"][0]["wall"] *= 3.0
+    (tmp_path / "round2" / "b" / "spheres-150-s4.json").write_text(json.dumps(moved))
+    proc = bench("--tabulate", "--runs", runs, "--runs", tmp_path / "round2", "--label", "a")
+    assert proc.returncode == 0, proc.stderr
+    b2 = {r[2].split(" ")[0]: r for r in _rows(proc.stdout, "sphere") if r[1] == "150"}["b"]
+    assert b2[6] == "2" and b2[7] == "%.0f (%.0f-%.0f)" % (2.0 * wall["b"], wall["b"], 3.0 * wall["b"])
+    assert float(b2[9]) == round(wall["a"] / wall["b"], 2) and "1 of its 2 rounds without a run of a" in proc.stdout
+
+    where = {r[1]: r for r in _rows(text, "sphere") if r[1] != "150"}
+    states_s = sum({r["state"]: float(r["state_wall_time"]) for r in rows}.values())
+    assert abs(float(where["b"][2]) - states_s) <= 0.5
+    parts = [float(x) for x in where["b"][5:]]
+    assert parts[0] > 0 and abs(sum(parts) - wall["b"]) <= 0.35 * wall["b"] + 3  # the profile covers the run
+
+
+def test_each_function_belongs_to_one_part():
+    import bench_study
+    assert bench_study.part_of("/x/pyscripts/trueaniso/dem.py", "run") == "stepping"
+    assert bench_study.part_of("/x/pyscripts/trueaniso/dem.py", "__init__") == "python"
+    assert bench_study.part_of("/x/pyscripts/trueaniso/fabric.py", "fabric_row") == "measurement"
+    assert bench_study.part_of("/x/pyscripts/trueaniso/statics.py", "static_stiffness") == "statics"
+    assert bench_study.part_of("~", "<built-in method posix.fsync>") == "io"
+    assert bench_study.part_of("/usr/lib/python3/dist-packages/numpy/lib/npyio.py", "savez") == "io"
+    assert bench_study.part_of("/usr/lib/python3/dist-packages/matplotlib/figure.py", "savefig") == "analysis"
+    assert bench_study.part_of("~", "<built-in method builtins.compile>") == "python"
+    assert bench_study.parse_ids("1-3,21") == [1, 2, 3, 21]
+
+
+def test_an_interrupted_run_is_not_timed_again_as_if_whole(tmp_path, specimen_150):
+    """A study that holds rows no timed run recorded (a run killed after its first states) would be
+    continued, its clock counting only the rest: refused, naming the folder to remove."""
+    runs = tmp_path / "runs"
+    proc = bench("--tree", REPO, "--label", "a", "--specimen", specimen_150, "--runs", runs, "--ids", "1")
+    assert proc.returncode == 0, proc.stderr
+    (runs / "a" / "spheres-150-s4.json").unlink()  # as if the run had been killed before its record
+    proc = bench("--tree", REPO, "--label", "a", "--specimen", specimen_150, "--runs", runs, "--ids", "1,21")
+    one_line_error(proc, "already has rows of states 1", "remove")
