@@ -153,18 +153,37 @@ def tile_counts(text):
         cli.fail("--tiles takes whole numbers separated by commas, not %r" % text)
 
 
-def time_ours(scene, dt, steps, warmup=100, damping=0.2):
+def loading_servo():
+    """A TrueTriaxialServo loading the cell along state 21's path (b = 0.5, sigma_z 140 kPa, 0.5 Pa
+    a step) that never settles, stalls or gives up: a study's step for as many steps as a benchmark
+    times. It reads the stress, the affine stiffness and the unbalanced force every step."""
+    from trueaniso import engines
+    servo = engines.TrueTriaxialServo()
+    servo.set_goal(0.5, 140e3, 100e3)
+    servo.path_rate = 0.5
+    servo.settle_steps = servo.hold_steps = servo.stall_steps = servo.max_steps = 10 ** 9
+    return servo
+
+
+def time_ours(scene, dt, steps, warmup=100, damping=0.2, servo=False):
     """Our stepper on `scene` at the fixed time step `dt` (the time stepper off), local damping
-    `damping`: `warmup` steps untimed, then `steps` timed. Returns (chain, seconds of the timed
-    steps)."""
+    `damping`, with a loading servo in the chain if `servo` (loading_servo): `warmup` steps
+    untimed, then `steps` timed. Returns (chain, seconds of the timed steps)."""
     from trueaniso import dem
     scene.dt = dt
-    chain = dem.Chain(scene, damping=damping)
+    controllers = [loading_servo()] if servo else []
+    chain = dem.Chain(scene, damping=damping, controllers=controllers)
     chain.timestep.dead = True
+    for c in controllers:
+        c.start(scene)
     chain.run(warmup)
     t = time.perf_counter()
     chain.run(steps)
-    return chain, time.perf_counter() - t
+    seconds = time.perf_counter() - t
+    for c in controllers:
+        if c.status != "loading":
+            raise RuntimeError("the benchmark's servo stopped loading (%s): the steps were not a study's" % c.status)
+    return chain, seconds
 
 
 def orthorhombic(scene):

@@ -18,6 +18,11 @@ machine's speed drifts by more than a change of code over an hour, and a ratio o
 would mix runs an hour apart. The speed-up over the first thread count is paired the same way. With --doc the table
 between the markers <!-- stepper:begin --> and <!-- stepper:end --> of that file is replaced.
 
+Code `ours+servo` is our stepper with a study's TrueTriaxialServo in the chain (state 21's path,
+never settling; _bench.loading_servo): the step of the study's loop, which reads the stress, the
+affine stiffness and the unbalanced force every step and deforms the cell (its shear terms too).
+Its row is paired with the other codes in the same rounds, as ours is.
+
 --also-build DIR times ours a second time, from the build tree DIR (TRUEANISO_BUILD), in the same
 rounds: a build of the same engine sources for another x86-64 level (cmake -DTRUEANISO_ARCH=x86-64-v3,
 CMakeLists.txt), one row of its own. Its engine hash must equal this tree's, and its pressure after
@@ -53,11 +58,11 @@ def load(o):
     return s
 
 
-def worker_ours(o):
+def worker_ours(o, servo=False):
     from trueaniso import engines
     s = load(o)
-    c, dt = _bench.time_ours(s, o.dt, o.steps)
-    return dict(code="trueaniso", steps=o.steps, seconds=dt, n=s.num_bodies,
+    c, dt = _bench.time_ours(s, o.dt, o.steps, servo=servo)
+    return dict(code="trueaniso" + " servo" * servo, steps=o.steps, seconds=dt, n=s.num_bodies,
                 rebuilds=c.detection.rebuilds, pressure=float(engines.stress(s).trace() / 3),
                 build=engines.build_arch(), source_hash=engines.source_hash())
 
@@ -90,13 +95,14 @@ def worker_lammps(style, threads, o, dt, steps):
     return dict(code="lammps " + style, steps=r["steps"], seconds=r["seconds"], n=r["atoms"], pressure=r["pressure"])
 
 
-CODES = ("ours", "yade", "lammps granular", "lammps gran/hertz/history")
+CODES = ("ours", "ours+servo", "yade", "lammps granular", "lammps gran/hertz/history")
+SERVO = "ours+servo"  # our stepper with a study's TrueTriaxialServo in the chain (_bench.loading_servo)
 
 
 def options():
     p = cli.Parser(description=cli.description(__doc__))
     p.add_argument("--specimen", required=True, help="specimen file (.npz) to step")
-    p.add_argument("--worker", choices=("ours", "yade"), help="(internal) time one stepper in this process")
+    p.add_argument("--worker", choices=("ours", SERVO, "yade"), help="(internal) time one stepper in this process")
     p.add_argument("--dt", type=float, default=0.0, help="time step (s); 0: half the stiffness bound")
     p.add_argument("--steps", type=int, default=0, help="timed steps of ours and LAMMPS (0: 20000)")
     p.add_argument("--codes", default="ours,yade,lammps granular,lammps gran/hertz/history",
@@ -165,6 +171,8 @@ def run_worker(code, threads, o, dt):
     args = ["--specimen", o.specimen, "--tile", str(o.tile), "--dt", repr(dt), "--steps", str(steps)]
     if code == ALSO:
         return _bench.run_worker(me, "ours", threads, args, timeout=3600, build=o.also_build)
+    if code == SERVO:
+        return _bench.run_worker(me, SERVO, threads, args, timeout=3600)
     return _bench.run_worker(me, code, threads, args, timeout=3600)
 
 
@@ -192,7 +200,7 @@ def speedups(these, first):
 def main():
     o = options()
     if o.worker:
-        _bench.reply(worker_ours(o) if o.worker == "ours" else worker_yade(o))
+        _bench.reply(worker_yade(o) if o.worker == "yade" else worker_ours(o, servo=o.worker == SERVO))
         return
     from trueaniso import engines, specimen_file
     _, meta = specimen_file.load(o.specimen)
@@ -204,8 +212,8 @@ def main():
                  % (dt, limit))
     threads = o.thread_counts
     codes = o.codes + ([ALSO] if o.also_build else [])
-    ours = ["ours"] + ([ALSO] if o.also_build else [])
-    others = [c for c in o.codes if c != "ours"]
+    ours = ["ours"] + ([ALSO] if o.also_build else []) + ([SERVO] if SERVO in o.codes else [])
+    others = [c for c in o.codes if c not in ours]
     level = {}
     # Rounds outside, thread counts inside: every thread count of a round runs within minutes of the
     # others, so the speed-up over one thread is a ratio within a round too. Timed as separate
@@ -231,7 +239,7 @@ def main():
     for th in threads:
         for mine in ours:
             ratios = {c: [a / b for a, b in zip(res[th, mine], res[th, c])] for c in others}
-            rows.append((th, level[mine], statistics.median(res[th, mine]), {c: statistics.median(res[th, c]) for c in others},
+            rows.append((th, mine, level[mine], statistics.median(res[th, mine]), {c: statistics.median(res[th, c]) for c in others},
                          ratios, speedups(res[th, mine], res[threads[0], mine])))
     n = s.num_bodies
     names = {"ours": "trueaniso", "yade": "YADE Mindlin", "lammps granular": "LAMMPS granular (mindlin)",
@@ -241,16 +249,16 @@ def main():
              "medians of %d interleaved runs, %s. Threads: OpenMP threads (ours, YADE) or MPI ranks (LAMMPS). "
              "Figures in M particle-steps/s (medians); ratios: ours / theirs in the same round, median and range "
              "over the rounds; x %d thread%s: ours / ours on %d thread%s in the same round, median and range. "
-             "Build: the x86-64 level ours was compiled for (TRUEANISO_ARCH; x86-64 is the "
-             "portable default)."
+             "Build: the x86-64 level of the engines ours ran (the package loads the fastest the processor "
+             "runs; TRUEANISO_LEVEL chooses another)."
              % (_bench.machine(), n, (" (%s tiled %d x %d x %d)" % (os.path.basename(o.specimen), o.tile, o.tile, o.tile)
                                       if o.tile > 1 else ""), meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d"), threads[0], plural, threads[0], plural), "",
-             "| threads | build | %s |" % " | ".join(["trueaniso", "x %d thread%s" % (threads[0], plural)]
-                                                     + ["%s | ratio" % names[c] for c in others]),
-             "|" + "---|" * (4 + 2 * len(others))]
-    for th, build, mine, med, ratios, up in rows:
-        cells = [build, "%.2f" % (mine / 1e6), up] + [
+             "| threads | step | build | %s |" % " | ".join(["trueaniso", "x %d thread%s" % (threads[0], plural)]
+                                                            + ["%s | ratio" % names[c] for c in others]),
+             "|" + "---|" * (5 + 2 * len(others))]
+    for th, code, build, mine, med, ratios, up in rows:
+        cells = ["with the servo" if code == SERVO else "bare", build, "%.2f" % (mine / 1e6), up] + [
             "%.3f | %.2f (%.2f-%.2f)" % (med[c] / 1e6, statistics.median(ratios[c]), min(ratios[c]), max(ratios[c]))
             for c in others]
         lines.append("| %d | %s |" % (th, " | ".join(cells)))

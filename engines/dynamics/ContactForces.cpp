@@ -127,8 +127,10 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       Real dx[kBatch], dy[kBatch], dz[kBatch], rsum[kBatch], dist2[kBatch], overlap[kBatch], inv[kBatch];
     };
     Gap gap;
-    alignas(64) Real terms[kBatch][kCellTerms];  // the cell measures' terms of the touching pairs (measure/CellSums.hpp)
-    CellSums blockSums;  // the sums of the block of pairs this thread is in
+    // The cell measures' terms of the batch's touching pairs (measure/CellSums.hpp), term by term
+    // (a row a term, a column a pair), and the running sums of the block of pairs this thread is in.
+    alignas(64) Real terms[kCellTerms][kBatch];
+    CellSums blockSums;
     int pairOf[kBatch];      // the touching pairs of the batch, in pair order
     Vec3 branches[kBatch];   // their branch vectors
     HertzMindlin::Batch q;
@@ -294,14 +296,22 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       }
       if (measure) {
         // The terms of contactMeasures from the values just stored (F = N n + F_s, the branch, n,
-        // k_n), the batch's contacts side by side, then added to the running sums of their block
-        // (measure/CellSums.hpp) contact after contact in pair order, the loaded ones only: each
-        // sum adds what the separate pass adds, in its order, the sixteen sums side by side.
+        // k_n), the batch's contacts side by side (a loop without a choice: vector lanes, the
+        // arithmetic of one contact unchanged), zeros for a contact without load; then added to
+        // the running sums of their block (measure/CellSums.hpp) contact after contact in pair
+        // order, the sixteen sums side by side. Each sum adds what the separate pass adds, in its
+        // order, and a zero leaves a sum's bits (cellTermsColumn). Computed one contact at a time, the
+        // terms added 1.30 M instructions to the 5.02 M of a step of 4000 spheres (callgrind,
+        // x86-64-v3); side by side, 0.88 M.
+        Real Lx[kBatch], Ly[kBatch], Lz[kBatch];  // the branches by component, as the loop below reads them
+        for (int k = 0; k < m; ++k) {
+          Lx[k] = branches[k].x(); Ly[k] = branches[k].y(); Lz[k] = branches[k].z();
+        }
         for (int k = 0; k < m; ++k)
-          cellTerms(v.Fx[k], v.Fy[k], v.Fz[k], branches[k].x(), branches[k].y(), branches[k].z(), q.nx[k], q.ny[k],
-                    q.nz[k], HertzMindlin::normalStiffness(q.N[k], q.delta[k]), ratio, terms[k]);
-        for (int k = 0; k < m; ++k)
-          if (q.N[k] > 0) blockSums.add(terms[k]);
+          cellTermsColumn(v.Fx[k], v.Fy[k], v.Fz[k], Lx[k], Ly[k], Lz[k], q.nx[k], q.ny[k], q.nz[k], q.N[k] > 0,
+                          HertzMindlin::normalStiffness(q.N[k], q.delta[k]), ratio, terms, k);
+        for (int k = 0; k < m; ++k) blockSums.loaded += q.N[k] > 0;
+        blockSums.addColumns(terms, m);
         if (c1 == hi || c1 % kSumBlock == 0) {  // the block's last batch
           pairSums[c0 / kSumBlock] = blockSums;
           blockSums = CellSums{};

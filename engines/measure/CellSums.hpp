@@ -20,26 +20,31 @@ namespace trueaniso {
 // body 2.
 constexpr int kCellTerms = 16;
 
-// One contact's kCellTerms terms, apart from any sum: the arithmetic of addStressTerm and
-// addAffineStiffnessTerm (measure/ContactTerms.hpp) operation for operation, and |F|. n is the
-// unit normal, kn the contact's k_n (Eq. 5; 0 for a contact without stiffness, whose Eq. (32)
-// terms are then zeros), ratio = k_s / k_n. Adding a zero to a running sum that started at +0
-// leaves its bits (in round-to-nearest no sum of such terms is -0), so a sum may add every loaded
-// contact's sixteen terms where the separate pass skips the stiffness of those without one.
-__attribute__((always_inline)) inline void cellTerms(Real Fx, Real Fy, Real Fz, Real Lx, Real Ly, Real Lz, Real nx,
-                                                     Real ny, Real nz, Real kn, Real ratio, Real* t) {
-  t[0] = Fx * Lx; t[1] = Fx * Ly; t[2] = Fx * Lz;
-  t[3] = Fy * Lx; t[4] = Fy * Ly; t[5] = Fy * Lz;
-  t[6] = Fz * Lx; t[7] = Fz * Ly; t[8] = Fz * Lz;
-  Real k[6];
-  affineStiffnessTerms(kn, ratio, nx, ny, nz, Lx, Ly, Lz, k);
-  for (int I = 0; I < 6; ++I) t[9 + I] = k[I];
-  t[15] = std::sqrt(Fx * Fx + Fy * Fy + Fz * Fz);
+// The kCellTerms terms of a contact into column k of rows of terms (a row a term): F (x) L, the
+// diagonal of Eq. (32) (measure/ContactTerms.hpp, operation for operation) and |F|, for a contact
+// with load (N > 0); zeros for one without. n is the unit normal, kn the contact's k_n (Eq. 5; 0
+// for a contact without stiffness, whose Eq. (32) terms are then zeros), ratio = k_s / k_n. Adding
+// a zero to a running sum that started at +0 leaves its bits (in round-to-nearest no sum of such
+// terms is -0), so a sum may add every contact's column where the separate pass adds only the
+// loaded ones. On scalars and without a branch, so that a loop over contacts runs it several
+// contacts at a time (vector lanes; dynamics/ContactForces.cpp), each contact's arithmetic that of
+// one alone.
+template <int Columns>
+__attribute__((always_inline)) inline void cellTermsColumn(Real Fx, Real Fy, Real Fz, Real Lx, Real Ly, Real Lz,
+                                                           Real nx, Real ny, Real nz, bool loaded, Real kn, Real ratio,
+                                                           Real (*terms)[Columns], int k) {
+  terms[0][k] = loaded ? Fx * Lx : 0.0; terms[1][k] = loaded ? Fx * Ly : 0.0; terms[2][k] = loaded ? Fx * Lz : 0.0;
+  terms[3][k] = loaded ? Fy * Lx : 0.0; terms[4][k] = loaded ? Fy * Ly : 0.0; terms[5][k] = loaded ? Fy * Lz : 0.0;
+  terms[6][k] = loaded ? Fz * Lx : 0.0; terms[7][k] = loaded ? Fz * Ly : 0.0; terms[8][k] = loaded ? Fz * Lz : 0.0;
+  Real K[6];
+  affineStiffnessTerms(loaded ? kn : 0.0, ratio, nx, ny, nz, Lx, Ly, Lz, K);
+  for (int I = 0; I < 6; ++I) terms[9 + I][k] = K[I];
+  terms[15][k] = loaded ? std::sqrt(Fx * Fx + Fy * Fy + Fz * Fz) : 0.0;
 }
 
 // Running sums of contacts' terms, one for each term, each adding its contacts in their order.
 struct CellSums {
-  alignas(32) Real sum[kCellTerms] = {};  // +0 each (see cellTerms)
+  alignas(32) Real sum[kCellTerms] = {};  // +0 each (see cellTermsColumn)
   long loaded = 0;                        // contacts with N > 0
 
   Mat3 stress() const {  // sum of F (x) L over the loaded contacts
@@ -56,16 +61,19 @@ struct CellSums {
     loaded += o.loaded;
     return *this;
   }
-  // One contact with N > 0, from its terms (cellTerms).
-  __attribute__((always_inline)) void add(const Real* terms) {
-    for (int j = 0; j < kCellTerms; ++j) sum[j] += terms[j];
+  // One contact with N > 0: F, L, n, kn and ratio as cellTermsColumn takes them.
+  void addContact(const Vec3& F, const Vec3& L, const Vec3& n, Real kn, Real ratio) {
+    Real t[kCellTerms][1];
+    cellTermsColumn(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), true, kn, ratio, t, 0);
+    for (int j = 0; j < kCellTerms; ++j) sum[j] += t[j][0];
     ++loaded;
   }
-  // One contact with N > 0: F, L, n, kn and ratio as cellTerms takes them.
-  void addContact(const Vec3& F, const Vec3& L, const Vec3& n, Real kn, Real ratio) {
-    alignas(32) Real t[kCellTerms];
-    cellTerms(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), kn, ratio, t);
-    add(t);
+  // Columns 0..m-1 of rows of terms (cellTermsColumn), column after column: each sum adds its
+  // contacts in their order, the sixteen sums side by side.
+  template <int Columns>
+  __attribute__((always_inline)) void addColumns(const Real (*terms)[Columns], int m) {
+    for (int k = 0; k < m; ++k)
+      for (int j = 0; j < kCellTerms; ++j) sum[j] += terms[j][k];
   }
 };
 

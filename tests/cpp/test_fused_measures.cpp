@@ -20,6 +20,8 @@
 #include "core/Parallel.hpp"
 #include "dynamics/Simulation.hpp"
 #include "dynamics/TimeStepper.hpp"
+#include "measure/CellSums.hpp"
+#include "measure/ContactTerms.hpp"
 #include "measure/Reduce.hpp"
 #include "measure/Stress.hpp"
 
@@ -197,6 +199,43 @@ TEST_P(FusedMeasures, DriveTheServoAsTheSeparatePass) {
   Real worst = 0;
   for (int k = 0; k < a->bodies.size(); ++k) worst = std::max(worst, (a->bodies.pos[k] - b->bodies.pos[k]).norm());
   EXPECT_LE(worst, tol * b->cell.hSize.norm());
+}
+
+// One contact's column of terms, as the force loop writes them for a batch of contacts side by
+// side: a loaded contact's are the Love-Weber term F (x) L and the diagonal of Eq. (32) of
+// measure/ContactTerms.hpp and |F|; a contact without load writes +0 in every row, which leaves
+// every running sum's bits.
+TEST(CellTermsColumn, IsTheContactTermsOrZerosWithoutLoad) {
+  const Vec3 F(-3.5, 1.25, 7.0), L(1e-4, -2e-4, 0.5e-4), n = L.normalized();
+  const Real kn = 2.5e5, ratio = 0.8;
+  Real terms[kCellTerms][4];
+  for (int j = 0; j < kCellTerms; ++j)
+    for (int k = 0; k < 4; ++k) terms[j][k] = -1.0;  // every entry written below
+  cellTermsColumn(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), true, kn, ratio, terms, 1);
+  cellTermsColumn(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), false, kn, ratio, terms, 2);
+  Mat3 stress = Mat3::Zero();
+  addStressTerm(F, L, stress);
+  Vec6 stiffness = Vec6::Zero();
+  addAffineStiffnessTerm(kn, ratio, n, L, stiffness);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(terms[3 * i + j][1], stress(i, j), test::kSameBits * stress.norm());
+  for (int I = 0; I < 6; ++I) EXPECT_NEAR(terms[9 + I][1], stiffness[I], test::kSameBits * stiffness.norm());
+  EXPECT_NEAR(terms[15][1], F.norm(), test::kSameBits * F.norm());
+  for (int j = 0; j < kCellTerms; ++j) {
+    EXPECT_EQ(terms[j][2], 0.0) << "term " << j;
+    EXPECT_FALSE(std::signbit(terms[j][2])) << "term " << j;
+    EXPECT_EQ(terms[j][0], -1.0);  // the other columns untouched
+    EXPECT_EQ(terms[j][3], -1.0);
+  }
+  // Added column after column, a sum starting at +0 keeps its bits through the zero column.
+  CellSums a, b;
+  Real only[kCellTerms][1];
+  for (int j = 0; j < kCellTerms; ++j) only[j][0] = terms[j][1];
+  a.addColumns(only, 1);
+  Real both[kCellTerms][2];
+  for (int j = 0; j < kCellTerms; ++j) { both[j][0] = terms[j][1]; both[j][1] = terms[j][2]; }
+  b.addColumns(both, 2);
+  for (int j = 0; j < kCellTerms; ++j) EXPECT_EQ(a.sum[j], b.sum[j]) << "term " << j;
 }
 
 INSTANTIATE_TEST_SUITE_P(SpheresAndClumpsOnOneAndTwoThreads, FusedMeasures,

@@ -122,7 +122,7 @@ def test_bench_stepper_times_a_second_build_in_the_same_rounds(specimen_100, tmp
     assert proc.returncode == 0, proc.stderr
     rows = [ln for ln in proc.stdout.splitlines() if ln.startswith("| 1 |")]
     from trueaniso import engines
-    assert len(rows) == 2 and all(r.startswith("| 1 | %s | " % engines.build_arch()) for r in rows)
+    assert len(rows) == 2 and all(r.startswith("| 1 | bare | %s | " % engines.build_arch()) for r in rows)
     one_line_error(run_script(os.path.join("bench", "bench_stepper.py"), "--specimen", specimen_100,
                               "--also-build", str(tmp_path), timeout=60), "has no python/_trueaniso module")
     import bench_stepper  # on the path with _bench (above)
@@ -144,10 +144,22 @@ def test_bench_stepper_speed_up_is_paired_within_rounds(specimen_100):
     assert sorted(rounds) == [["round", "1", "threads", "1"], ["round", "1", "threads", "2"],
                               ["round", "2", "threads", "1"], ["round", "2", "threads", "2"]]
     assert rounds[0][1] == rounds[1][1] == "1"  # both thread counts of round 1 before round 2
-    assert "| threads | build | trueaniso | x 1 thread |" in proc.stdout
-    assert [ln.rstrip(" |").split(" | ")[3] == "1" for ln in proc.stdout.splitlines() if ln.startswith("| 1 |")] == [True]
+    assert "| threads | step | build | trueaniso | x 1 thread |" in proc.stdout
+    assert [ln.rstrip(" |").split(" | ")[4] == "1" for ln in proc.stdout.splitlines() if ln.startswith("| 1 |")] == [True]
     import bench_stepper
     # Round by round: 4/2 and 1/1, median 1.5; the ratio of the medians would be 2.5 / 1.5 = 1.67.
     assert bench_stepper.speedups([4.0, 1.0], [2.0, 1.0]) == "1.50 (1.00-2.00)"
     same = [3.0, 2.0]
     assert bench_stepper.speedups(same, same) == "1"
+
+
+def test_bench_stepper_times_the_study_step_beside_the_bare_one(specimen_100):
+    """--codes ours,ours+servo: the stepper with a study's servo in the chain (_bench.loading_servo,
+    which must still be loading when the timed steps end) gets a row of its own beside the bare
+    step's, each paired with the first thread count in its own rounds."""
+    from conftest import run_script
+    proc = run_script(os.path.join("bench", "bench_stepper.py"), "--specimen", specimen_100, "--codes",
+                      "ours,ours+servo", "--threads", "1", "--repeats", "1", "--steps", "100", timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    rows = [ln.split(" | ")[1] for ln in proc.stdout.splitlines() if ln.startswith("| 1 |")]
+    assert rows == ["bare", "with the servo"]
