@@ -204,7 +204,8 @@ ROWS = (("docs/data/clump2-4000-s1", "grown to 100 kPa at 0.01, rotations blocke
         ("free-0.2-at-5kPa", "blocked at 0.01 to 5 kPa, then free at 0.2"),
         ("free-0.25-at-5kPa", "blocked at 0.01 to 5 kPa, then free at 0.25"),
         ("free-0.25-at-5kPa-w0.3", "the same, long axes weighted 0.3"),
-        ("default-1000-s1", "**the default**: the same, by run_study.py, all 39 states"))
+        ("default-1000-s1", "**the default**: the same, by run_study.py, all 39 states"),
+        ("unloaded-20kPa-free-0.25", "the default unloaded at 0.25 to 20 kPa, then 0.5"))
 PAPER = "| paper | 53,004 | 0.636 | | | 39 | approximately constant | | Fig. 13f only | 0.855 | | |"
 
 # clump1's growth friction (mu_prep, also the unloading's), the pentamer recipe otherwise.
