@@ -442,9 +442,6 @@ def headline_section(heads, assembly, borrowed_b1=False):
     return out + [""]
 
 
-study_who = figures.study_who  # what a figure is of, for its title
-
-
 def paper_table2(assembly, zm):
     """The paper's Table 2 quadratics for Fig. 11 (figures.scalar_moduli_vs_zm): for spheres over
     the paper's own Zm, 5.94-5.99 (Fig. 8a), since below it they turn and rise again (their vertex is
@@ -498,7 +495,7 @@ def fig16_section(rows, source, out, calibrated=None, material=None, own=None, a
         z = rows[0].get("predicted_zeta")
         cols = [("zeta = %g" % z if z is not None else "the zeta of the table's columns",
                  [m.get("predicted_ratio", float("nan")) for m in rows])]
-    cross_anisotropy.figure(rows, os.path.join(out, "fig16.png"), curves, study_who(source, assembly))
+    cross_anisotropy.figure(rows, os.path.join(out, "fig16.png"), curves, figures.study_who(source, assembly))
     lines = ["## Fig. 16: one anisotropy in G, E and nu (cross-anisotropic states, z vertical)", "",
              "From `%s`%s.%s The paper (Fig. 16a, spheres; 16b, clump2): the predicted a_h^2/a_v^2 (at its "
              "calibrated zeta) agrees with G_hh/G_vh and (E_h/E_v)^0.5, as Eq. (24) says, while nu_hh/nu_vv follows "
@@ -711,7 +708,7 @@ def build(results, out=None, assembly=None, shear_modulus=None, poisson=None, lo
     os.makedirs(out, exist_ok=True)
     numbers = {}
     own_size = study_size(results) if os.path.isdir(results) else None
-    who = study_who(results, assembly)
+    who = figures.study_who(results, assembly)
     for rot in sorted({r["rotations"] for r in rows}):
         sel = [r for r in rows if r["rotations"] == rot]
         tab = chain.state_table(sel)
