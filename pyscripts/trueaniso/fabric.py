@@ -79,7 +79,7 @@ def prediction(scene, zeta=1.0, density="eq36"):
     Args:
         scene: the engines' Scene, its forces evaluated at its state.
         zeta: the rotation factor of Eq. (37) (the paper fits 0.552 for spheres; 1: kinematic).
-        density: Nc/V by "eq36" (the paper's Eq. 36, read with the mean r^3) or "count".
+        density: $N_c/V$ by "eq36" (the paper's Eq. 36, read with the mean $r^3$) or "count".
 
     Returns:
         dict: ``C`` (C_ijkl, Eq. 37, 3x3x3x3), ``voigt`` (its orthotropic 6x6, Appendix A), ``E``

@@ -25,7 +25,7 @@ TABLE_C1 = [
 
 
 def b_of(sx, sy, sz):
-    """b of Eq. (8) from the three principal stresses, (sigma_x - sigma_y) / (sigma_z - sigma_y).
+    r"""b of Eq. (8) from the three principal stresses, $(\sigma_x - \sigma_y)/(\sigma_z - \sigma_y)$.
 
     The isotropic state has no b: 0 is returned (every path of Table C1 passes through it).
 
@@ -63,10 +63,10 @@ SIGMA_H = 100e3
 
 
 def path_mean_stress(path, b, sigma_z):
-    """The mean stress p of the state (b, sigma_z) on a path: 100 kPa on the true-triaxial paths;
-    on the cross-anisotropic path (b = 0 there) (2 sigma_h + sigma_v) / 3, which makes Eq. (9)
-    give sigma_x = sigma_y = sigma_h for any sigma_v, so the servo's straight stress path from the
-    isotropic state keeps sigma_h at 100 kPa all the way."""
+    r"""The mean stress p of the state (b, sigma_z) on a path: 100 kPa on the true-triaxial paths;
+    on the cross-anisotropic path (b = 0 there) $(2\sigma_h + \sigma_v)/3$, which makes Eq. (9)
+    give $\sigma_x = \sigma_y = \sigma_h$ for any $\sigma_v$, so the servo's straight stress path from
+    the isotropic state keeps $\sigma_h$ at 100 kPa all the way."""
     if path == "true-triaxial":
         return 100e3
     if path == "cross-anisotropic":

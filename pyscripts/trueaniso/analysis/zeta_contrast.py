@@ -1,4 +1,4 @@
-"""The rotation factor zeta fitted on the contrast a_i^2 (trueaniso.zeta.fit_contrast), from a
+"""The rotation factor zeta fitted on the contrast $a_i^2$ (trueaniso.zeta.fit_contrast), from a
 study's probe table: the one route for the main job (run_study.py) and the benchmark (bench_zeta.py).
 
 Each state's DEM E_i are its x, y, z probe rows; its micromechanical parts (A_n, A_s of Eq. 37)
