@@ -75,14 +75,14 @@ def path_mean_stress(path, b, sigma_z):
 
 
 def principal_stresses(b, sigma_z, p=100e3):
-    """Eq. (9): (sigma_x, sigma_y, sigma_z) of constant b (Eq. 8) and mean stress p (Pa)."""
+    r"""Eq. (9): ($\sigma_x$, $\sigma_y$, $\sigma_z$) of constant b (Eq. 8) and mean stress p (Pa)."""
     sx = ((2.0 * b - 1.0) * sigma_z + 3.0 * p * (1.0 - b)) / (2.0 - b)
     sy = (3.0 * p - (b + 1.0) * sigma_z) / (2.0 - b)
     return sx, sy, sigma_z
 
 
 def path_principal_stresses(path, b, sigma_z):
-    """sigma_x, sigma_y, sigma_z (Pa) of the state on its path (Eq. 9 at the path's mean stress)."""
+    r"""$\sigma_x$, $\sigma_y$, $\sigma_z$ (Pa) of the state on its path (Eq. 9 at the path's mean stress)."""
     return principal_stresses(b, sigma_z, path_mean_stress(path, b, sigma_z))
 
 

@@ -48,7 +48,7 @@ def a_squared(E):
     """The directional contrast of Eq. (25), $a_i^2 = E_i^{1/3}/(E_j E_k)^{1/6}$, over the last axis of E.
 
     Args:
-        E: Young's moduli (E_x, E_y, E_z), or a stack of them (n, 3).
+        E: Young's moduli ($E_x$, $E_y$, $E_z$), or a stack of them (n, 3).
 
     Returns:
         numpy.ndarray: $a_x^2$, $a_y^2$, $a_z^2$ (their product is 1), in E's shape.
@@ -105,7 +105,7 @@ def _normal(A):
 
 
 def normal_block(A_n, A_s, zeta_h, zeta_v):
-    """C_ik = A_n,ik + sqrt(zeta_i zeta_k) A_s,ik (module doc), for one state or a stack."""
+    r"""$C_{ik} = A_{n,ik} + \sqrt{\zeta_i \zeta_k}\,A_{s,ik}$ (module doc), for one state or a stack."""
     z = np.sqrt(np.array([zeta_h, zeta_h, zeta_v], dtype=float))
     return _normal(A_n) + np.outer(z, z) * _normal(A_s)
 
@@ -275,7 +275,7 @@ def fit_contrast(E, A_n, A_s, min_states=2, reference=None):
         `ZETA_BOUNDS` is not determined), ``n_states``, ``a_dem`` and ``a_fit`` (n, 3).
 
     Raises:
-        ValueError: fewer than `min_states` states, NaN or non-positive E_i, or states whose
+        ValueError: fewer than `min_states` states, NaN or non-positive $E_i$, or states whose
             predicted contrast does not depend on zeta.
 
     Example:
@@ -318,10 +318,10 @@ def magnitude_zeta(A_n, A_s, E):
     Args:
         A_n: 6x6 part of Eq. (37) at zeta = 0, with its Nc/V (`parts_from_scene`).
         A_s: its slope in zeta.
-        E: the Young's moduli to reproduce (E_x, E_y, E_z).
+        E: the Young's moduli to reproduce ($E_x$, $E_y$, $E_z$).
 
     Returns:
-        dict: ``zeta`` (per axis), ``zeta_h`` (of (E_x + E_y)/2) and ``zeta_v``; NaN where no zeta in
+        dict: ``zeta`` (per axis), ``zeta_h`` (of $(E_x + E_y)/2$) and ``zeta_v``; NaN where no zeta in
         `ZETA_BOUNDS` reproduces the modulus.
 
     Example:

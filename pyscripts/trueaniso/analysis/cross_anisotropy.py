@@ -1,5 +1,5 @@
 r"""The paper's Fig. 16 measures on a cross-anisotropic path (run_states.py --path cross-anisotropic):
-per state, E_h, E_v, the shear moduli G_vh and G_hh, and the anisotropy ratios of Eq. (24).
+per state, $E_h$, $E_v$, the shear moduli $G_{vh}$ and $G_{hh}$, and the anisotropy ratios of Eq. (24).
 
     /usr/bin/python3 pyscripts/trueaniso/analysis/cross_anisotropy.py results/fig16/probes.csv [--out fig16.json] [--figure fig16.png]
 
@@ -127,7 +127,7 @@ def figure(rows, path, predictions=None, who=None):
         ax.plot(sr, curve[1], curve[2] if len(curve) > 2 else style, label=curve[0])
     ax.set_xlabel(r"$\sigma_v/\sigma_h$ (-)")
     ax.set_ylabel("anisotropy ratio (-)")
-    entitle(fig, r"Fig. 16: one anisotropy in $G$, $E$ and $\nu$? ($\sigma_h$ = 100 kPa)", who)
+    entitle(fig, r"Fig. 16: one anisotropy in $G$, $E$ and $\nu$? ($\sigma_h = 100$ kPa)", who)
     legend_outside(ax)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)  # as --out's JSON (trueaniso.atomic)
     _finish(plt, fig, path)

@@ -14,7 +14,7 @@ def fabric_a2(E):
     """Eq. (25): $a_i^2 = E_i^{1/3}/(E_j E_k)^{1/6}$ from the three directional Young's moduli.
 
     Args:
-        E: (E_x, E_y, E_z), or a stack (..., 3); all > 0.
+        E: ($E_x$, $E_y$, $E_z$), or a stack (..., 3); all > 0.
 
     Raises:
         ValueError: a modulus <= 0.
@@ -35,14 +35,14 @@ def fabric_a2(E):
 
 
 def scalar_moduli(E, nu):
-    r"""K and G of the hyperelastic model from a state's E_i and nu_ij (Eqs. 21-22 inverted).
+    r"""K and G of the hyperelastic model from a state's $E_i$ and $\nu_{ij}$ (Eqs. 21-22 inverted).
 
     $E_0$ is the mean of $E_i/a_i^4$ (all equal when Eq. 21 holds), $\nu_0$ the mean of the six
     $\nu_{ij} a_j^2/a_i^2$ (Eq. 22); $K = E_0/(3(1 - 2\nu_0))$, $G = E_0/(2(1 + \nu_0))$.
 
     Args:
-        E: (E_x, E_y, E_z), Pa.
-        nu: 3x3, nu[i, j] = nu_ij (i loading, j lateral); the diagonal is ignored.
+        E: ($E_x$, $E_y$, $E_z$), Pa.
+        nu: 3x3, nu[i, j] = $\nu_{ij}$ (i loading, j lateral); the diagonal is ignored.
 
     Returns:
         dict: ``K``, ``G``, ``E0``, ``nu0`` and ``a2`` (Eq. 25).
@@ -71,7 +71,7 @@ def scalar_moduli(E, nu):
 
 
 def predicted(K, G, a2):
-    """Eqs. (21)-(23) forward: the orthotropic moduli of K, G and the fabric's $a_i^2$.
+    r"""Eqs. (21)-(23) forward: the orthotropic moduli of K, G and the fabric's $a_i^2$.
 
     Args:
         K: bulk modulus, Pa.
@@ -79,8 +79,8 @@ def predicted(K, G, a2):
         a2: ($a_x^2$, $a_y^2$, $a_z^2$), whose product is 1.
 
     Returns:
-        (E, nu, G_ij): E (3,), nu (3x3, nu[i, j] = nu_ij, NaN on the diagonal), G_ij (G_yz, G_xz,
-        G_xy).
+        (E, nu, G_ij): E (3,), nu (3x3, nu[i, j] = $\nu_{ij}$, NaN on the diagonal), $G_{ij}$ ($G_{yz}$, $G_{xz}$,
+        $G_{xy}$).
 
     Example:
         >>> from trueaniso.analysis import hyperelastic
