@@ -297,7 +297,7 @@ def test_static_solve_equals_probe_mean_on_clumps(packing, rotations):
     st = statics.static_stiffness(scene, rotations=rotations)
     E_static, nu_static = np.array(st["E"]), np.array(st["nu"])
     tight = dict(ramp_steps=2000, gain=0.01, settle_steps=200, relative_tolerance=1e-4, unbalanced=1e-7,
-                 restrain_rotations=not rotations)
+                 restrain_rotations=not rotations, sides="one")
     for axis in range(3):
         up = triaxial.probe(scene, hold, axis, **tight)
         down = triaxial.probe(scene, hold, axis, sign=-1, **tight)
@@ -306,6 +306,37 @@ def test_static_solve_equals_probe_mean_on_clumps(packing, rotations):
             if j != axis:
                 name = "nu_%s%s" % ("xyz"[axis], "xyz"[j])
                 assert 0.5 * (up[name] + down[name]) == pytest.approx(nu_static[axis, j], abs=6e-4)
+
+
+@pytest.mark.parametrize("skip_detection", [False, True])
+def test_two_sided_probe_is_the_two_one_sided_probes(packing, skip_detection):
+    """A two-sided probe (ProbeOptions.sides; "auto", the default, makes it on clumps free to
+    rotate) relaxes once and runs its two sides from the relaxed state: each side is, bit for bit,
+    the one-sided probe of its sign from the same state (the engine puts the relaxed scene back,
+    shear forces and contact list with it, and the detection builds again only if it built in
+    between; with the detection off, the list of the start serves both sides), its increments are
+    the half differences, its steps one Relax and two Ramps and Holds; triaxial.two_sides (the YADE
+    host's) makes the same from the two one-sided probes. Its stages settle 300 steps, a one-sided
+    probe's 100 (options.TWO_SIDED_SETTLE_STEPS). With rotations restrained, or on spheres, "auto"
+    is one-sided."""
+    scene, _ = specimen_file.load(packing)
+    hold = triaxial.stress_as_held(scene)
+    kw = dict(skip_detection=skip_detection)
+    two = triaxial.probe(scene, hold, "x", **kw)
+    up = triaxial.probe(scene, hold, "x", sides="one", settle_steps=300, **kw)  # a two-sided probe's settle steps
+    down = triaxial.probe(scene, hold, "x", sign=-1, sides="one", settle_steps=300, **kw)
+    assert (two["sides"], two["sign"], up["sides"], up["sign"], down["sign"]) == (2, 0, 1, 1, -1)
+    assert two["d_strain_sides"] == [up["d_strain"], down["d_strain"]]
+    assert two["d_stress_sides"] == [up["d_stress"], down["d_stress"]]
+    assert two["d_strain"] == (0.5 * (np.array(up["d_strain"]) - np.array(down["d_strain"]))).tolist()
+    assert two["steps"] == up["steps"] + down["steps"] - down["relax_steps"]
+    assert two["relax_steps"] == up["relax_steps"] == down["relax_steps"]
+    both = triaxial.two_sides(up, down)
+    assert (both["E"], both["nu_xy"], both["nu_xz"], both["d_strain"]) == (two["E"], two["nu_xy"], two["nu_xz"],
+                                                                           two["d_strain"])
+    assert triaxial.probe(scene, hold, "x", restrain_rotations=True, **kw)["sides"] == 1
+    spheres, _ = specimen_file.load(os.path.join(REPO, "tests", "data", "spheres-150-s4.npz"))
+    assert triaxial.probe(spheres, triaxial.stress_as_held(spheres), "x")["sides"] == 1
 
 
 def test_servo_reaches_a_true_triaxial_state_on_clumps(packing):
