@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import REPO
+from conftest import REPO, assert_page_is_its_data
 from trueaniso import clump_shapes, dem, engines, specimen, specimen_file, statics, triaxial
 
 
@@ -529,10 +529,7 @@ def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
     sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump_recipe_variants as crv
     data = os.path.join(REPO, "docs", "data", "clump-recipes")
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
-    crv.write_doc(str(doc), data)
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: crv.write_doc(doc, data))
     with open(os.path.join(data, "state21-frictionless-s1", "probes.csv")) as f:
         E = {(r["state"], r["probe"]): float(r["E"]) for r in csv.DictReader(f)}
     ratio = E[("21", "x")] / E[("1", "x")]
@@ -567,11 +564,9 @@ def test_clump2_recipe_screen_table_is_that_of_its_data(tmp_path):
     sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump2_recipe_screen as screen
     data = os.path.join(REPO, "docs", "data", "clump2-recipes")
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
     import _bench
-    _bench.replace_block(str(doc), "clump2-recipes", screen.table(data, screen.ROWS, screen.PAPER))
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: _bench.replace_block(
+        doc, "clump2-recipes", screen.table(data, screen.ROWS, screen.PAPER)))
     with open(os.path.join(data, "default-1000-s1", "probes.csv")) as f:
         e = {r["state"]: float(r["void_ratio"]) for r in csv.DictReader(f)}
     assert len(e) == 39 and max(abs(v - e["1"]) for v in e.values()) < 1e-4
@@ -635,10 +630,8 @@ def test_the_default_clump1_grows_at_the_friction_that_meets_the_papers_void_rat
         before = json.load(f)
     assert before["parameters"]["mu_prep"] == clump_recipes.variant("clump1", "grown-at-0.002")["mu_prep"] == 0.002
     assert abs(before["summary"]["void_ratio"] - 0.445) > 0.01
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
-    _bench.replace_block(str(doc), "clump1-recipes", screen.table(data, screen.ROWS1, screen.PAPER1))
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: _bench.replace_block(
+        doc, "clump1-recipes", screen.table(data, screen.ROWS1, screen.PAPER1)))
 
 
 def _assert_seeds_block_is_its_data(tmp_path, groups, assembly, block):
@@ -648,10 +641,7 @@ def _assert_seeds_block_is_its_data(tmp_path, groups, assembly, block):
     data = os.path.join(REPO, "docs", "data")
     text = seeds.table([(label, [seeds.headlines(os.path.join(data, d)) for d in ds]) for label, ds in groups],
                        assembly)
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
-    seeds.write_block(str(doc), block, text)
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: seeds.write_block(doc, block, text))
 
 
 def test_clump2_seeds_table_and_reciprocity_are_those_of_their_data(tmp_path):

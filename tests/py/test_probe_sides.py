@@ -1,11 +1,11 @@
 """The default probe of a clump2 held state is reciprocal and agrees with the exact static
-compliance of the state; the one-sided probe of before is not (docs/studies/clumps.md 5j)."""
+compliance of the state; the one-sided probe (`--probe-sides one`) is not (docs/studies/clumps.md 5j)."""
 import os
 
 import numpy as np
 import pytest
 
-from conftest import REPO
+from conftest import REPO, assert_page_is_its_data
 from trueaniso import engines, specimen_file, statics, triaxial
 
 STATE = os.path.join(REPO, "tests", "data", "clump2-300-s4-state4.npz")
@@ -41,7 +41,7 @@ def test_default_probe_of_a_clump2_state_is_reciprocal(one_thread):
     strain over its few hundred steps, 1-2 % of the lateral strains. The default probe (two-sided
     on clumps free to rotate, its stages settled 300 steps) cancels it: measured reciprocity 0.14 %
     against the static compliance's own 0.08 %, off-diagonal compliances within 0.38 % of the static
-    ones, diagonal within 0.11 %. The one-sided probe of before: 1.06 %, 0.77 %, 0.23 %. Tolerances:
+    ones, diagonal within 0.11 %. The one-sided probe (`--probe-sides one`): 1.06 %, 0.77 %, 0.23 %. Tolerances:
     the issue's 0.5 % for the reciprocity (between the two), 0.5 % for the off-diagonal terms (above
     what the default gives, below the one-sided 0.77 %), 0.3 % for the diagonal ones. The file's
     bits and one engine thread make the probes' bits: what is measured here is what runs."""
@@ -53,28 +53,24 @@ def test_default_probe_of_a_clump2_state_is_reciprocal(one_thread):
     assert sides == 2
     assert reciprocity(P) < 5e-3
     assert np.abs(P / S - 1)[off].max() < 5e-3 and np.abs(np.diag(P / S) - 1).max() < 3e-3
-    before, sides = probed_compliance(sides="one")
+    one_sided, sides = probed_compliance(sides="one")
     assert sides == 1
-    assert reciprocity(before) > 5e-3 and np.abs(before / S - 1)[off].max() > 5e-3  # what the test tells apart
+    assert reciprocity(one_sided) > 5e-3 and np.abs(one_sided / S - 1)[off].max() > 5e-3  # what the test tells apart
 
 
 def test_the_study_s_tables_are_those_of_its_data(tmp_path):
     """docs/studies/clumps.md 5j's tables are what bench/probe_sides.py --doc writes from
     docs/data/probe-sides, and the data say what the section does: over the 39 states of each of
-    the three clump2 seeds the default probe is reciprocal within 0.5 % and the one-sided probe of
-    before is not."""
-    import shutil
+    the three clump2 seeds the default probe is reciprocal within 0.5 % and the one-sided probe is
+    not."""
     import sys
     sys.path.insert(0, os.path.join(REPO, "bench"))
     import probe_sides
     data = os.path.join(REPO, "docs", "data", "probe-sides")
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
-    probe_sides.main_doc(str(doc), data)
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: probe_sides.main_doc(doc, data))
     for seed in (1, 2, 3):
         records = probe_sides.read(data, "clump2-2000-s%d-all.jsonl" % seed)
         default = [r for r in records if r["variant"] == probe_sides.SIDES[-1][0]]
-        before = [r for r in records if r["variant"] == probe_sides.SIDES[0][0]]
-        assert len(default) == len(before) == 39
-        assert max(r["reciprocity"] for r in default) < 5e-3 < max(r["reciprocity"] for r in before)
+        one_sided = [r for r in records if r["variant"] == probe_sides.SIDES[0][0]]
+        assert len(default) == len(one_sided) == 39
+        assert max(r["reciprocity"] for r in default) < 5e-3 < max(r["reciprocity"] for r in one_sided)
