@@ -665,8 +665,9 @@ def test_clump1_old_new_table_and_its_claims_are_those_of_their_data(tmp_path):
     """docs/studies/clumps.md 5i: the table is what trueaniso.analysis.seeds writes from the committed
     studies, and what the text and docs/departures.md say of them holds on each of the three seeds of
     2000 clumps and on the one of 4000: e within 0.01 of the paper's 0.445, constant to 1e-4 along
-    the 39 states, Zm never below its isotropic value at q < 0, and at the far end of each of the ten paths above it at q < 0 and below
-    it at q > 0 (near the isotropic state, at b = 1 and q 15-30 kPa, it can move by a contact either way)."""
+    the 39 states, Zm never below its isotropic value at q < 0, and at the far end of each of the ten
+    paths above it at q < 0 and below it at q > 0 (near the isotropic state, at b = 1 and q 15-30 kPa,
+    it can move by a contact either way)."""
     import csv
     from trueaniso.analysis import seeds
     data = os.path.join(REPO, "docs", "data")
