@@ -654,7 +654,7 @@ def test_clump2_seeds_table_and_reciprocity_are_those_of_their_data(tmp_path):
     data = os.path.join(REPO, "docs", "data")
     groups = [("default, 1000 clumps, one-sided probes", ["clump2-recipes/default-1000-s1"]),
               ("default, 2000 clumps", ["clump2-2000/s1", "clump2-2000/s2", "clump2-2000/s3"]),
-              ("default, 4000 clumps, one-sided probes", ["clump2-4000/s1"]),
+              ("default, 4000 clumps", ["clump2-4000/s1"]),
               ("earlier recipe (grown-to-target), 4000 clumps", ["clump2-4000-s1"])]
     _assert_seeds_block_is_its_data(tmp_path, groups, "clump2", "clump2-seeds")
     with open(os.path.join(data, "clump2-2000", "s1", "reciprocity.json")) as f:
