@@ -28,6 +28,8 @@ import subprocess
 from docutils import nodes
 from docutils.parsers.rst import Directive
 
+import yade_classes
+
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PYTHON = "/usr/bin/python3"
 MARKER = re.compile(r"<!-- generated: ([a-z-]+) -->")
@@ -130,7 +132,6 @@ def generate(kind):
     if kind == "python-api":
         return python_api()
     if kind == "yade-classes":
-        import yade_classes
         return yade_classes.markdown(REPO)
     raise ValueError("unknown generated section %r" % kind)
 
@@ -293,6 +294,15 @@ def schema_rows(name):
     return root, rows, extends
 
 
+def _with_math(text):
+    """Nodes of a schema's words: text, and each $x$ of it a formula (MathJax), as in the docstrings."""
+    found, at = [], 0
+    for m in yade_classes.DOLLARS.finditer(text):
+        found += [nodes.Text(text[at:m.start()]), nodes.math(m.group(1), m.group(1))]
+        at = m.end()
+    return found + [nodes.Text(text[at:])]
+
+
 def _cell(*children):
     entry = nodes.entry()
     paragraph = nodes.paragraph()
@@ -319,7 +329,7 @@ class SchemaTable(Directive):
         intro = nodes.paragraph()
         intro += nodes.Text("Schema ")
         intro += nodes.literal(text=schema_file(name))
-        intro += nodes.Text(" (pyscripts/trueaniso/schemas/): %s" % root.get("description", root.get("title", "")))
+        intro.extend(_with_math(" (pyscripts/trueaniso/schemas/): %s" % root.get("description", root.get("title", ""))))
         if extends:
             intro += nodes.Text(" Every field of ")
             for i, ref in enumerate(extends):
@@ -348,7 +358,7 @@ class SchemaTable(Directive):
             row += _cell(nodes.Text("; ".join(constraints)))
             if with_required:
                 row += _cell(nodes.Text(required))
-            row += _cell(nodes.Text(description))
+            row += _cell(*_with_math(description))
             body += row
         group += body
         # the schema's words as written: no curly quotes or dashes made of its ' and --
@@ -383,8 +393,29 @@ def on_source_read(app, docname, source):
     source[0] = MARKER.sub(lambda m: generate(m.group(1)), source[0])
 
 
+def docstring_math(app, what, name, obj, options, lines):
+    """A docstring's formulas, written between dollars as the YADE plugin's are (yade_classes.py:
+    TeX that reads as it stands in help()), as :math: roles for MathJax. Doctest blocks (from a
+    ``>>>`` line to the next blank one) and literal blocks (after a line ending in ``::``) are
+    code and stay as they are."""
+    doctest, literal = False, None
+    for i, line in enumerate(lines):
+        text = line.strip()
+        indent = len(line) - len(line.lstrip())
+        if literal is not None and (not text or indent > literal):
+            continue
+        literal = None
+        doctest = text.startswith(">>>") or (doctest and bool(text))
+        if doctest:
+            continue
+        lines[i] = yade_classes.dollar_math(line, ":math:")
+        if text.endswith("::") and not text.startswith(".. math::"):
+            literal = indent
+
+
 def setup(app):
     app.connect("source-read", on_source_read)
+    app.connect("autodoc-process-docstring", docstring_math)
     app.add_config_value("trueaniso_mathjax_dir", None, "html")
     app.connect("build-finished", copy_mathjax)
     app.add_directive("schema-table", SchemaTable)

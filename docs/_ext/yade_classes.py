@@ -17,6 +17,15 @@ LIBDIR = os.path.join("lib", "x86_64-linux-gnu", "yade-double")
 YADE_DOCS = "https://yade-dem.org/doc/yade.wrapper.html#yade.wrapper.%s"
 # YADE's attribute flags (lib/serialization/Serializable.hpp, Attr::), those a user needs to know
 FLAGS = {2: "read-only", 1: "not saved"}
+# YADE's rule for a formula in a docstring (its doc/sphinx/conf.py): an unescaped $x$; here also
+# no backtick inside, so that a code span holding a dollar stays code
+DOLLARS = re.compile(r"(?<!\\)\$([^$`]+)(?<!\\)\$")
+
+
+def dollar_math(text, role):
+    """`text` with each $x$ written as the given role of x (``{math}`x` `` in MyST, ``:math:`x` ``
+    in reStructuredText)."""
+    return DOLLARS.sub(lambda m: "%s`%s`" % (role, m.group(1)), text)
 
 
 def plugin_classes(repo):
@@ -68,7 +77,13 @@ def split_roles(doc):
 
 def to_markdown(text, ours):
     """YADE's reStructuredText roles in a docstring as Markdown: :yref:`X` a link (to this page for
-    the plugin's classes, to YADE's reference for YADE's), ``x`` code, :math:`x` MathJax."""
+    the plugin's classes, to YADE's reference for YADE's), ``x`` code, $x$ and :math:`x` MathJax.
+
+    The plugin writes its formulas as YADE's own classes do, between single dollars (YADE's
+    doc/sphinx/conf.py turns an unescaped $x$ into :math:`x` and \\$ into a dollar): TeX that a
+    user reads as it stands in help() and in the GUI's inspector, which print docstrings raw. Each
+    formula becomes a {math} role, whose code span keeps its backslashes and underscores from
+    Markdown, and which needs no $ or | to mean math inside a table's cell."""
     def yref(m):
         label, target = m.group(1).strip(), (m.group(2) or m.group(1)).strip()
         cls = re.split(r"::|\.", target)[0]
@@ -76,11 +91,11 @@ def to_markdown(text, ours):
             return "[`%s`](#%s)" % (label, cls.lower())
         return "[`%s`](%s)" % (label, YADE_DOCS % target.replace("::", "."))
     text = re.sub(r":yref:`([^`<]*?)\s*(?:<([^`>]*)>)?`", yref, text)
-    text = re.sub(r":math:`([^`]*)`", r"$\1$", text)
     text = re.sub(r":ref:`([^`<]*?)\s*<[^`]*>`", r"\1", text)
     text = text.replace("|yupdate|", "(updated by the engine)").replace("|ycomp|", "(computed)")
     text = re.sub(r"``([^`]+)``", r"`\1`", text)
-    return text
+    text = re.sub(r":math:`([^`]*)`", r"{math}`\1`", text)
+    return dollar_math(text, "{math}")
 
 
 def cell(text):

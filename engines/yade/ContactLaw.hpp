@@ -35,17 +35,17 @@ class SimplifiedMindlinPhys : public FrictPhys {
   // clang-format off
   YADE_CLASS_BASE_DOC_ATTRS_CTOR(SimplifiedMindlinPhys, FrictPhys,
     "The paper's simplified Hertz-Mindlin contact (Eqs. 5-7) of the trueaniso engines: Hertz's normal force, "
-    "the tangential stiffness k_s = (C_s/C_n) k_n of Eq. (6) carried with the contact frame by an exact rotation, "
-    "Coulomb's cap at tangensOfFrictionAngle times N (1e23 suppresses sliding, as StressProbe does), an optional "
+    "the tangential stiffness $k_s = (C_s/C_n)\\,k_n$ of Eq. (6) carried with the contact frame by an exact rotation, "
+    "Coulomb's cap at tangensOfFrictionAngle times $N$ (1e23 suppresses sliding, as StressProbe does), an optional "
     "rolling spring. Made by :yref:`Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys`. Forces in N, on body 2 "
     "(normalForce along the normal from body 1 to body 2: a compressed contact's normalForce points from 1 to 2).",
-    ((Real, rbar, 0, , "r-bar of Eq. (7), 2 r1 r2/(r1 + r2) between two spheres, 2 r for a sphere on a wall, facet or box [m]"))
-    ((Real, hertzUnit, 0, , "(4/3) E* sqrt(1/2): N = hertzUnit sqrt(rbar) delta^(3/2) [Pa]"))
-    ((Real, stiffnessRatio, 0, , "k_s/k_n = C_s/C_n: 2(1-nu)/(2-nu) for one material, 4 G*/E* for two"))
-    ((Real, Cn, 0, , "C_n of Eq. (5): k_n = C_n (rbar N)^(1/3) [Pa^(2/3)]"))
-    ((Real, Cs, 0, , "C_s of Eq. (6): k_s = C_s (rbar N)^(1/3) [Pa^(2/3)]"))
-    ((Real, rollingStiffness, 0, , "beta of the rolling spring k_r = beta k_s rbar^2 (0: no rolling resistance)"))
-    ((Real, rollingFriction, 0, , "eta_r: the rolling moment is capped at eta_r rbar N"))
+    ((Real, rbar, 0, , "$\\bar r$ of Eq. (7), $2 r_1 r_2/(r_1 + r_2)$ between two spheres, $2r$ for a sphere on a wall, facet or box [m]"))
+    ((Real, hertzUnit, 0, , "$(4/3) E^* \\sqrt{1/2}$, so that $N = \\text{hertzUnit}\\,\\sqrt{\\bar r}\\,\\delta^{3/2}$ [Pa]"))
+    ((Real, stiffnessRatio, 0, , "$k_s/k_n = C_s/C_n$: $2(1-\\nu)/(2-\\nu)$ for one material, $4 G^*/E^*$ for two"))
+    ((Real, Cn, 0, , "$C_n$ of Eq. (5): $k_n = C_n (\\bar r N)^{1/3}$ [$\\mathrm{Pa}^{2/3}$]"))
+    ((Real, Cs, 0, , "$C_s$ of Eq. (6): $k_s = C_s (\\bar r N)^{1/3}$ [$\\mathrm{Pa}^{2/3}$]"))
+    ((Real, rollingStiffness, 0, , "$\\beta$ of the rolling spring $k_r = \\beta k_s \\bar r^2$ (0: no rolling resistance)"))
+    ((Real, rollingFriction, 0, , "$\\eta_r$: the rolling moment is capped at $\\eta_r \\bar r N$"))
     ((Vector3r, rollingMoment, Vector3r::Zero(), , "rolling moment on body 2 [N m]"))
     ((Vector3r, prevNormal, Vector3r::Zero(), , "the contact normal at the last evaluation"))
     ((bool, loaded, false, , "the contact carried a force at the last evaluation"))
@@ -150,16 +150,17 @@ class Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys : public IPhysFunctor {
   FUNCTOR2D(FrictMat, FrictMat);
   // clang-format off
   YADE_CLASS_BASE_DOC_ATTRS_CTOR_PY(Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys, IPhysFunctor,
-    "Makes :yref:`SimplifiedMindlinPhys` from two FrictMat: G = young/(2(1+poisson)) and nu = poisson of each (the "
-    "particle's Poisson ratio, as in :yref:`Ip2_FrictMat_FrictMat_MindlinPhys`), friction tan(min(frictionAngle)). "
-    "One material gives the paper's C_n and C_s (Eqs. 5-6); two give Hertz's and Mindlin's combined moduli, "
-    "1/E* = sum (1-nu_i)/(2 G_i), 1/G* = sum (2-nu_i)/G_i, k_s/k_n = 4 G*/E* (contact/MaterialPair.hpp). Contacts "
-    "between two spheres (free or clump members) take rbar of Eq. (7); a sphere against a Wall, Facet or Box is a "
-    "sphere on a half-space (rbar = 2 r). Refused with a RuntimeError from O.run (the contact carries no force, "
+    "Makes :yref:`SimplifiedMindlinPhys` from two FrictMat: each one's shear modulus $G = E/(2(1+\\nu))$ from its "
+    "young $E$ and poisson $\\nu$ (the particle's Poisson ratio, as in :yref:`Ip2_FrictMat_FrictMat_MindlinPhys`), "
+    "friction the tangent of the smaller frictionAngle. One material gives the paper's $C_n$ and $C_s$ (Eqs. 5-6); "
+    "two give Hertz's and Mindlin's combined moduli, $1/E^* = \\sum_i (1-\\nu_i)/(2 G_i)$, "
+    "$1/G^* = \\sum_i (2-\\nu_i)/G_i$, $k_s/k_n = 4 G^*/E^*$ (contact/MaterialPair.hpp). Contacts between two "
+    "spheres (free or clump members) take $\\bar r$ of Eq. (7); a sphere against a Wall, Facet or Box is a sphere "
+    "on a half-space ($\\bar r = 2r$). Refused with a RuntimeError from O.run (the contact carries no force, "
     "the run stops after the step): young or frictionAngle not finite, young <= 0, poisson outside (-1, 0.5), any "
     "other pair of shapes.",
-    ((Real, rollingStiffness, 0, Attr::triggerPostLoad, "beta of the rolling spring k_r = beta k_s rbar^2 (0: none; >= 0)"))
-    ((Real, rollingFriction, 0, Attr::triggerPostLoad, "eta_r of the rolling cap eta_r rbar N (>= 0)")),
+    ((Real, rollingStiffness, 0, Attr::triggerPostLoad, "$\\beta$ of the rolling spring $k_r = \\beta k_s \\bar r^2$ (0: none; >= 0)"))
+    ((Real, rollingFriction, 0, Attr::triggerPostLoad, "$\\eta_r$ of the rolling cap $\\eta_r \\bar r N$ (>= 0)")),
     /* ctor */,
     PYTHON_ATTRIBUTES_DEFS(Ip2_FrictMat_FrictMat_SimplifiedMindlinPhys));
   // clang-format on
@@ -191,9 +192,9 @@ class Law2_ScGeom_SimplifiedMindlinPhys_Mindlin : public LawFunctor {
   // clang-format off
   YADE_CLASS_BASE_DOC_ATTRS(Law2_ScGeom_SimplifiedMindlinPhys_Mindlin, LawFunctor,
     "The paper's simplified Hertz-Mindlin law (Eqs. 5-7), the code of the trueaniso engines "
-    "(contact/HertzMindlin.hpp): N = (4/3) E* sqrt(rbar/2) delta^(3/2), the shear force carried with the contact "
-    "frame by an exact rotation and incremented by -k_s times the step's tangential displacement, capped at "
-    "tangensOfFrictionAngle N; the rolling spring when the phys has rollingStiffness > 0. Build the geometry with "
+    "(contact/HertzMindlin.hpp): $N = (4/3) E^* \\sqrt{\\bar r/2}\\,\\delta^{3/2}$, the shear force carried with the "
+    "contact frame by an exact rotation and incremented by $-k_s$ times the step's tangential displacement, capped "
+    "at tangensOfFrictionAngle times $N$; the rolling spring when the phys has rollingStiffness > 0. Build the geometry with "
     "Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=False) (our tangential displacement; docs/yade-peer.md). "
     "Geometries: ScGeom of two spheres, or of a sphere and a Wall, Facet or Box (a half-space); the Ip2 refuses others.",
     ((bool, neverErase, false, , "keep interactions whose spheres separated (forces zero)")));

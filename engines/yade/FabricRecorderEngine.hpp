@@ -180,34 +180,34 @@ class FabricRecorder : public PeriodicEngine {
     "The fabric of the contact network (paper sections 3.2 and 4.2), the code of the trueaniso engines "
     "(measure/Fabric.hpp, measure/FabricTerms.hpp), every iterPeriod steps (100 unless given: about 1 % of the "
     "steps' time) or by calling the engine: Zm (Eq. 14), R (Eq. 15), H (Eq. 16), B (Eq. 33), M (Eq. 34), the "
-    "contact density Nc/V counted and by Eq. (36), the void ratio, over the contacts carrying a normal force. Put "
+    "contact density $N_c/V$ counted and by Eq. (36), the void ratio, over the contacts carrying a normal force. Put "
     "it after InteractionLoop.\n\n"
     "Particles: free spheres and clumps of spheres; a clump is one particle (one Np, its members' contacts with "
-    "other particles each count in Nc and in its Zm), the branch vector L joins particle centres (clump centres; "
-    "the image of body 2 by the interaction's cellDist), rbar (Eq. 7) is the two member spheres', and a clump's "
+    "other particles each count in $N_c$ and in its Zm), the branch vector $L$ joins particle centres (clump centres; "
+    "the image of body 2 by the interaction's cellDist), $\\bar r$ (Eq. 7) is the two member spheres', and a clump's "
     "solid volume is the union of its balls, overlaps counted once. Any other body is refused.\n\n"
-    "Units: R dimensionless, H m^2, B and M m^(7/3) N^(1/3) (the weight (rbar N)^(1/3) of Eqs. 33-34 is k_n/C_n; "
-    "the material constants C_n, C_s stay outside), Nc/V 1/m^3. M holds 81 values, M[9(3i+j) + 3k + l] = "
-    "M_ijkl.\n\n"
+    "Units: R dimensionless, H $\\mathrm{m}^2$, B and M $\\mathrm{m}^{7/3}\\,\\mathrm{N}^{1/3}$ (the weight "
+    "$(\\bar r N)^{1/3}$ of Eqs. 33-34 is $k_n/C_n$; the material constants $C_n$, $C_s$ stay outside), $N_c/V$ "
+    "$\\mathrm{m}^{-3}$. M holds 81 values in C order: ``M[27*i + 9*j + 3*k + l]`` is $M_{ijkl}$.\n\n"
     "Refusals: a period < 0, or no period > 0 (it would never record), raises ValueError at construction or "
     "assignment; a value of the wrong type a TypeError naming the attribute. A scene that is not periodic raises "
     "RuntimeError from O.run at the first step, a scene without particles or a body other than a sphere or a clump "
     "of spheres at the first record. Without any contact carrying a force, ``message`` says 'no contacts' and the averages are 0 (not NaN); "
     "before the first record Zm is NaN and ``message`` 'not recorded yet'.",
-    ((Real, Zm, NAN, Attr::readonly, "mechanical coordination number, Eq. (14): (2 Nc - Np1)/(Np - Np0 - Np1)"))
-    ((Matrix3r, R, Matrix3r::Zero(), Attr::readonly, "contact normal fabric, Eq. (15), <n n>"))
-    ((Matrix3r, H, Matrix3r::Zero(), Attr::readonly, "branch vector fabric, Eq. (16), <L L> [m^2]"))
-    ((Matrix3r, B, Matrix3r::Zero(), Attr::readonly, "branch-contact-stiffness fabric, Eq. (33), <(rbar N)^(1/3) L L> [m^(7/3) N^(1/3)]"))
-    ((vector<Real>, M, , Attr::readonly, "mixed fourth-order tensor of Eq. (34), <(rbar N)^(1/3) L_i n_j L_k n_l>, 81 values in C order [m^(7/3) N^(1/3)]"))
-    ((Real, NcOverV, NAN, Attr::readonly, "contacts per volume, counted, Nc/V [1/m^3]"))
-    ((Real, NcOverVEq36, NAN, Attr::readonly, "contacts per volume by Eq. (36), 3 Zm/(8 pi (1+e) <r^3>), a clump's r^3 from its volume [1/m^3]"))
-    ((Real, voidRatio, NAN, Attr::readonly, "void ratio (V - Vs)/Vs, Vs the particles' solid volume"))
+    ((Real, Zm, NAN, Attr::readonly, "mechanical coordination number, Eq. (14): $Z_m = (2 N_c - N_p^1)/(N_p - N_p^0 - N_p^1)$"))
+    ((Matrix3r, R, Matrix3r::Zero(), Attr::readonly, "contact normal fabric, Eq. (15): $R_{ij} = \\langle n_i n_j \\rangle$"))
+    ((Matrix3r, H, Matrix3r::Zero(), Attr::readonly, "branch vector fabric, Eq. (16): $H_{ij} = \\langle L_i L_j \\rangle$ [$\\mathrm{m}^2$]"))
+    ((Matrix3r, B, Matrix3r::Zero(), Attr::readonly, "branch-contact-stiffness fabric, Eq. (33): $B_{ij} = \\langle (\\bar r N)^{1/3} L_i L_j \\rangle$ [$\\mathrm{m}^{7/3}\\,\\mathrm{N}^{1/3}$]"))
+    ((vector<Real>, M, , Attr::readonly, "mixed fourth-order tensor of Eq. (34): $M_{ijkl} = \\langle (\\bar r N)^{1/3} L_i n_j L_k n_l \\rangle$, 81 values in C order [$\\mathrm{m}^{7/3}\\,\\mathrm{N}^{1/3}$]"))
+    ((Real, NcOverV, NAN, Attr::readonly, "contacts per volume, counted, $N_c/V$ [$\\mathrm{m}^{-3}$]"))
+    ((Real, NcOverVEq36, NAN, Attr::readonly, "contacts per volume by Eq. (36), $3 Z_m/(8\\pi(1+e)\\langle r^3 \\rangle)$, a clump's $r^3$ from its volume [$\\mathrm{m}^{-3}$]"))
+    ((Real, voidRatio, NAN, Attr::readonly, "void ratio $e = (V - V_s)/V_s$, $V_s$ the particles' solid volume"))
     ((Real, meanNormalForce, NAN, Attr::readonly, "mean normal force over the contacts [N]"))
-    ((Real, volume, NAN, Attr::readonly, "cell volume [m^3]"))
-    ((long, contacts, 0, Attr::readonly, "Nc: contacts carrying a normal force"))
-    ((long, particles, 0, Attr::readonly, "Np: free spheres and clumps"))
-    ((long, rattlers, 0, Attr::readonly, "Np0: particles without a contact"))
-    ((long, oneContact, 0, Attr::readonly, "Np1: particles with one contact"))
+    ((Real, volume, NAN, Attr::readonly, "cell volume $V$ [$\\mathrm{m}^3$]"))
+    ((long, contacts, 0, Attr::readonly, "$N_c$: contacts carrying a normal force"))
+    ((long, particles, 0, Attr::readonly, "$N_p$: free spheres and clumps"))
+    ((long, rattlers, 0, Attr::readonly, "$N_p^0$: particles without a contact"))
+    ((long, oneContact, 0, Attr::readonly, "$N_p^1$: particles with one contact"))
     ((long, records, 0, Attr::readonly, "times recorded"))
     ((string, message, "not recorded yet", Attr::readonly, "what the last record could not give ('no contacts', ...); empty when all is defined")),
     iterPeriod = 100;,

@@ -122,7 +122,7 @@ class StressProbe : public GlobalEngine {
     "The paper's directional stress probe (section 2.2, Eqs. 10-12), the code of the trueaniso engines "
     "(control/StressProbe.hpp). From the held state it suppresses sliding (friction probeFriction on every contact, "
     "every step), optionally restrains rotations, relaxes at the held stresses, raises the stress on ``axis`` while "
-    "the five others are held until gamma of Eq. (12) reaches gammaTarget (or the stress has risen by increment), "
+    "the five others are held until $\\gamma$ of Eq. (12) reaches gammaTarget (or the stress has risen by increment), "
     "holds to equilibrium, and gives E (Eq. 10) and nu (Eq. 11), or G for a shear axis. Then the scene is put back "
     "as it was (positions, velocities, orientations, cell and its velocity gradient, contact forces, friction, blocked "
     "DOFs). A scene saved mid-probe keeps the held state: loaded, the probe puts it back and probes again from it.\n\n"
@@ -132,13 +132,13 @@ class StressProbe : public GlobalEngine {
     "branch vectors join clump centres.\n\n"
     "Conventions: stresses Voigt (xx, yy, zz, yz, xz, xy), compression positive, Pa (minus utils.getStress()); "
     "strains Voigt, engineering shears, compression positive, counted from the cell at the end of the relaxation; "
-    "E and G in Pa, nu_ij = -d eps_j / d eps_i.\n\n"
+    "E and G in Pa, $\\nu_{ij} = -\\Delta\\varepsilon_j/\\Delta\\varepsilon_i$.\n\n"
     "Refusals: an attribute out of range raises ValueError at construction or assignment, naming it; a scene that "
     "is not periodic, a second controller, or held normal stresses that are not > 0 raise RuntimeError from O.run at "
     "the first step, before the probe changes anything. reset() mid-probe puts the held state back first.",
     ((string, axis, "z", Attr::triggerPostLoad, "x, y, z (E, nu) or yz, xz, xy (G); 0-5 are taken too"))
     ((int, sign, 1, Attr::triggerPostLoad, "+1 loads (compression or positive shear), -1 unloads"))
-    ((Real, gammaTarget, 1e-6, Attr::triggerPostLoad, "strain at which the ramp stops: gamma of Eq. (12), or the shear strain; finite, > 0"))
+    ((Real, gammaTarget, 1e-6, Attr::triggerPostLoad, "strain at which the ramp stops: $\\gamma$ of Eq. (12), or the shear strain; finite, > 0"))
     ((Real, increment, 0, Attr::triggerPostLoad, "> 0: a fixed stress increment [Pa] instead of gammaTarget"))
     ((Real, probeFriction, 1e23, Attr::triggerPostLoad, "friction coefficient during the probe (the paper's sliding suppressed; the engines' kProbeFriction)"))
     ((bool, restrainRotations, false, , "block particle rotations during the probe"))
@@ -154,15 +154,15 @@ class StressProbe : public GlobalEngine {
     ((bool, pauseWhenDone, true, , "stop O.run after the step where the probe ends"))
     ((bool, finished, false, Attr::readonly, "the probe has ended (see E, nu, G or message)"))
     ((Real, E, NAN, Attr::readonly, "Young's modulus of axis, Eq. (10) [Pa]"))
-    ((Vector3r, nu, Vector3r::Constant(NAN), Attr::readonly, "Poisson's ratios nu_ij = -d eps_j / d eps_i, Eq. (11), for j = x, y, z (NaN at i)"))
+    ((Vector3r, nu, Vector3r::Constant(NAN), Attr::readonly, "Poisson's ratios $\\nu_{ij} = -\\Delta\\varepsilon_j/\\Delta\\varepsilon_i$, Eq. (11), for $j$ = x, y, z ($i$ = axis; NaN at $j = i$)"))
     ((Real, G, NAN, Attr::readonly, "shear modulus of a shear axis [Pa]"))
     ((Vector6r, dStress, Vector6r::Zero(), Attr::readonly, "stress increments (Voigt, compression positive) [Pa]"))
     ((Vector6r, dStrain, Vector6r::Zero(), Attr::readonly, "strain increments (Voigt, engineering shear, compression positive)"))
     ((Vector6r, heldStress, Vector6r::Constant(NAN), Attr::readonly, "the stresses held (holdStress, NaN entries measured at the start) [Pa]"))
     ((Vector6r, target, Vector6r::Zero(), Attr::readonly, "current goal [Pa]"))
-    ((Real, stressError, 0, Attr::readonly, "largest |stress - goal| over the held components [Pa]"))
+    ((Real, stressError, 0, Attr::readonly, "largest distance of a held stress from its goal [Pa]"))
     ((Real, unbalanced, 0, Attr::readonly, "last unbalanced force"))
-    ((Real, gamma, 0, Attr::readonly, "current gamma"))
+    ((Real, gamma, 0, Attr::readonly, "current $\\gamma$ of Eq. (12)"))
     ((int, stage, 0, Attr::readonly, "0 idle, 1 relax, 2 ramp, 3 hold, 4 done, 5 failed"))
     ((long, steps, 0, Attr::readonly, "steps of the probe"))
     ((long, lostContacts, 0, Attr::readonly, "contacts of the snapshot that no longer existed at the restore"))

@@ -148,8 +148,8 @@ class TrueTriaxialServo : public GlobalEngine {
     "the servo changes anything. Friction: from its first step the servo sets loadingFriction on every contact, "
     "every step (contacts made later too, from the step after they appear).",
     ((Real, b, 0, Attr::triggerPostLoad, "intermediate principal stress coefficient of Eq. (8), in [0, 1]"))
-    ((Real, sigmaZ, 100e3, Attr::triggerPostLoad, "sigma_z of the state [Pa], > 0"))
-    ((Real, meanStress, 100e3, Attr::triggerPostLoad, "mean stress p, constant along the path [Pa], > 0"))
+    ((Real, sigmaZ, 100e3, Attr::triggerPostLoad, "$\\sigma_z$ of the state [Pa], > 0"))
+    ((Real, meanStress, 100e3, Attr::triggerPostLoad, "mean stress $p$, constant along the path [Pa], > 0"))
     ((Real, pathRate, 2.0, Attr::triggerPostLoad, "fastest motion of the goal along the path [Pa per step], > 0"))
     ((Real, followTolerance, 1000.0, Attr::triggerPostLoad, "the goal advances while every stress is within this of it [Pa]"))
     ((Real, stressTolerance, 500.0, Attr::triggerPostLoad, "a state is held when every stress (shear too) is within this [Pa]"))
@@ -161,7 +161,7 @@ class TrueTriaxialServo : public GlobalEngine {
     ((long, holdSteps, 200000, Attr::triggerPostLoad, "it fails when held at the state this many steps without settling"))
     ((Real, gain, 0.01, Attr::triggerPostLoad, "fraction of the stress error closed per step, in (0, 1]"))
     ((Real, maxStrainRate, 0, Attr::triggerPostLoad, "largest cell strain rate [1/s]; 0: that of inertialNumber"))
-    ((Real, inertialNumber, 1e-3, Attr::triggerPostLoad, "with maxStrainRate 0, the cap is the rate of this inertial number I = rate d50 sqrt(rho/p): d50 the median sphere diameter, rho the first sphere's density, p = meanStress (quasi-static below 1e-3)"))
+    ((Real, inertialNumber, 1e-3, Attr::triggerPostLoad, "with maxStrainRate 0, the cap is the strain rate $\\dot\\varepsilon$ of this inertial number $I = \\dot\\varepsilon\\, d_{50} \\sqrt{\\rho/p}$: $d_{50}$ the median sphere diameter, $\\rho$ the first sphere's density, $p$ = meanStress (quasi-static below 1e-3)"))
     ((Real, loadingFriction, 0.5, Attr::triggerPostLoad, "friction coefficient set on every contact while the servo runs (the paper's 0.5)"))
     ((Real, lostStressFraction, 0.5, Attr::triggerPostLoad, "a normal stress below this fraction of its goal (a packing that lost its stress when its friction dropped, a cloud) is loaded at the strain-rate cap, not by the stiffness of the few contacts left; 0: never"))
     ((Real, stepScale, 1.0, Attr::triggerPostLoad, "length of a step in the unit of the per-step settings (1: YADE's step; run_states.py --host yade passes O.dt over the reference rule's step)"))

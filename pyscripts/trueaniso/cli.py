@@ -10,6 +10,7 @@
 import argparse
 import math
 import os
+import re
 import signal
 import sys
 import threading
@@ -213,9 +214,11 @@ def resolve_path_rate(o):
 
 def description(doc):
     """A script's --help description: the first paragraph of its docstring, whole (not its first
-    line, which may stop mid-sentence)."""
+    line, which may stop mid-sentence), its formulas without the dollars the manual typesets them
+    from (a terminal shows the TeX between them as it stands)."""
     first = doc.strip().split("\n\n")[0]
-    return " ".join(line.strip() for line in first.splitlines())
+    text = " ".join(line.strip() for line in first.splitlines())
+    return re.sub(r"(?<!\\)\$([^$`]+)(?<!\\)\$", r"\1", text)
 
 
 # ---------------------------------------------------------------- option types (argparse type=)

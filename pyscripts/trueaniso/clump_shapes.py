@@ -99,9 +99,9 @@ def quaternion_from_matrix(R):
 
 
 def long_axes(n, rng, weights):
-    """n unit vectors from the angular central Gaussian distribution with covariance
-    diag(w_x^2, w_y^2, w_z^2): u = g / norm(g) with g = (w_x g1, w_y g2, w_z g3), g standard normal.
-    Equal weights give isotropic directions; w_z > w_x = w_y favours the vertical, w_z < w_x = w_y
+    r"""n unit vectors from the angular central Gaussian distribution with covariance
+    $\operatorname{diag}(w_x^2, w_y^2, w_z^2)$: $u = g/\lVert g \rVert$ with $g = (w_x g_1, w_y g_2, w_z g_3)$,
+    $g_i$ standard normal. Equal weights give isotropic directions; $w_z > w_x = w_y$ favours the vertical, $w_z < w_x = w_y$
     the horizontal plane, and the distribution is then transversely isotropic about z."""
     w = np.asarray(weights, dtype=float)
     if w.shape != (3,) or not np.all(np.isfinite(w)) or np.any(w <= 0):

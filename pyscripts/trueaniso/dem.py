@@ -98,11 +98,12 @@ def refresh(scene):
 
 
 def reference_contact_force(scene, pressure):
-    """Mean contact force expected at a pressure: p = Nc <N l> / V with Nc l ~ 3 V_s Z / (2 pi r^2 ...).
+    r"""Mean contact force expected at a pressure: $p = N_c \langle N l \rangle / V$ with $N_c l \sim 3 V_s Z/(2\pi r^2 \dots)$.
 
     A bound is enough here (it only caps the time step before contacts exist): for spheres of
-    mean diameter d at solid fraction ~0.6 and Z ~ 6, <N> ~ pi d^2 p / (0.6 Z) ~ 0.9 d^2 p;
-    we use 4 d^2 p so the cap is safe for the stiffest contacts of a well-formed network.
+    mean diameter $d$ at solid fraction ~0.6 and $Z \sim 6$,
+    $\langle N \rangle \sim \pi d^2 p/(0.6 Z) \sim 0.9\,d^2 p$; we use $4 d^2 p$ so the cap is safe
+    for the stiffest contacts of a well-formed network.
     """
     radii = scene.radii
     d = 2.0 * float(radii.mean())
@@ -110,8 +111,8 @@ def reference_contact_force(scene, pressure):
 
 
 def reference_time_step(scene, pressure=100e3, safety=None, coordination=12):
-    """Time step for contacts carrying the reference force at `pressure` (k_n of Eq. 5): the cap of
-    the time stepper's step. sqrt(m / (Z k_n)) at the stiffest expected contact is below either
+    r"""Time step for contacts carrying the reference force at `pressure` ($k_n$ of Eq. 5): the cap of
+    the time stepper's step. $\sqrt{m/(Z k_n)}$ at the stiffest expected contact is below either
     bound of a packing at that pressure, so it takes the factor of the rule (default: the factor of
     the module's time_step_rule)."""
     if safety is None:
@@ -124,14 +125,14 @@ def reference_time_step(scene, pressure=100e3, safety=None, coordination=12):
 
 
 def strain_rate_for_inertial_number(inertial_number, d50, density, pressure):
-    """The strain rate of an inertial number, I = rate d sqrt(rho / p) (I < 1e-3: quasi-static).
+    r"""The strain rate $\dot\varepsilon$ of an inertial number, $I = \dot\varepsilon\, d \sqrt{\rho/p}$ (I < 1e-3: quasi-static).
 
     The engines' control/InertialNumber.hpp, which the YADE plugin's TrueTriaxialServo takes too.
 
     Args:
-        inertial_number: I.
-        d50: the particles' diameter, m.
-        density: the particles' density, kg/m^3.
+        inertial_number: $I$.
+        d50: the particles' diameter $d$, m.
+        density: the particles' density $\rho$, $\mathrm{kg/m^3}$.
         pressure: the mean stress, Pa.
 
     Example:

@@ -1,21 +1,21 @@
-"""Physical bounds on the moduli of a packing of Hertz-Mindlin particles, for checking files.
+r"""Physical bounds on the moduli of a packing of Hertz-Mindlin particles, for checking files.
 
 A file that fits its schema can still hold numbers no packing of its material has: a column scaled
 by 1e6, E and gamma swapped, a record's E_blocked of 1e30 Pa. These bounds are what every reader
 of moduli (probe tables, statics records) checks them against before using them.
 
-The scale is the simple cubic packing's Young's modulus at the mean stress p,
-E_sc = (12 E*^2 p)^(1/3) / 2 with E* = E_p / (2 (1 - nu_p^2)) (Eqs. 5-6 for its six contacts;
+The scale is the simple cubic packing's Young's modulus at the mean stress $p$,
+$E_{sc} = (12 E^{*2} p)^{1/3}/2$ with $E^* = E_p/(2(1 - \nu_p^2))$ (Eqs. 5-6 for its six contacts;
 406.7 MPa at 100 kPa for the paper's particles, docs/triaxial.md). Every committed probe table
-lies within 0.19-1.93 E_sc (clump2 with rotations free to clump1 vertically); a packing's modulus
-grows as p^(1/3) with its contact stiffness and as (solid fraction x coordination)^(2/3) with its
-contact density, which the densest packings raise by about 2 over the simple cubic one. So
-MODULUS_RANGE, [0.01, 10] E_sc, keeps a factor of ten beyond the loosest and densest packings
+lies within 0.19-1.93 $E_{sc}$ (clump2 with rotations free to clump1 vertically); a packing's modulus
+grows as $p^{1/3}$ with its contact stiffness and as $(\text{solid fraction} \times \text{coordination})^{2/3}$
+with its contact density, which the densest packings raise by about 2 over the simple cubic one. So
+MODULUS_RANGE, [0.01, 10] $E_{sc}$, keeps a factor of ten beyond the loosest and densest packings
 measured, and refuses what no packing of the material reaches.
 
 The compliance of a state (its three normal probes) is an elastic solid's: symmetric (reciprocity
-nu_ij / E_i = nu_ji / E_j) within RECIPROCITY, and positive definite. RECIPROCITY is of
-sqrt(S_ii S_jj): the committed tables reach 0.69 % (clump2, rotations free; spheres less), the
+$\nu_{ij}/E_i = \nu_{ji}/E_j$) within RECIPROCITY, and positive definite. RECIPROCITY is of
+$\sqrt{S_{ii} S_{jj}}$: the committed tables reach 0.69 % (clump2, rotations free; spheres less), the
 probe's own error (its relative tolerance 2e-3 on each modulus, the stress noise of the held
 state); 2 % leaves three times that.
 """
@@ -26,7 +26,7 @@ RECIPROCITY = 0.02  # |S_ij - S_ji| / sqrt(S_ii S_jj)
 
 
 def simple_cubic_modulus(shear_modulus, poisson, stress):
-    """E of the simple cubic packing of equal spheres at the stress (Pa): (12 E*^2 sigma)^(1/3) / 2."""
+    r"""E of the simple cubic packing of equal spheres at the stress (Pa): $(12 E^{*2} \sigma)^{1/3}/2$."""
     young = 2.0 * shear_modulus * (1.0 + poisson)
     contact = young / (2.0 * (1.0 - poisson * poisson))
     return math.cbrt(12.0 * contact * contact * stress) / 2.0
@@ -50,8 +50,8 @@ def modulus_problem(value, stress, material, name="E"):
 
 
 def compliance_problem(E, nu):
-    """Why a state's normal compliance is not an elastic solid's, or None. E: {axis: E_i}; nu:
-    {(i, j): nu_ij} (i loaded, j lateral) for the axes x, y, z. S_ii = 1/E_i, S_ji = -nu_ij/E_i."""
+    r"""Why a state's normal compliance is not an elastic solid's, or None. E: {axis: $E_i$}; nu:
+    {(i, j): $\nu_{ij}$} (i loaded, j lateral) for the axes x, y, z. $S_{ii} = 1/E_i$, $S_{ji} = -\nu_{ij}/E_i$."""
     axes = "xyz"
     S = [[0.0] * 3 for _ in range(3)]
     for i, a in enumerate(axes):

@@ -1,12 +1,12 @@
-"""Micro-structure of the contact network and its micromechanical elastic prediction.
+r"""Micro-structure of the contact network and its micromechanical elastic prediction.
 
 The numbers come from the C++ engines (measure/Fabric, theory/Micromechanics); this module names
 them for the study's tables:
 
 - ``fabric(scene)``: Zm (Eq. 14), R (15), H (16), B (33), M (34, 3x3x3x3), Nc/V by Eq. (36)
   and by count, void ratio, mean normal force, Nc, Np, Np0, Np1;
-- ``prediction(scene, zeta, density)``: C_ijkl (Eq. 37), its orthotropic Voigt matrix
-  (Appendix A) and E_i, nu_ij, G_ij (Eqs. 39-42);
+- ``prediction(scene, zeta, density)``: $C_{ijkl}$ (Eq. 37), its orthotropic Voigt matrix
+  (Appendix A) and $E_i$, $\nu_{ij}$, $G_{ij}$ (Eqs. 39-42);
 - ``fabric_row(scene, zeta)``: one flat dict of CSV columns;
 - ``recorder(every)`` / ``history(recorder)``: the engine that records every N steps;
 - ``fabric_from_interactions(O)``: the same measures in plain Python over YADE's
@@ -74,16 +74,16 @@ def fabric(scene):
 
 
 def prediction(scene, zeta=1.0, density="eq36"):
-    """The micromechanical elastic prediction of the scene's contact network (Eqs. 33-42).
+    r"""The micromechanical elastic prediction of the scene's contact network (Eqs. 33-42).
 
     Args:
         scene: the engines' Scene, its forces evaluated at its state.
         zeta: the rotation factor of Eq. (37) (the paper fits 0.552 for spheres; 1: kinematic).
-        density: Nc/V by "eq36" (the paper's Eq. 36, read with the mean r^3) or "count".
+        density: $N_c/V$ by "eq36" (the paper's Eq. 36, read with the mean $r^3$) or "count".
 
     Returns:
-        dict: ``C`` (C_ijkl, Eq. 37, 3x3x3x3), ``voigt`` (its orthotropic 6x6, Appendix A), ``E``
-        (E_x, E_y, E_z), ``nu`` (3x3, nu[i, j] = nu_ij), ``G`` (G_yz, G_xz, G_xy), in Pa, with
+        dict: ``C`` ($C_{ijkl}$, Eq. 37, 3x3x3x3), ``voigt`` (its orthotropic 6x6, Appendix A), ``E``
+        ($E_x$, $E_y$, $E_z$), ``nu`` (3x3, nu[i, j] = $\nu_{ij}$), ``G`` ($G_{yz}$, $G_{xz}$, $G_{xy}$), in Pa, with
         ``zeta`` and ``contact_density``.
 
     Raises:
@@ -117,10 +117,10 @@ def _material(shear_modulus, poisson):
 
 
 def fabric_row(scene, zeta=1.0, density="eq36"):
-    """Flat dict of CSV columns: counts, ``R_``, ``H_``, ``B_`` (6 independent components each), the M
+    r"""Flat dict of CSV columns: counts, ``R_``, ``H_``, ``B_`` (6 independent components each), the M
     components of Appendix A, NcV_eq36, NcV_count, e, mean_N, and the micromechanical moduli
     mic_E_i, mic_nu_ij, mic_G_ij for the given zeta (prefixed so they cannot be mistaken for
-    the probe's measured E_i, nu_ij)."""
+    the probe's measured $E_i$, $\nu_{ij}$)."""
     f = fabric(scene)  # refuses a scene without contacts
     p = engines.micromechanics(f["B"], f["M"], float(f["NcV_eq36"] if _check_density(density) == "eq36"
                                                      else f["NcV_count"]),
@@ -137,7 +137,7 @@ def gap_column(tolerance):
 
 
 def gap_columns(scene, tolerance=None):
-    """Zm and N_c with near-contacts counted: pairs whose gap is below tolerance (default
+    """Zm and $N_c$ with near-contacts counted: pairs whose gap is below tolerance (default
     engines.GAP_TOLERANCE) times their mean diameter (measure/Coordination.hpp)."""
     tol = engines.GAP_TOLERANCE if tolerance is None else tolerance
     z = engines.coordination_gap(scene, tol)

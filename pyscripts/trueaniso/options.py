@@ -89,7 +89,7 @@ class _Options:
 
 @dataclasses.dataclass(frozen=True)
 class ServoOptions(_Options):
-    """How `triaxial.reach_state` reaches and holds a state (the TrueTriaxialServo's settings).
+    r"""How `triaxial.reach_state` reaches and holds a state (the TrueTriaxialServo's settings).
 
     Every value is checked for its type and range when the object is made; the defaults are the
     paper's protocol, every study's. The rates and step counts are per step of the reference time
@@ -108,10 +108,10 @@ class ServoOptions(_Options):
         hold_steps: ... or after this many steps held at the state without settling.
         friction: mu while loading (the paper's 0.5).
         control_shear: True holds the shear stresses at `shear`; False the cell's shear strains.
-        shear: the shear stresses held (sigma_yz, sigma_xz, sigma_xy), Pa.
+        shear: the shear stresses held ($\sigma_{yz}$, $\sigma_{xz}$, $\sigma_{xy}$), Pa.
         rolling_stiffness: beta of the rolling resistance (docs/rolling.md; 0 with
             `rolling_friction` 0: the paper's law).
-        rolling_friction: eta_r of the rolling resistance.
+        rolling_friction: $\eta_r$ of the rolling resistance.
         gain: the fraction of the stress error closed a step (None: the engine's 0.01).
         feed_forward: True feeds the path's rate forward through the measured tangent stiffness.
         time_step: the time step rule, "per-axis" or "smallest-inertia".
@@ -209,7 +209,7 @@ class ProbeOptions(_Options):
         control_shear: True holds the shear stresses; False the cell's shear strains (normal axes
             only).
         hold_other_strains: True holds the five other strains at zero: the modulus is then the
-            stiffness C_kk, not 1/S_kk (docs/cell.md).
+            stiffness $C_{kk}$, not $1/S_{kk}$ (docs/cell.md).
         time_step: the time step rule, "per-axis" or "smallest-inertia". The gain and the step
             counts are per step of smallest-inertia, so either rule probes over the same time.
 
@@ -268,11 +268,11 @@ class ProbeOptions(_Options):
 
 @dataclasses.dataclass(frozen=True)
 class PathOptions(_Options):
-    """What `study.run_states` walks: the loading path and the probe axes of each state.
+    r"""What `study.run_states` walks: the loading path and the probe axes of each state.
 
     Args:
         path: "true-triaxial" (Table C1's paths, p = 100 kPa) or "cross-anisotropic" (Fig. 16:
-            sigma_x = sigma_y = 100 kPa).
+            $\sigma_x = \sigma_y = 100$ kPa).
         probes: the probe axes, each at most once: "x", "y", "z", "yz", "xz", "xy" (or 0-5, or
             "zy", "zx", "yx"), kept as their names.
 

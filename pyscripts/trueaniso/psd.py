@@ -73,7 +73,7 @@ class SizeDistribution:
     def sample(self, n, rng):
         """n diameters whose mass distribution follows the table.
 
-        Within a segment of constant mass density the number density goes as d^-3; its CDF
+        Within a segment of constant mass density the number density goes as $d^{-3}$; its CDF
         is inverted in closed form. Stratified uniforms (one per 1/n quantile, shuffled) keep
         small specimens close to the target D50 and Cu. Products, quotients and square roots only
         (correctly rounded on every processor): numpy's power runs another implementation on

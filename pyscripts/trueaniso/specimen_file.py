@@ -1,4 +1,4 @@
-"""Versioned specimen files: one .npz holding the whole mechanical state and its provenance.
+r"""Versioned specimen files: one .npz holding the whole mechanical state and its provenance.
 
 Layout (format "trueaniso-specimen", version 4): arrays for bodies, member spheres, cell (the
 3x3 matrix hSize whose columns are the cell vectors, its reference and the velocity gradient) and
@@ -14,7 +14,7 @@ its template scaled to its size, ``masses`` and ``inertia`` its mass and princip
 loads the file gets the same bits: recomputed from the members (the union, by CGAL, cached once per
 shape), its last bits depended on which clump of the shape the process had met first, and a
 resumed study's void ratios differed from the uninterrupted run's. A stored volume is checked
-against the union (1e-9) and a sphere's against 4/3 pi r^3; a sphere's is recomputed from its
+against the union (1e-9) and a sphere's against $\frac{4}{3}\pi r^3$; a sphere's is recomputed from its
 radius, as before. A version-3 file (no volumes) is read with the union's volumes. A clump whose
 members do not overlap into one body is refused like any other invalid field.
 

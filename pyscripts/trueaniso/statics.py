@@ -17,7 +17,7 @@ __all__ = ["static_stiffness", "rotation_factor", "identity", "state_record"]
 
 
 def static_stiffness(scene, rotations=True, max_unbalanced=1e-2, max_residual=1e-8, **solver):
-    """The exact static stiffness of the contact network at the scene's state (module doc).
+    r"""The exact static stiffness of the contact network at the scene's state (module doc).
 
     Args:
         scene: the engines' Scene at rest at its state, its forces evaluated there.
@@ -27,9 +27,9 @@ def static_stiffness(scene, rotations=True, max_unbalanced=1e-2, max_residual=1e
         **solver: settings of the engine's sparse solver (engines.static_stiffness).
 
     Returns:
-        dict: ``C`` (6x6 stiffness, Pa) and ``S`` (its inverse); ``E`` (E_x, E_y, E_z of Eq. 40,
-        the probe's moduli), ``nu`` (3x3, nu[i, j] = nu_ij, i loading, j lateral, NaN on the
-        diagonal), ``G`` (G_yz, G_xz, G_xy of Eq. 39); ``affine`` (the kinematic stiffness, no
+        dict: ``C`` (6x6 stiffness, Pa) and ``S`` (its inverse); ``E`` ($E_x$, $E_y$, $E_z$ of Eq. 40,
+        the probe's moduli), ``nu`` (3x3, nu[i, j] = $\nu_{ij}$, i loading, j lateral, NaN on the
+        diagonal), ``G`` ($G_{yz}$, $G_{xz}$, $G_{xy}$ of Eq. 39); ``affine`` (the kinematic stiffness, no
         relaxation) with its parts ``affine_normal`` + ``affine_shear`` (Eq. 32) and
         ``affine_geometric`` (initial-force terms); ``stress``; ``residual`` (max of
         norm(K u - f) / norm(f) over the six strains) and ``pinned_reaction``; ``rattlers`` (body
@@ -71,7 +71,7 @@ def rotation_factor(scene, free=None, blocked=None, **kw):
         **kw: the arguments of `static_stiffness`.
 
     Returns:
-        dict: ``zeta`` (per axis), ``zeta_h`` (of (E_x + E_y)/2), ``zeta_v`` (of E_z),
+        dict: ``zeta`` (per axis), ``zeta_h`` (of $(E_x + E_y)/2$), ``zeta_v`` (of $E_z$),
         ``zeta_rotation``, ``zeta_rotation_h``, ``zeta_rotation_v``, ``E_free``, ``E_blocked`` and
         ``E_kinematic`` (zeta = 1). A zeta no value in ``engines.ZETA_RANGE`` reproduces is NaN.
 

@@ -25,7 +25,7 @@ TABLE_C1 = [
 
 
 def b_of(sx, sy, sz):
-    """b of Eq. (8) from the three principal stresses, (sigma_x - sigma_y) / (sigma_z - sigma_y).
+    r"""b of Eq. (8) from the three principal stresses, $(\sigma_x - \sigma_y)/(\sigma_z - \sigma_y)$.
 
     The isotropic state has no b: 0 is returned (every path of Table C1 passes through it).
 
@@ -63,10 +63,10 @@ SIGMA_H = 100e3
 
 
 def path_mean_stress(path, b, sigma_z):
-    """The mean stress p of the state (b, sigma_z) on a path: 100 kPa on the true-triaxial paths;
-    on the cross-anisotropic path (b = 0 there) (2 sigma_h + sigma_v) / 3, which makes Eq. (9)
-    give sigma_x = sigma_y = sigma_h for any sigma_v, so the servo's straight stress path from the
-    isotropic state keeps sigma_h at 100 kPa all the way."""
+    r"""The mean stress p of the state (b, sigma_z) on a path: 100 kPa on the true-triaxial paths;
+    on the cross-anisotropic path (b = 0 there) $(2\sigma_h + \sigma_v)/3$, which makes Eq. (9)
+    give $\sigma_x = \sigma_y = \sigma_h$ for any $\sigma_v$, so the servo's straight stress path from
+    the isotropic state keeps $\sigma_h$ at 100 kPa all the way."""
     if path == "true-triaxial":
         return 100e3
     if path == "cross-anisotropic":
@@ -75,14 +75,14 @@ def path_mean_stress(path, b, sigma_z):
 
 
 def principal_stresses(b, sigma_z, p=100e3):
-    """Eq. (9): (sigma_x, sigma_y, sigma_z) of constant b (Eq. 8) and mean stress p (Pa)."""
+    r"""Eq. (9): ($\sigma_x$, $\sigma_y$, $\sigma_z$) of constant b (Eq. 8) and mean stress p (Pa)."""
     sx = ((2.0 * b - 1.0) * sigma_z + 3.0 * p * (1.0 - b)) / (2.0 - b)
     sy = (3.0 * p - (b + 1.0) * sigma_z) / (2.0 - b)
     return sx, sy, sigma_z
 
 
 def path_principal_stresses(path, b, sigma_z):
-    """sigma_x, sigma_y, sigma_z (Pa) of the state on its path (Eq. 9 at the path's mean stress)."""
+    r"""$\sigma_x$, $\sigma_y$, $\sigma_z$ (Pa) of the state on its path (Eq. 9 at the path's mean stress)."""
     return principal_stresses(b, sigma_z, path_mean_stress(path, b, sigma_z))
 
 

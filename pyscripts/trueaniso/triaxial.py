@@ -1,9 +1,9 @@
-"""True-triaxial states (paper Table C1) and directional stress probes, composed from the C++
+r"""True-triaxial states (paper Table C1) and directional stress probes, composed from the C++
 engines TrueTriaxialServo and StressProbe. The servo holds the shear stresses at zero (the cell's
 axes are the principal axes, as the paper's frictionless walls make them); probes act on a normal
-stress (E_i, nu_ij) or a shear stress (G_ij).
+stress ($E_i$, $\nu_{ij}$) or a shear stress ($G_{ij}$).
 
-A state is (b, sigma_z) at p = 100 kPa; Eq. (9) gives sigma_x, sigma_y. The 39 states of Table C1
+A state is (b, sigma_z) at p = 100 kPa; Eq. (9) gives $\sigma_x$, $\sigma_y$. The 39 states of Table C1
 lie on eight paths from the isotropic state (b = 0, 0.25, 0.5, 0.75, 1; compression and
 extension of z), which the study follows one path at a time, probing each state on the way.
 """
@@ -68,7 +68,7 @@ def hertz_range_problem(stress, shear_modulus, poisson, solid_fraction=DENSE_PAC
 
 
 def rolling_problem(stiffness, friction, clumps=False):
-    """Why rolling resistance (docs/rolling.md) with beta = stiffness, eta_r = friction cannot be
+    r"""Why rolling resistance (docs/rolling.md) with $\beta$ = stiffness, $\eta_r$ = friction cannot be
     run, or None: both must be finite numbers, > 0 together (one zero gives no resistance, or no
     cap) or both 0 (off, the paper); clumps have none."""
     for name, x in (("stiffness factor beta", stiffness), ("friction eta_r", friction)):
@@ -192,11 +192,11 @@ def _chunk(chunk, owner):
 
 
 def stress_as_held(scene):
-    """The scene's stress as the six Voigt components a probe holds, to probe a state as it is.
+    r"""The scene's stress as the six Voigt components a probe holds, to probe a state as it is.
 
-    sigma_xx, sigma_yy, sigma_zz, sigma_yz, sigma_xz, sigma_xy in Pa, compression positive, the
+    $\sigma_{xx}$, $\sigma_{yy}$, $\sigma_{zz}$, $\sigma_{yz}$, $\sigma_{xz}$, $\sigma_{xy}$ in Pa, compression positive, the
     symmetric part. Holding zero shear instead at a state that carries some first moves it to
-    another state (54 Pa of shear changed E_z of a clump packing by 5.4e-4, docs/clumps.md).
+    another state (54 Pa of shear changed $E_z$ of a clump packing by 5.4e-4, docs/clumps.md).
 
     Example:
         >>> from trueaniso import specimen_file, triaxial
@@ -276,7 +276,7 @@ def check_held_state(scene, hold):
 
 
 def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **settings):
-    """One directional stress probe at a held state (Eqs. 10-12); the scene is restored afterwards.
+    r"""One directional stress probe at a held state (Eqs. 10-12); the scene is restored afterwards.
 
     From the held state, sliding is suppressed (friction 1e23), the scene relaxes, and the stress on
     `axis` rises until the strain invariant gamma reaches the options' `gamma` while the other stresses are
@@ -286,7 +286,7 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
         scene: the engines' Scene at a held state (`reach_state`, or a specimen).
         hold: the state's stresses held on the other components, Pa: three normal stresses (the shear
             stresses then held at zero), or six Voigt components (`stress_as_held`).
-        axis: "x", "y", "z" (a normal stress: E_i, nu_ij) or "yz", "xz", "xy" (a shear stress: G_ij);
+        axis: "x", "y", "z" (a normal stress: $E_i$, $\nu_{ij}$) or "yz", "xz", "xy" (a shear stress: $G_{ij}$);
             or 0-5.
         sign: +1 loads, -1 unloads.
         options: `options.ProbeOptions`, how the state is probed: gamma (the strain invariant of
@@ -417,11 +417,11 @@ def validate_path_state(path, b, sigma_z):
 
 
 def path_stresses(path, b, sigma_z):
-    """sigma_x, sigma_y, sigma_z (Pa) of the state (b, sigma_z) on a loading path (Eq. 9).
+    r"""$\sigma_x$, $\sigma_y$, $\sigma_z$ (Pa) of the state (b, sigma_z) on a loading path (Eq. 9).
 
     Args:
         path: one of `PATHS`: "true-triaxial" (Table C1: p = 100 kPa) or "cross-anisotropic"
-            (Fig. 16: sigma_x = sigma_y = 100 kPa).
+            (Fig. 16: $\sigma_x = \sigma_y = 100$ kPa).
         b: b of Eq. (8) (0 on the cross-anisotropic path).
         sigma_z: the vertical stress, Pa.
 
@@ -434,7 +434,7 @@ def path_stresses(path, b, sigma_z):
 
 
 def cross_anisotropic_states(sigma_v=CROSS_ANISOTROPIC_SIGMA_V):
-    """The states of a cross-anisotropic study (Fig. 16): sigma_x = sigma_y = 100 kPa, sigma_z = sigma_v.
+    r"""The states of a cross-anisotropic study (Fig. 16): $\sigma_x = \sigma_y = 100$ kPa, $\sigma_z = \sigma_v$.
 
     Args:
         sigma_v: the vertical stresses, Pa (by default from 50 to 250 kPa).

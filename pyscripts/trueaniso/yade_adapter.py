@@ -178,7 +178,7 @@ def run_until_done(controller, O, chunk=1000, max_steps=5_000_000):
         bool: whether the controller is done.
 
     Example:
-        Inside yade-double, a probe of E_z through the adapter (sliding suppressed):
+        Inside yade-double, a probe of $E_z$ through the adapter (sliding suppressed):
 
         >>> import numpy as np
         >>> from yade import O, utils

@@ -1,4 +1,4 @@
-"""Bridge between YADE's ``O`` and our Scene (runs only inside yade-double).
+r"""Bridge between YADE's ``O`` and our Scene (runs only inside yade-double).
 
 The whole periodic cell crosses both ways: hSize (columns = cell vectors, off-diagonal terms of
 a sheared cell included), refHSize and the velocity gradient (velGrad, full 3x3), with the
@@ -11,7 +11,7 @@ Conventions that differ and are converted here:
   write_to_yade); the bridge reads the scheduled one as our strain rate.
 - YADE's getStress() is tension positive; ours is compression positive.
 - Material: YADE's FrictMat has (young, poisson, frictionAngle); ours (G, nu, mu) with
-  G = E/(2(1+nu)), mu = tan(frictionAngle).
+  $G = E/(2(1+\nu))$, $\mu = \tan(\text{frictionAngle})$.
 - Contacts: YADE's normal points from id1 to id2 and phys.shearForce is the force on id2, as ours;
   id2's image is pos2 + hSize cellDist, as our shift.
 """
@@ -229,11 +229,11 @@ def write_to_yade(scene, O=None, ids=None):
 
 
 def yade_scene_from(scene, O=None, damping=0.2, import_contacts=True, mindlin_ratcheting=False, law="yade"):
-    """Rebuild YADE's O from our scene: bodies, periodic cell, material, contacts and an engine list.
+    r"""Rebuild YADE's O from our scene: bodies, periodic cell, material, contacts and an engine list.
 
     With YADE's own Hertz-Mindlin law (law="yade"), the peer we compare to; or with our law as a
     YADE class (law="trueaniso": the plugin of engines/yade, loaded with YADE_PREFIX, docs/yade-peer.md).
-    YADE's sphere-sphere geometry scales tangential displacements by (r1+r2)/(r1+r2-delta) to "avoid
+    YADE's sphere-sphere geometry scales tangential displacements by $(r_1+r_2)/(r_1+r_2-\delta)$ to "avoid
     granular ratcheting" (its default); our law does not, so it is switched off unless asked.
 
     Args:

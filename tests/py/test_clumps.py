@@ -610,22 +610,65 @@ def test_the_default_clump1_grows_at_the_friction_that_meets_the_papers_void_rat
     assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
 
 
+def _assert_seeds_block_is_its_data(tmp_path, groups, assembly, block):
+    """The block of docs/studies/clumps.md is what trueaniso.analysis.seeds writes from the committed
+    studies: groups of (column label, study directories under docs/data)."""
+    from trueaniso.analysis import seeds
+    data = os.path.join(REPO, "docs", "data")
+    text = seeds.table([(label, [seeds.headlines(os.path.join(data, d)) for d in ds]) for label, ds in groups],
+                       assembly)
+    doc = tmp_path / "clumps.md"
+    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
+    seeds.write_block(str(doc), block, text)
+    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+
+
 def test_clump2_seeds_table_and_reciprocity_are_those_of_their_data(tmp_path):
-    """docs/studies/clumps.md 5h: the table of the default clump2 recipe at 1000, 2000 and 4000 clumps
-    is what trueaniso.analysis.seeds writes from the committed studies, and what the text says of the
+    """docs/studies/clumps.md 5h: the table of the default clump2 recipe at 1000, 2000 (three seeds) and
+    4000 clumps is what trueaniso.analysis.seeds writes from the committed studies, and what the text says of the
     reciprocity: at 2000 clumps the probes' compliance is off by more than 1 % at state 4, where the
     exact static solve of the same held state is reciprocal to 0.1 %."""
     import json
-    from trueaniso.analysis import seeds
     data = os.path.join(REPO, "docs", "data")
-    groups = [("default, 1000 clumps", "clump2-recipes/default-1000-s1"), ("default, 2000 clumps", "clump2-2000/s1"),
-              ("default, 4000 clumps", "clump2-4000/s1"),
-              ("earlier recipe (grown-to-target), 4000 clumps", "clump2-4000-s1")]
-    text = seeds.table([(label, [seeds.headlines(os.path.join(data, d))]) for label, d in groups], "clump2")
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
-    seeds.write_block(str(doc), "clump2-seeds", text)
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    groups = [("default, 1000 clumps", ["clump2-recipes/default-1000-s1"]),
+              ("default, 2000 clumps", ["clump2-2000/s1", "clump2-2000/s2", "clump2-2000/s3"]),
+              ("default, 4000 clumps", ["clump2-4000/s1"]),
+              ("earlier recipe (grown-to-target), 4000 clumps", ["clump2-4000-s1"])]
+    _assert_seeds_block_is_its_data(tmp_path, groups, "clump2", "clump2-seeds")
     with open(os.path.join(data, "clump2-2000", "s1", "reciprocity.json")) as f:
         rec = json.load(f)
     assert rec["4"]["asymmetry_probes"] > 0.01 and all(r["asymmetry_static"] < 0.0015 for r in rec.values())
+
+
+def test_clump1_old_new_table_and_its_claims_are_those_of_their_data(tmp_path):
+    """docs/studies/clumps.md 5i: the table is what trueaniso.analysis.seeds writes from the committed
+    studies, and what the text and docs/departures.md say of them holds on each of the three seeds of
+    2000 clumps: e within 0.01 of the paper's 0.445, constant to 1e-4 along the 39 states, Zm never below
+    its isotropic value at q < 0, and at the far end of each of the ten paths above it at q < 0 and below
+    it at q > 0 (near the isotropic state, at b = 1 and q 15-30 kPa, it can move by a contact either way)."""
+    import csv
+    from trueaniso.analysis import seeds
+    data = os.path.join(REPO, "docs", "data")
+    groups = [("default (mu_prep 0.01), 2000 clumps, 39 states", ["clump1-2000/s1", "clump1-2000/s2", "clump1-2000/s3"]),
+              ("default (mu_prep 0.01), 1000 clumps, states 1, 9, 21, 33",
+               ["clump1-recipes/mu-prep-0.01", "clump1-recipes/mu-prep-0.01-s2"]),
+              ("pentamer at mu_prep 0.002, nine states", ["clump1-recipes/default-1000-s1"]),
+              ("trimer (grown-to-target), 39 states", ["clump1-4000-s1"])]
+    _assert_seeds_block_is_its_data(tmp_path, groups, "clump1", "clump1-old-new")
+    for d in groups[0][1]:
+        h = seeds.headlines(os.path.join(data, d))
+        assert h["states"] == 39 and abs(h["e"] - 0.445) < 0.01 and h["e_change"] < 1e-4
+        with open(os.path.join(data, d, "probes.csv")) as f:
+            rows = [r for r in csv.DictReader(f) if r["probe"] == "z"]
+        zm1 = float(next(r["Zm"] for r in rows if r["state"] == "1"))
+        ends = {}  # the far end of each of the ten paths (b, sign of q)
+        for r in rows:
+            q = float(r["q"])
+            if abs(q) > 1.0:  # Pa: states 2-39 are at |q| >= 15 kPa, state 1 at 0
+                key = (r["b"], q > 0)
+                if key not in ends or abs(q) > abs(float(ends[key]["q"])):
+                    ends[key] = r
+        assert len(ends) == 10
+        for (b, loaded), r in ends.items():
+            assert (float(r["Zm"]) - zm1) * (1 if loaded else -1) < 0, (d, r["state"], r["q"], r["Zm"], zm1)
+        assert min(float(r["Zm"]) for r in rows if float(r["q"]) < -1.0) >= zm1

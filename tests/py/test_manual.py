@@ -144,6 +144,8 @@ def test_every_schema_is_shown_in_the_manual_with_its_descriptions(manual):
             text = _words(_text(out, page))
             assert os.path.basename(path) in text, "%s does not name %s" % (page, path)
             for description in descriptions:
+                # a formula, $x$ in the schema, is MathJax's \(x\) in the page
+                description = re.sub(r"(?<!\\)\$([^$`]+)\$", r"\\(\1\\)", description)
                 assert _words(description) in text, "%s: %r is not on %s" % (os.path.basename(path), description,
                                                                             page)
                 checked += 1
@@ -263,12 +265,31 @@ CHROMIUM = ("chromium", "--headless", "--no-sandbox", "--disable-gpu", "--no-fir
             "--disable-background-networking", "--disable-component-update", "--disable-sync",
             "--allow-file-access-from-files", "--window-size=1400,1000")
 
+# A formula written as ASCII: an exponent (^(1/3), ^2), sqrt(, a Greek letter or a symbol with a
+# subscript (sigma_z, nu_ij, k_n, E_i), rbar; or one that was meant to be typeset and was not (a
+# role or a TeX command left in the text). The same pattern in Python and in the browser's JavaScript.
+UNRENDERED = r":math:`|\{math\}`|\$\\[a-z]"
+RAW_FORMULA = (r"\^\(|\^-?[0-9]|\bsqrt\(|\b(?:sigma|nu|zeta|gamma|eps|rho|eta|beta|delta|omega|theta|mu)_[A-Za-z0-9]+"
+               r"|\b[A-Za-z]_(?:[a-z]{1,2}|[0-9])\b|\brbar\b|" + UNRENDERED)
+
+# The parts of RAW_FORMULA that no identifier has: on the pages generated from the Python API's
+# docstrings and the file formats' schemas, sigma_z, mu_prep or nu_ij name a parameter or a
+# column, and only these count there.
+RAW_FORMULA_STRUCTURE = r"\^\(|\^-?[0-9]|\bsqrt\(|\brbar\b|" + UNRENDERED
+
+
+def _named_by_identifiers(page):
+    return page == os.path.join("reference", "python-api.html") or \
+        page.startswith(os.path.join("reference", "formats") + os.sep)
+
+
 # Loads each page in turn in an iframe of the width of a laptop's browser (1280 px), waits for the
 # theme's script (it wraps every table in its scrolling box) and MathJax (a formula widens its
 # cell), and writes what it measures into the page, which chromium --dump-dom prints: a table
 # wider than its box (the theme lets it scroll, which hides the right-hand columns), a cell
-# whose content overflows it, or an entry of the side menu cut off at its edge.
-MEASURE = """<!DOCTYPE html><html><body><pre id="result">running</pre>
+# whose content overflows it, an entry of the side menu cut off at its edge, or a formula left as
+# ASCII in the text.
+MEASURE = r"""<!DOCTYPE html><html><body><pre id="result">running</pre>
 <iframe id="f" style="width:1280px;height:900px;border:0"></iframe>
 <script>
 const pages = %s, out = [], f = document.getElementById("f");
@@ -291,7 +312,21 @@ function measure(doc, page) {
   });
   const wrapped = doc.querySelectorAll(".wy-table-responsive table").length;
   return {page: page, tables: doc.querySelectorAll("table").length, wrapped: wrapped, found: found,
-          formulas: doc.querySelectorAll(".math").length, typeset: doc.querySelectorAll(".MathJax_CHTML").length};
+          formulas: doc.querySelectorAll(".math").length, typeset: doc.querySelectorAll(".MathJax_CHTML").length,
+          raw: raw_formulas(doc)};
+}
+// A formula left as ASCII in the text a reader sees (code, literal blocks and typeset math left
+// out): RAW_FORMULA.
+const RAW = new RegExp(%s, "g");
+function raw_formulas(doc) {
+  const main = (doc.querySelector('[role="main"]') || doc.body).cloneNode(true);
+  main.querySelectorAll("code, pre, .math, .MathJax_Preview, .MathJax_CHTML, .MJX_Assistive_MathML, script, "
+                        + ".highlight, .headerlink").forEach(e => e.remove());
+  const text = main.textContent.replace(/\s+/g, " "), out = [];
+  let m;
+  while ((m = RAW.exec(text)) !== null && out.length < 5000)
+    out.push([m[0], text.slice(Math.max(0, m.index - 30), m.index + m[0].length + 20)]);
+  return out;
 }
 function when_ready(win, then, waited) {
   const doc = win.document, tables = doc.querySelectorAll("table.docutils").length;
@@ -327,20 +362,39 @@ def _pages_with_tables(out):
     return pages
 
 
+def _user_page(rel):
+    """A built page of the user manual (tutorial, how-tos, reference, explanation): not a study
+    report (studies/, report-*/), which keeps its investigation's notation."""
+    return not rel.startswith(("studies" + os.sep, "report-"))
+
+
+def _user_pages(out):
+    pages = []
+    for path in sorted(glob.glob(os.path.join(str(out), "**", "*.html"), recursive=True)):
+        rel = os.path.relpath(path, str(out))
+        if not rel.startswith("_") and rel not in ("genindex.html", "search.html", "py-modindex.html") \
+                and _user_page(rel):
+            pages.append(rel)
+    return pages
+
+
 def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
     """Every table of every built page fits its column at a laptop's width (1280 px) in chromium:
     the theme keeps each cell on one line and lets a wide table scroll in its box, which hid the
     equation map's code and tests and the schemas' descriptions; docs/_static/trueaniso.css makes
     cells wrap. A table wider than its box, a cell whose content overflows, or a side-menu entry cut
     off (a long class name in code) fails here; so does a formula of these pages that MathJax
-    (Debian's, copied into the manual) did not typeset."""
+    (Debian's, copied into the manual) did not typeset, or one that a user page (the YADE classes'
+    and the Python API's generated from the docstrings among them) shows as ASCII, ^(1/3) or
+    sigma_z, where it should be typeset."""
     proc, out = manual
     assert proc.returncode == 0
-    pages = _pages_with_tables(out)
-    assert len(pages) >= 20 and "equations.html" in pages
+    tables = _pages_with_tables(out)
+    assert len(tables) >= 20 and "equations.html" in tables
+    pages = tables + [p for p in _user_pages(out) if p not in tables]
     harness = os.path.join(str(out), "_measure_tables.html")
     with open(harness, "w") as f:
-        f.write(MEASURE % json.dumps(pages))
+        f.write(MEASURE % (json.dumps(pages), json.dumps(RAW_FORMULA)))
     done = subprocess.run(list(CHROMIUM) + ["--user-data-dir=%s" % (tmp_path / "profile"),
                                             "--virtual-time-budget=120000", "--dump-dom", "file://" + harness],
                           capture_output=True, text=True, timeout=300)
@@ -361,6 +415,15 @@ def test_no_table_of_the_manual_is_clipped_in_a_browser(manual, tmp_path):
     assert equations["formulas"] >= 30, equations
     assert [r["page"] for r in results if r["typeset"] < r["formulas"]] == [], \
         [(r["page"], r["formulas"], r["typeset"]) for r in results if r["typeset"] < r["formulas"]]
+    # and no user page, the YADE classes' and the Python API's among them, shows one as ASCII
+    raw = ["%s: ...%s..." % (r["page"], around) for r in results if _user_page(r["page"]) for hit, around in r["raw"]
+           if not _named_by_identifiers(r["page"]) or re.fullmatch(RAW_FORMULA_STRUCTURE, hit)]
+    assert not raw, "formulas left as ASCII (write them between $...$):\n" + "\n".join(raw)
+    api = results[pages.index(os.path.join("reference", "python-api.html"))]
+    assert api["formulas"] >= 40, api
+    yade = results[pages.index(os.path.join("reference", "yade-classes.html"))]
+    if _yade_classes().plugin_state(REPO)[0]:
+        assert yade["formulas"] >= 40, yade  # the plugin's docstrings' formulas, typeset (above)
 
 
 # --- the YADE classes' reference, generated from the plugin --------------------------------------
@@ -422,6 +485,75 @@ def test_the_yade_class_reference_says_why_it_is_empty_where_the_plugin_is_not_b
     (tmp_path / "build" / "yade-plugin.status").write_text("no-source: no YADE source (set TRUEANISO_YADE_SOURCE)\n")
     note = yc.markdown(str(tmp_path))
     assert "no-source: no YADE source" in note and "`StressProbe`" in note
+
+
+def _plugin_docstrings():
+    """{class: its docstrings (the class's, its attributes', its methods'), joined} from the string
+    literals of engines/yade/*.hpp from a YADE_CLASS_BASE_DOC* macro to the `// clang-format on`
+    after it, C escapes undone."""
+    docs = {}
+    for path in glob.glob(os.path.join(REPO, "engines", "yade", "*.hpp")):
+        with open(path) as f:
+            text = f.read()
+        for name, body in re.findall(r"YADE_CLASS_BASE_DOC\w*\(\s*(\w+)(.*?)// clang-format on", text, flags=re.S):
+            literals = re.findall(r'"((?:[^"\\]|\\.)*)"', body)
+            docs[name] = re.sub(r"\\(.)", lambda m: " " if m.group(1) == "n" else m.group(1), " ".join(literals))
+    return docs
+
+
+def test_the_plugin_s_docstrings_write_their_formulas_between_dollars():
+    """What a YADE user reads in help() and the GUI's inspector, and what the YADE classes' page is
+    generated from: every formula of the plugin's docstrings is TeX between single dollars (YADE's
+    own convention, which the page's generator and YADE's manual turn into math), none left as
+    ASCII. Read from the source, so it holds where the plugin is not built (./test.sh)."""
+    docs = _plugin_docstrings()
+    assert {"SimplifiedMindlinPhys", "FabricRecorder", "StressProbe", "TrueTriaxialServo"} <= set(docs)
+    raw, formulas = [], 0
+    for name, text in docs.items():
+        formulas += len(re.findall(r"(?<!\\)\$[^$`]+\$", text))
+        prose = re.sub(r"(?<!\\)\$[^$`]+\$|``[^`]*``|:y\w+:`[^`]*`", " ", text)
+        raw += ["%s: ...%s..." % (name, prose[max(0, m.start() - 30):m.end() + 20])
+                for m in re.finditer(RAW_FORMULA, prose)]
+    assert not raw, "\n".join(raw)
+    assert formulas >= 40, formulas
+    assert r"$k_n = C_n (\bar r N)^{1/3}$" in docs["SimplifiedMindlinPhys"]
+
+
+def test_a_docstring_formula_between_dollars_becomes_math():
+    """The generators' side: $x$ becomes a math role on the YADE page (MyST) and in the Python API
+    (reStructuredText, through autodoc); an escaped \\$ and a dollar in code stay as they are, and
+    so do doctest and literal blocks."""
+    yc = _yade_classes()
+    md = yc.to_markdown(r"$k_n = C_n (\bar r N)^{1/3}$ [$\mathrm{Pa}^{2/3}$], a \$5 fee, ``a$b`` and :math:`y`", set())
+    assert md == r"{math}`k_n = C_n (\bar r N)^{1/3}` [{math}`\mathrm{Pa}^{2/3}`], a \$5 fee, `a$b` and {math}`y`"
+    import trueaniso_manual
+    lines = ["Eq. (25): $a_i^2 = E_i^{1/3}/(E_j E_k)^{1/6}$.", "", ">>> print('$x$')", "$x$", "",
+             "Literal::", "", "    $y$", "", "after $\\nu$"]
+    trueaniso_manual.docstring_math(None, "function", "f", None, {}, lines)
+    # and a script's --help, which shows its docstring's first paragraph in a terminal, drops the dollars
+    from trueaniso import cli
+    assert cli.description("The factor $\\zeta$ fitted on $a_i^2$, a \\$5 fee.\n\nMore.") == \
+        "The factor \\zeta fitted on a_i^2, a \\$5 fee."
+    assert lines == ["Eq. (25): :math:`a_i^2 = E_i^{1/3}/(E_j E_k)^{1/6}`.", "", ">>> print('$x$')", "$x$", "",
+                     "Literal::", "", "    $y$", "", "after :math:`\\nu`"]
+
+
+USER_PAGES_MAX_LINES = 2500
+
+
+def test_the_user_manual_stays_under_2500_lines():
+    """The user-facing pages (tutorial, how-tos, reference, explanation: every docs/**/*.md but
+    docs/studies/ and docs/report-*/) hold under 2,500 lines together: each gives the choice, its
+    default and the measurement behind it; investigations go to docs/studies/ as short reports."""
+    sources = [p for p in glob.glob(os.path.join(DOCS, "**", "*.md"), recursive=True)
+               if _user_page(os.path.relpath(p, DOCS))]
+    assert len(sources) >= 30 and os.path.join(DOCS, "tutorial.md") in sources
+    lines = {}
+    for path in sources:
+        with open(path) as f:
+            lines[os.path.relpath(path, DOCS)] = len(f.read().splitlines())
+    longest = sorted(lines.items(), key=lambda kv: -kv[1])[:5]
+    assert sum(lines.values()) < USER_PAGES_MAX_LINES, "%d lines; the longest pages: %s" % (sum(lines.values()), longest)
 
 
 def test_the_index_opens_with_an_example_that_prints_what_it_shows():

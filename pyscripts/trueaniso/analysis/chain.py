@@ -1,17 +1,17 @@
-"""The paper's analysis chain (sections 3.1 and 4), from a study's probe table.
+r"""The paper's analysis chain (sections 3.1 and 4), from a study's probe table.
 
-Per state: the DEM E_i (three axial probes) and nu_ij, K and G of the hyperelastic model (Eqs.
-21-22 inverted, hyperelastic.scalar_moduli), the DEM a_i^2 (Eq. 25) and the micromechanical a_i^2
-from the state's fabric (B, M, Nc/V of the row; Eqs. 37-40 with zeta in the directional form
-sqrt(zeta_i zeta_k), trueaniso.zeta). Over the states:
+Per state: the DEM $E_i$ (three axial probes) and $\nu_{ij}$, K and G of the hyperelastic model (Eqs.
+21-22 inverted, hyperelastic.scalar_moduli), the DEM $a_i^2$ (Eq. 25) and the micromechanical $a_i^2$
+from the state's fabric (B, M, $N_c/V$ of the row; Eqs. 37-40 with $\zeta$ in the directional form
+$\sqrt{\zeta_i \zeta_k}$, trueaniso.zeta). Over the states:
 
-- Table 2: K(Zm) and G(Zm) as quadratics, with R^2 (Fig. 11);
-- Fig. 13: micromechanical against DEM a_i^2 at zeta = 1, at the paper's 0.552 and at the value
+- Table 2: $K(Z_m)$ and $G(Z_m)$ as quadratics, with $R^2$ (Fig. 11);
+- Fig. 13: micromechanical against DEM $a_i^2$ at zeta = 1, at the paper's 0.552 and at the value
   fitted on the contrast (trueaniso.analysis.zeta_contrast);
-- Figs 14-15: E_i and nu_ij predicted through Eqs. 21-22 from K(Zm), G(Zm) of the Table 2 fits and
-  the micromechanical a_i^2, against the DEM values, with RMSE (nu: absolute, as the paper's
+- Figs 14-15: $E_i$ and $\nu_{ij}$ predicted through Eqs. 21-22 from K(Zm), G(Zm) of the Table 2 fits and
+  the micromechanical $a_i^2$, against the DEM values, with RMSE (nu: absolute, as the paper's
   0.003; E: relative);
-- Fig. 4a: E_i/E_j against sigma_i/sigma_j, the power-law exponent m of E_i/E_j = (sigma_i/sigma_j)^m
+- Fig. 4a: $E_i/E_j$ against $\sigma_i/\sigma_j$, the power-law exponent $m$ of $E_i/E_j = (\sigma_i/\sigma_j)^m$
   (a least-squares line through the origin in log-log, all six ordered pairs of every state).
 
 Everything here reads numbers already in the table; nothing is simulated.
@@ -43,10 +43,10 @@ PAPER = dict(
 
 
 def state_table(rows):
-    """A probe table's complete states as arrays over states, in file order, for the fits of the chain.
+    r"""A probe table's complete states as arrays over states, in file order, for the fits of the chain.
 
     Give the rows of one rotations setting (the ``rotations`` column). States without all three axial
-    probes or all six nu_ij are left out (a study still running).
+    probes or all six $\nu_{ij}$ are left out (a study still running).
 
     Args:
         rows: rows of probes.csv (`results.read_probes`).
@@ -79,7 +79,7 @@ def state_table(rows):
 
 
 def table2(tab):
-    """Table 2: K and G (MPa) against Zm as quadratics, c1 Zm^2 + c2 Zm + c3, with R^2.
+    """Table 2: K and G (MPa) against Zm as quadratics, $c_1 Z_m^2 + c_2 Z_m + c_3$, with $R^2$.
 
     Args:
         tab: a `state_table`.
@@ -104,7 +104,7 @@ def table2(tab):
 
 
 def rising_side(c):
-    """Where the quadratic c1 Zm^2 + c2 Zm + c3 rises with Zm: ("above" or "below", its vertex
+    """Where the quadratic $c_1 Z_m^2 + c_2 Z_m + c_3$ rises with Zm: ("above" or "below", its vertex
     -c2 / (2 c1)). K and G grow with Zm in every assembly (the paper's Fig. 11), so a fit's data
     lie on its rising side; a value on the other side is an extrapolation."""
     vertex = -c[1] / (2.0 * c[0])
@@ -126,19 +126,19 @@ def rising_range(fits):
 
 
 def micromechanical_a2(parts, zeta_h, zeta_v):
-    """a_i^2 of Eq. (25) applied to the micromechanical E_i of every state (n, 3)."""
+    """$a_i^2$ of Eq. (25) applied to the micromechanical $E_i$ of every state (n, 3)."""
     A_n, A_s = parts
     return _zeta.predicted_a_squared(A_n, A_s, zeta_h, zeta_v)
 
 
 def fit_contrast(E, A_n, A_s):
-    """zeta_h, zeta_v fitted on the contrast a_i^2 over the states (trueaniso.zeta.fit_contrast)."""
+    """zeta_h, zeta_v fitted on the contrast $a_i^2$ over the states (trueaniso.zeta.fit_contrast)."""
     return _zeta.fit_contrast(E, A_n, A_s, min_states=2)
 
 
 def predictions(tab, fits, a2_mic):
-    """Figs 14-15: E_i (n, 3) and nu_ij (n, 3, 3) from Eqs. (21)-(22) with K(Zm) and G(Zm) of the
-    Table 2 fits and the given a_i^2; with their RMSE against the DEM values."""
+    r"""Figs 14-15: $E_i$ (n, 3) and $\nu_{ij}$ (n, 3, 3) from Eqs. (21)-(22) with K(Zm) and G(Zm) of the
+    Table 2 fits and the given $a_i^2$; with their RMSE against the DEM values."""
     K = np.polyval(fits["K"][:3], tab["Zm"]) * 1e6
     G = np.polyval(fits["G"][:3], tab["Zm"]) * 1e6
     E = np.empty_like(tab["E"])
@@ -160,7 +160,7 @@ MIN_LOG_STRESS_RATIO = 0.01
 
 
 def stress_ratio_exponent(tab, pairs=ALL_PAIRS):
-    """Fig. 4: the exponent m of E_i/E_j = (sigma_i/sigma_j)^m, the stress-induced anisotropy.
+    r"""Fig. 4: the exponent $m$ of $E_i/E_j = (\sigma_i/\sigma_j)^m$, the stress-induced anisotropy.
 
     A least-squares line through the origin in log-log over the ordered pairs (i, j) of every state:
     all six for spheres (Fig. 4a), the horizontal pair for clumps (Fig. 4b-c).
@@ -219,7 +219,7 @@ def fabric_parts(path, tab, shear_modulus, poisson, rotations):
 
 
 def zeta_per_state(tab, parts, reference):
-    """One zeta (zeta_h = zeta_v) per state, fitted on that state's a_i^2 divided by those of the
+    """One zeta (zeta_h = zeta_v) per state, fitted on that state's $a_i^2$ divided by those of the
     reference state (Appendix B's reference point), as the zeta-against-Zm analysis needs:
     {state: zeta, or None where it is not determined: the contrast does not depend on zeta, or the
     fit stops at a bound of its range: bound zetas (clump2's 1e-20 to 1e-19) ranked against Zm
@@ -257,10 +257,10 @@ def zeta_trend(tab, zetas, band=0.02, low_fraction=0.2):
 
 
 def nu_floor(tab):
-    """The nu_ij RMSE that no zeta can beat: Eq. (22) fed with each state's own DEM a_i^2 (Eq. 25)
-    and nu0 (hyperelastic.scalar_moduli), against the DEM nu_ij. Any prediction through Eq. (22)
-    has nu_ij a_j^2 / a_i^2 equal in all six pairs, which the DEM values are not; this is how far
-    they are from it. Returns dict(rmse, mean_abs (the mean of abs(nu_ij)), relative (rmse / mean_abs))."""
+    r"""The $\nu_{ij}$ RMSE that no zeta can beat: Eq. (22) fed with each state's own DEM $a_i^2$ (Eq. 25)
+    and nu0 (hyperelastic.scalar_moduli), against the DEM $\nu_{ij}$. Any prediction through Eq. (22)
+    has $\nu_{ij} a_j^2/a_i^2$ equal in all six pairs, which the DEM values are not; this is how far
+    they are from it. Returns dict(rmse, mean_abs (the mean of $\lvert\nu_{ij}\rvert$), relative (rmse / mean_abs))."""
     off = ~np.eye(3, dtype=bool)
     err, vals = [], []
     for E, nu in zip(tab["E"], tab["nu"]):
@@ -274,13 +274,13 @@ def nu_floor(tab):
 
 
 def relative_nu_rmse(tab, rmse):
-    """An RMSE of nu_ij relative to the values: rmse over the mean of abs(nu_ij) over the states' six nu_ij."""
+    r"""An RMSE of $\nu_{ij}$ relative to the values: rmse over the mean of $\lvert\nu_{ij}\rvert$ over the states' six $\nu_{ij}$."""
     off = ~np.eye(3, dtype=bool)
     return float(rmse / np.mean(np.abs(tab["nu"][:, off])))
 
 
 def a2_regression(a2_dem, a2_mic):
-    """Micromechanical against DEM a_i^2 over all states and axes: least-squares slope and
+    """Micromechanical against DEM $a_i^2$ over all states and axes: least-squares slope and
     intercept of mic = slope dem + intercept, and Pearson's r. Appendix B expects a line; with
     the right zeta its slope is 1."""
     x, y = np.ravel(a2_dem), np.ravel(a2_mic)
@@ -293,7 +293,7 @@ UNBOUNDED_ZETA = (-1.0, 5.0)  # the per-state search when the bounded fit stops 
 
 def zeta_below_zero(tab, parts, reference, bounds=UNBOUNDED_ZETA):
     """One zeta per state, as zeta_per_state, but searched below 0 as well: C = A_n + zeta A_s
-    (Eq. 37, one zeta, linear in it) is defined for negative zeta as long as E_i stay positive.
+    (Eq. 37, one zeta, linear in it) is defined for negative zeta as long as $E_i$ stay positive.
     A negative optimum says that no reduction of the tangential stiffness reaches the DEM contrast:
     the model's contrast is too small even with the tangential springs removed.
     Returns {state: zeta} (None where the misfit has no interior minimum in `bounds`)."""

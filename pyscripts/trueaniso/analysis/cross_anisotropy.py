@@ -1,14 +1,15 @@
-"""The paper's Fig. 16 measures on a cross-anisotropic path (run_states.py --path cross-anisotropic):
-per state, E_h, E_v, the shear moduli G_vh and G_hh, and the anisotropy ratios of Eq. (24).
+r"""The paper's Fig. 16 measures on a cross-anisotropic path (run_states.py --path cross-anisotropic):
+per state, $E_h$, $E_v$, the shear moduli $G_{vh}$ and $G_{hh}$, and the anisotropy ratios of Eq. (24).
 
     /usr/bin/python3 pyscripts/trueaniso/analysis/cross_anisotropy.py results/fig16/probes.csv [--out fig16.json] [--figure fig16.png]
 
-With z vertical: E_h is the mean of E_x and E_y, G_vh the mean of the two vertical planes' G_yz and
-G_xz, G_hh = G_xy. By Eq. (23), G_ij = G a_i^2 a_j^2, so G_hh / G_vh = a_h^2 / a_v^2, the ratio
-Eq. (24) equates with (E_h / E_v)^0.5 and with nu_hv / nu_hh (Eq. 22). Eq. (24) prints G_hh / G_vv;
-with G_vv = G a_v^4 that ratio would be (a_h^2 / a_v^2)^2, so it is read as G_hh / G_vh
-(docs/cell.md). The micromechanical prediction a_h^2 / a_v^2 is (mic_E_h / mic_E_v)^0.5 of the
-fabric columns (Eqs. 35-37 with the row's zeta, then Eq. 25).
+With $z$ vertical: $E_h$ is the mean of $E_x$ and $E_y$, $G_{vh}$ the mean of the two vertical planes'
+$G_{yz}$ and $G_{xz}$, $G_{hh} = G_{xy}$. By Eq. (23), $G_{ij} = G a_i^2 a_j^2$, so
+$G_{hh}/G_{vh} = a_h^2/a_v^2$, the ratio Eq. (24) equates with $(E_h/E_v)^{0.5}$ and with
+$\nu_{hv}/\nu_{hh}$ (Eq. 22). Eq. (24) prints $G_{hh}/G_{vv}$; with $G_{vv} = G a_v^4$ that ratio
+would be $(a_h^2/a_v^2)^2$, so it is read as $G_{hh}/G_{vh}$ (docs/cell.md). The micromechanical
+prediction $a_h^2/a_v^2$ is $(E_h/E_v)^{0.5}$ of the fabric columns mic_E_* (Eqs. 35-37 with the
+row's $\zeta$, then Eq. 25).
 """
 import math
 import os
@@ -24,11 +25,11 @@ SHEAR = SHEAR_PROBES
 
 
 def cross_anisotropic_moduli(E, G, nu=None):
-    """The measures of one state from E {"x", "y", "z"}, G {"yz", "xz", "xy"} and optionally nu
-    {"xy", "yx", "xz", "yz"} (nu_ij = -d eps_j / d eps_i of a probe on i, Eq. 11).
+    r"""The measures of one state from E {"x", "y", "z"}, G {"yz", "xz", "xy"} and optionally nu
+    {"xy", "yx", "xz", "yz"} ($\nu_{ij} = -\Delta\varepsilon_j/\Delta\varepsilon_i$ of a probe on $i$, Eq. 11).
 
-    G_vh_split = abs(G_yz - G_xz) / G_vh measures the departure from cross-anisotropy (0 for a
-    cross-anisotropic medium)."""
+    G_vh_split $= \lvert G_{yz} - G_{xz} \rvert / G_{vh}$ measures the departure from cross-anisotropy (0
+    for a cross-anisotropic medium)."""
     E_h = 0.5 * (E["x"] + E["y"])
     G_vh = 0.5 * (G["yz"] + G["xz"])
     out = dict(E_h=E_h, E_v=E["z"], G_vh=G_vh, G_hh=G["xy"], G_vh_split=abs(G["yz"] - G["xz"]) / G_vh,
@@ -89,9 +90,9 @@ def states(path):
 
 
 def predicted_ratios(path, shear_modulus, poisson, zeta_h, zeta_v):
-    """{state: a_h^2 / a_v^2} of the micromechanical prediction at (zeta_h, zeta_v), from the
+    """{state: $a_h^2/a_v^2$} of the micromechanical prediction at (zeta_h, zeta_v), from the
     fabric columns of a cross-anisotropic study's probe table (Eqs. 35-37 in the directional form
-    of trueaniso.zeta, Eq. 40, then Eq. 25 as `states` takes it: (mic E_h / mic E_v)^0.5)."""
+    of trueaniso.zeta, Eq. 40, then Eq. 25 as `states` takes it: $(E_h/E_v)^{0.5}$ of the mic_E_* columns)."""
     from . import zeta_contrast
     from trueaniso import zeta
     found = zeta_contrast.sources(path, shear_modulus, poisson, complete_only=True)
@@ -105,8 +106,8 @@ def predicted_ratios(path, shear_modulus, poisson, zeta_h, zeta_v):
 
 
 def figure(rows, path, predictions=None, who=None):
-    """Fig. 16: the anisotropy ratios against sigma_v / sigma_h. `predictions`: [(label, [a_h^2 /
-    a_v^2 per row][, line style])], the micromechanical curves, each labelled with its zeta; by
+    """Fig. 16: the anisotropy ratios against sigma_v / sigma_h. `predictions`: [(label, [$a_h^2/a_v^2$ per
+    row][, line style])], the micromechanical curves, each labelled with its zeta; by
     default the rows' own predicted_ratio, at the zeta of the table's micromechanical columns.
     `who`: what the figure is of (figures.who_said), in its title."""
     from .figures import _finish, _plt, entitle, legend_outside
@@ -126,7 +127,7 @@ def figure(rows, path, predictions=None, who=None):
         ax.plot(sr, curve[1], curve[2] if len(curve) > 2 else style, label=curve[0])
     ax.set_xlabel(r"$\sigma_v/\sigma_h$ (-)")
     ax.set_ylabel("anisotropy ratio (-)")
-    entitle(fig, r"Fig. 16: one anisotropy in $G$, $E$ and $\nu$? ($\sigma_h$ = 100 kPa)", who)
+    entitle(fig, r"Fig. 16: one anisotropy in $G$, $E$ and $\nu$? ($\sigma_h = 100$ kPa)", who)
     legend_outside(ax)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)  # as --out's JSON (trueaniso.atomic)
     _finish(plt, fig, path)

@@ -83,7 +83,7 @@ def study_who(source, assembly=None):
 
 
 def modulus_vs_stress(rows, path, who=None):
-    """Fig. 3: each Young's modulus E_i against the stress sigma_i in its direction, one series per axis.
+    r"""Fig. 3: each Young's modulus $E_i$ against the stress $\sigma_i$ in its direction, one series per axis.
 
     Args:
         rows: rows of probes.csv (`results.read_probes`).
@@ -189,7 +189,7 @@ def _b_groups(states):
 
 
 def poisson_vs_q(rows, path, who=None):
-    """Fig. 5: nu_zx, nu_xz | nu_zy, nu_yz | nu_xy, nu_yx against q, one line per b. Returns
+    r"""Fig. 5: $\nu_{zx}$, $\nu_{xz}$ | $\nu_{zy}$, $\nu_{yz}$ | $\nu_{xy}$, $\nu_{yx}$ against q, one line per b. Returns
     {b: (q, nu (n, 3, 3))} in kPa and ratios."""
     plt = _plt()
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
@@ -214,7 +214,7 @@ def poisson_vs_q(rows, path, who=None):
 
 
 def stress_ratios_vs_q(rows, path, who=None):
-    """Fig. 6: sigma_z/sigma_x, sigma_z/sigma_y, sigma_x/sigma_y against q, one line per b."""
+    r"""Fig. 6: $\sigma_z/\sigma_x$, $\sigma_z/\sigma_y$, $\sigma_x/\sigma_y$ against q, one line per b."""
     plt = _plt()
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
     out = {}

@@ -1,9 +1,9 @@
-"""Orthotropic hyperelastic model of the paper, section 4.1 (Eqs. 21-25).
+r"""Orthotropic hyperelastic model of the paper, section 4.1 (Eqs. 21-25).
 
-E_i = 9KG/(3K+G) a_i^4 (21), nu_ij = (3K-2G)/(2(3K+G)) a_i^2/a_j^2 (22), G_ij = G a_i^2 a_j^2 (23),
-with det(a) = 1, so a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) (25). The scalar part
-E0 = 9KG/(3K+G) and nu0 = (3K-2G)/(2(3K+G)) are an isotropic Young modulus and Poisson ratio,
-hence K = E0/(3(1-2 nu0)) and G = E0/(2(1+nu0)).
+$E_i = 9KG/(3K+G)\,a_i^4$ (21), $\nu_{ij} = (3K-2G)/(2(3K+G))\,a_i^2/a_j^2$ (22), $G_{ij} = G a_i^2 a_j^2$ (23),
+with $\det(a) = 1$, so $a_i^2 = E_i^{1/3}/(E_j E_k)^{1/6}$ (25). The scalar part
+$E_0 = 9KG/(3K+G)$ and $\nu_0 = (3K-2G)/(2(3K+G))$ are an isotropic Young modulus and Poisson ratio,
+hence $K = E_0/(3(1-2\nu_0))$ and $G = E_0/(2(1+\nu_0))$.
 """
 import numpy as np
 
@@ -11,10 +11,10 @@ __all__ = ["fabric_a2", "scalar_moduli", "predicted", "quadratic_fit", "states_f
 
 
 def fabric_a2(E):
-    """Eq. (25): a_i^2 = E_i^(1/3) / (E_j E_k)^(1/6) from the three directional Young's moduli.
+    """Eq. (25): $a_i^2 = E_i^{1/3}/(E_j E_k)^{1/6}$ from the three directional Young's moduli.
 
     Args:
-        E: (E_x, E_y, E_z), or a stack (..., 3); all > 0.
+        E: ($E_x$, $E_y$, $E_z$), or a stack (..., 3); all > 0.
 
     Raises:
         ValueError: a modulus <= 0.
@@ -35,14 +35,14 @@ def fabric_a2(E):
 
 
 def scalar_moduli(E, nu):
-    """K and G of the hyperelastic model from a state's E_i and nu_ij (Eqs. 21-22 inverted).
+    r"""K and G of the hyperelastic model from a state's $E_i$ and $\nu_{ij}$ (Eqs. 21-22 inverted).
 
-    E0 is the mean of E_i / a_i^4 (all equal when Eq. 21 holds), nu0 the mean of the six
-    nu_ij a_j^2 / a_i^2 (Eq. 22); K = E0 / (3 (1 - 2 nu0)), G = E0 / (2 (1 + nu0)).
+    $E_0$ is the mean of $E_i/a_i^4$ (all equal when Eq. 21 holds), $\nu_0$ the mean of the six
+    $\nu_{ij} a_j^2/a_i^2$ (Eq. 22); $K = E_0/(3(1 - 2\nu_0))$, $G = E_0/(2(1 + \nu_0))$.
 
     Args:
-        E: (E_x, E_y, E_z), Pa.
-        nu: 3x3, nu[i, j] = nu_ij (i loading, j lateral); the diagonal is ignored.
+        E: ($E_x$, $E_y$, $E_z$), Pa.
+        nu: 3x3, nu[i, j] = $\nu_{ij}$ (i loading, j lateral); the diagonal is ignored.
 
     Returns:
         dict: ``K``, ``G``, ``E0``, ``nu0`` and ``a2`` (Eq. 25).
@@ -71,16 +71,16 @@ def scalar_moduli(E, nu):
 
 
 def predicted(K, G, a2):
-    """Eqs. (21)-(23) forward: the orthotropic moduli of K, G and the fabric's a_i^2.
+    r"""Eqs. (21)-(23) forward: the orthotropic moduli of K, G and the fabric's $a_i^2$.
 
     Args:
         K: bulk modulus, Pa.
         G: shear modulus, Pa.
-        a2: (a_x^2, a_y^2, a_z^2), whose product is 1.
+        a2: ($a_x^2$, $a_y^2$, $a_z^2$), whose product is 1.
 
     Returns:
-        (E, nu, G_ij): E (3,), nu (3x3, nu[i, j] = nu_ij, NaN on the diagonal), G_ij (G_yz, G_xz,
-        G_xy).
+        (E, nu, G_ij): E (3,), nu (3x3, nu[i, j] = $\nu_{ij}$, NaN on the diagonal), $G_{ij}$ ($G_{yz}$, $G_{xz}$,
+        $G_{xy}$).
 
     Example:
         >>> from trueaniso.analysis import hyperelastic
@@ -101,19 +101,19 @@ def predicted(K, G, a2):
 def quadratic_fittable(x):
     """A quadratic in Zm needs three distinct Zm: states of one contact network share Zm exactly
     (a short cross-anisotropic path of 300 spheres gave two such of three), and a fit through two
-    abscissae is any parabola through two points (numpy warns, R^2 means nothing)."""
+    abscissae is any parabola through two points (numpy warns, $R^2$ means nothing)."""
     return len(np.unique(np.asarray(x, float))) >= 3
 
 
 def quadratic_fit(x, y):
-    """K or G against Zm as a quadratic, c1 Zm^2 + c2 Zm + c3 (section 4.1, Table 2).
+    """K or G against Zm as a quadratic, $c_1 Z_m^2 + c_2 Z_m + c_3$ (section 4.1, Table 2).
 
     Args:
         x: Zm of each state (at least three distinct values).
         y: K or G of each state.
 
     Returns:
-        (c, R^2): the coefficients (c1, c2, c3) and the fit's R^2.
+        (c, r2): the coefficients (c1, c2, c3) and the fit's $R^2$.
 
     Raises:
         ValueError: fewer than three distinct Zm.

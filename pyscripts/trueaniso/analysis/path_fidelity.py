@@ -1,8 +1,8 @@
-"""Path fidelity of a Table C1 study: how far Zm (and Zm with a gap tolerance) moves over
+r"""Path fidelity of a Table C1 study: how far Zm (and Zm with a gap tolerance) moves over
 the states, and where the stiffness trend reverses.
 
-A reversal is a step along one loading path where a modulus E_i falls while its own stress
-sigma_i rises (by more than `threshold`, 0.5 kPa: a stress that stays put, e.g. sigma_x on a b = 0
+A reversal is a step along one loading path where a modulus $E_i$ falls while its own stress
+$\sigma_i$ rises (by more than `threshold`, 0.5 kPa: a stress that stays put, e.g. $\sigma_x$ on a b = 0
 path, is no trend). The paths are the constant-b paths of triaxial.paths, each walked from the
 isotropic state (sigma_z = p) outwards by distance from it, as in docs/studies/table-c1-4000.md.
 

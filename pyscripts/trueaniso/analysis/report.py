@@ -126,8 +126,8 @@ NU_PAIRS = (((2, 0), (0, 2)), ((1, 2), (2, 1)), ((0, 1), (1, 0)))  # the paper's
 
 
 def fig14_15(tab, pred, path_E, path_nu, assembly="spheres", path_parity=None, who=None):
-    """Fig. 14 (E_i, predicted against DEM) and Fig. 15 as the paper draws it: nu_ij of DEM and
-    predicted against the state ID, one panel per pair; the parity plot of nu_ij beside it."""
+    r"""Fig. 14 ($E_i$, predicted against DEM) and Fig. 15 as the paper draws it: $\nu_{ij}$ of DEM and
+    predicted against the state ID, one panel per pair; the parity plot of $\nu_{ij}$ beside it."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(5.6, 4.6))
     for i, mark in zip(range(3), "os^"):
@@ -180,7 +180,7 @@ def fig14_15(tab, pred, path_E, path_nu, assembly="spheres", path_parity=None, w
 
 
 def fig4a(exp, path, label=r"$E_i/E_j$, $i \neq j$", who=None, panel="4a"):
-    """Fig. 4: E_i/E_j against sigma_i/sigma_j on log axes, with the power law fitted. The ratios
+    r"""Fig. 4: $E_i/E_j$ against $\sigma_i/\sigma_j$ on log axes, with the power law fitted. The ratios
     span about 0.5-2, where a log axis's own ticks (at powers of ten) label one tick: plain ticks."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(5.8, 4.4))
@@ -520,7 +520,7 @@ def fig16_section(rows, source, out, calibrated=None, material=None, own=None, a
 
 def clumps_section(entries, source, own_size=None):
     """The clump assemblies at their isotropic state (clump_entries): void ratio, the restrained
-    moduli of Table B1 and E_z/E_x beside the paper's."""
+    moduli of Table B1 and $E_z/E_x$ beside the paper's."""
     from . import chain
     lines = ["## Clump assemblies at the isotropic state (100 kPa, rotations restrained)", "",
              "From `%s`, %s (docs/specimens.md has the fabric and the free-rotation moduli)%s. The paper's "
@@ -965,8 +965,8 @@ def _b1_ratios(found, paper, size):
 def table_b1(results, paper, own_size=None, others=(), other_material=None):
     """Appendix B / Table B1 at the isotropic state and at state 21: the exact static solve with
     rotations blocked (what a restrained probe measures) against the unmodified (zeta = 1)
-    kinematic prediction, from the study's statics records (b1_records). Each E_i with its a_i^2
-    (Eq. 25), the paper's a_i^2 computed the same way from its printed E_i. `others`: directories
+    kinematic prediction, from the study's statics records (b1_records). Each $E_i$ with its $a_i^2$
+    (Eq. 25), the paper's $a_i^2$ computed the same way from its printed $E_i$. `others`: directories
     of other studies (another size, or another specimen) whose records stand for state 21 where
     the study has none, each shown with its own isotropic state (a ratio between states holds
     within one specimen). `other_material`: {directory: material} of those whose particles are not

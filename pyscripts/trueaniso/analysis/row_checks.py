@@ -1,7 +1,7 @@
-"""What a probe table's rows say of themselves, checked before any analysis uses them.
+r"""What a probe table's rows say of themselves, checked before any analysis uses them.
 
 A table that fits its schema (schemas/probes.schema.json) can still be wrong: two column headers
-swapped (sigma_x and sigma_z, E and gamma), a column scaled, a row of one state under another's
+swapped ($\sigma_x$ and $\sigma_z$, E and gamma), a column scaled, a row of one state under another's
 id. Every reader of a table (results.read_probes) refuses such a table in one line naming the
 file, the line, the state and probe, and the field. Each row is checked against:
 
@@ -14,7 +14,7 @@ file, the line, the state and probe, and the field. Each row is checked against:
 - its modulus (E, or G of a shear probe) within the physical bounds of a packing of its material
   (elastic_bounds.modulus_problem);
 
-and each state probed on x, y and z: its compliance symmetric (reciprocity nu_ij/E_i = nu_ji/E_j)
+and each state probed on x, y and z: its compliance symmetric (reciprocity $\nu_{ij}/E_i = \nu_{ji}/E_j$)
 and positive definite (elastic_bounds.compliance_problem).
 Columns a table does not have (older tables) are not checked.
 """

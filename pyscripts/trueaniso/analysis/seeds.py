@@ -1,4 +1,4 @@
-"""Headline numbers of one study, and their mean and standard deviation over the seeds of a recipe.
+r"""Headline numbers of one study, and their mean and standard deviation over the seeds of a recipe.
 
     /usr/bin/python3 -m trueaniso.analysis.seeds STUDY_DIR [STUDY_DIR ...]
     /usr/bin/python3 -m trueaniso.analysis.seeds --label "new recipe" DIR DIR DIR --label "old recipe" DIR DIR
@@ -9,7 +9,7 @@ over that label's studies (one seed: its value, and the count says so), the pape
 
 A study is a run_study.py or run_states.py directory: probes.csv, metadata.json, and where written,
 the statics records of the isotropic state and state 21 (statics_isotropic.json or statics_state-1.json,
-statics_state-21.json) (Table B1, E_z/E_x with rotations restrained) and specimen.json, the
+statics_state-21.json) (Table B1, $E_z/E_x$ with rotations restrained) and specimen.json, the
 specimen's own summary (prepare_specimen.py writes it beside the .npz; copied into the study), for
 the preparation's steps and wall time. What a study lacks is left out of its column, not guessed.
 
@@ -19,17 +19,17 @@ The headlines (section numbers are the paper's):
 - Zm's drop over the states (largest less smallest) and e's change along the paths (largest
   ``abs(e - e of state 1)``): the paper's Zm stays in 5.94-5.99 for spheres (Fig. 8a) and its void ratios
   "approximately constant" (section 2.2);
-- the moduli E_i that fall by more than 1 % from one state to the next along a path while sigma_i
-  rises (path_fidelity.reversals; the paper's E_i follow their stress);
+- the moduli $E_i$ that fall by more than 1 % from one state to the next along a path while $\sigma_i$
+  rises (path_fidelity.reversals; the paper's $E_i$ follow their stress);
 - the largest reciprocity error over the states, ``abs(nu_ij/E_i - nu_ji/E_j)`` over their mean modulus
   (a compliance is symmetric: an elastic response has none, a creeping packing does);
 - K and G at the isotropic state (state 1, Eqs. 21-22 inverted), against the paper's Table 2
   quadratics at our Zm (spheres only: the clumps' fits hold on the other side of their vertex);
-- zeta fitted on the contrast (section 4.2), the nu_ij RMSE (Eq. 22) and the relative E_i RMSE
+- zeta fitted on the contrast (section 4.2), the $\nu_{ij}$ RMSE (Eq. 22) and the relative $E_i$ RMSE
   (Eq. 21) at that zeta with the study's own Table 2 fits;
-- E_z/E_x at the isotropic state, rotations restrained (the static solve; Table B1's DEM row);
-- Table B1: E_i at state 21 over E_i at the isotropic state, rotations restrained, and the
-  kinematic (zeta = 1) prediction over the static solve, mean E_i, at both states;
+- $E_z/E_x$ at the isotropic state, rotations restrained (the static solve; Table B1's DEM row);
+- Table B1: $E_i$ at state 21 over $E_i$ at the isotropic state, rotations restrained, and the
+  kinematic (zeta = 1) prediction over the static solve, mean $E_i$, at both states;
 - the steps and wall time to prepare the specimen and to reach and probe the states.
 """
 import json
@@ -46,8 +46,8 @@ PAIRS = ((0, 1), (0, 2), (1, 2))
 
 
 def reciprocity_errors(tab):
-    """Per state, the largest of ``abs(nu_ij/E_i - nu_ji/E_j) / mean(abs(nu_ij/E_i), abs(nu_ji/E_j))``
-    over the three pairs (``nu[i, j]`` = nu_ij: probe on i, strain on j; the compliance
+    r"""Per state, the largest of ``abs(nu_ij/E_i - nu_ji/E_j) / mean(abs(nu_ij/E_i), abs(nu_ji/E_j))``
+    over the three pairs (``nu[i, j]`` = $\nu_{ij}$: probe on i, strain on j; the compliance
     ``S_ji = -nu_ij/E_i``)."""
     out = []
     for E, nu in zip(tab["E"], tab["nu"]):

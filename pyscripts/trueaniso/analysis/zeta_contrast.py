@@ -1,7 +1,7 @@
-"""The rotation factor zeta fitted on the contrast a_i^2 (trueaniso.zeta.fit_contrast), from a
+"""The rotation factor zeta fitted on the contrast $a_i^2$ (trueaniso.zeta.fit_contrast), from a
 study's probe table: the one route for the main job (run_study.py) and the benchmark (bench_zeta.py).
 
-Each state's DEM E_i are its x, y, z probe rows; its micromechanical parts (A_n, A_s of Eq. 37)
+Each state's DEM $E_i$ are its x, y, z probe rows; its micromechanical parts (A_n, A_s of Eq. 37)
 are rebuilt from the fabric columns of the row (B, the M components of Appendix A, Nc/V), which
 trueaniso.fabric.fabric_row wrote, and the particle material. The rebuild is checked against the
 row's own micromechanical moduli (mic_E_*), which pins the material and the columns.
