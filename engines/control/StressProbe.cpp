@@ -42,6 +42,13 @@ void StressProbe::begin(const Vec6& hold) {
   steps = relaxSteps = rampStepsDone = holdSteps = settled_ = 0;
   dStress.setZero();
   dStrain.setZero();
+  dStressFirst.setZero();
+  dStrainFirst.setZero();
+  dStressSecond.setZero();
+  dStrainSecond.setZero();
+  side = 0;
+  restorePending_ = false;
+  relaxed_.reset();
   gamma = 0;
   done = false;
 }
@@ -69,15 +76,54 @@ void StressProbe::apply(Scene& s) {
     return;
   }
   stepScale = s.stepScale();
-  s.cell.velGrad = CellServoLaw::velocityGradient(update(CellMeasurement::of(s), s.dt));
+  const Stage before = stage;
+  const Vec6 rates = update(CellMeasurement::of(s), s.dt);
+  if (twoSided && before == Stage::Relax && stage == Stage::Ramp) {
+    relaxed_ = std::make_shared<Scene>(s);  // as this step found it, before its rates act
+  } else if (restorePending_) {
+    const Contacts& now = s.contacts;
+    // The contact list as the detection engine last built it: the relaxed one unless a rebuild
+    // came between (then the detection's reference positions are no longer the relaxed list's,
+    // and it must build again).
+    const bool sameList = now.m1 == relaxed_->contacts.m1 && now.m2 == relaxed_->contacts.m2 &&
+                          now.shift == relaxed_->contacts.shift;
+    s = *relaxed_;
+    if (!sameList) s.detectionInvalid = true;
+    restored();
+  }
+  s.cell.velGrad = CellServoLaw::velocityGradient(rates);
 }
 
 Real StressProbe::strainMeasure() const {
   return shearProbe() ? std::abs(dStrain[axis]) : shearStrainGamma(dStrain.head<3>());
 }
 
+// The Hold of a side has settled: keep its increments; after the first side of a two-sided
+// probe, start the second from the relaxed state (the host puts it back), else finish.
+void StressProbe::finishSide() {
+  (side == 0 ? dStressFirst : dStressSecond) = dStress;
+  (side == 0 ? dStrainFirst : dStrainSecond) = dStrain;
+  if (twoSided && side == 0) {
+    side = 1;
+    target = refStress;
+    settled_ = 0;
+    stage = Stage::Ramp;
+    restorePending_ = true;
+    return;
+  }
+  if (twoSided) {
+    dStress = 0.5 * (dStressFirst - dStressSecond);
+    dStrain = 0.5 * (dStrainFirst - dStrainSecond);
+    gamma = strainMeasure();
+  }
+  stage = Stage::Done;
+  done = true;
+}
+
 Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
   if (stage == Stage::Idle) throw InputError("StressProbe: begin() before update()");
+  require(!restorePending_, "StressProbe: a two-sided probe's host must put the relaxed state back (restorePending) "
+                            "before the next update()");
   if (stage == Stage::Done || stage == Stage::Failed) {
     done = true;
     return Vec6::Zero();
@@ -87,6 +133,8 @@ Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
   unbalanced = m.unbalanced;
   const Vec6& K = m.stiffness;
   const unsigned mask = stressMask();
+  const int sideSign = side == 0 ? sign : -sign;
+  bool relaxEnds = false;
 
   if (stage == Stage::Relax) {
     ++relaxSteps;
@@ -103,18 +151,19 @@ Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
       rampRate_ = (increment > 0 ? increment : 0.5 * K[axis] * gammaTarget) / stepsFor(rampSteps, stepScale);
       stage = Stage::Ramp;
       settled_ = 0;
+      relaxEnds = true;
     }
   } else if (stage == Stage::Ramp) {
     ++rampStepsDone;
     dStrain = strainBetween(refDeformation, m.deformation);
     gamma = strainMeasure();
-    const Real reached = sign * (target[axis] - refStress[axis]);
+    const Real reached = sideSign * (target[axis] - refStress[axis]);
     const bool stop = increment > 0 ? reached >= increment : gamma >= gammaTarget;
     if (stop) {
-      if (increment > 0) target[axis] = refStress[axis] + sign * increment;
+      if (increment > 0) target[axis] = refStress[axis] + sideSign * increment;
       stage = Stage::Hold;
     } else {
-      target[axis] += sign * rampRate_;
+      target[axis] += sideSign * rampRate_;
     }
   } else if (stage == Stage::Hold) {
     ++holdSteps;
@@ -125,9 +174,10 @@ Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
       dStress = stress - refStress;
       dStrain = strainBetween(refDeformation, m.deformation);
       gamma = strainMeasure();
-      stage = Stage::Done;
-      done = true;
-      return Vec6::Zero();
+      finishSide();
+      // The second side starts where Relax ended: the host puts that state back and this step
+      // applies the rates of that step.
+      return restorePending_ ? relaxRates_ : Vec6::Zero();
     }
   }
   if (steps > stepsFor(maxSteps, stepScale)) {
@@ -142,7 +192,9 @@ Vec6 StressProbe::update(const CellMeasurement& m, Real dt) {
   Vec6 goal = target;
   for (int I = 0; I < 6; ++I)
     if (!(mask >> I & 1u)) goal[I] = 0;  // held strain: rate 0
-  return law.perStep(stepScale).rates(goal, mask, stress, K, dt);
+  const Vec6 rates = law.perStep(stepScale).rates(goal, mask, stress, K, dt);
+  if (relaxEnds) relaxRates_ = rates;
+  return rates;
 }
 
 }  // namespace trueaniso

@@ -15,6 +15,16 @@
 // restore() puts the snapshot back (friction, rotations, tangential forces, cell, positions), so
 // every probe starts from the same state.
 //
+// twoSided: after Relax the probe runs Ramp and Hold with `sign`, then puts the relaxed state back
+// and runs them again with -sign; the increments are the half differences of the two sides (a
+// central difference about the held state). What the held state does by itself while it is
+// probed is the same in both sides, which start from the same relaxed state, and cancels: with
+// sliding suppressed a clump packing still moves (bodies with one contact roll on their
+// neighbours and spin them up, as the static solve's rattlers cannot), by ~1e-3 of the probe's
+// strain over its few hundred steps, which is 1-2 % of its lateral strains (docs/studies/clumps.md
+// 5j). The second-order part of the finite increment cancels too. It costs a second Ramp and Hold,
+// not a second Relax.
+//
 // The shear stresses are held (controlShear, the default), as the paper's frictionless walls hold
 // them at zero: the probe's strains are then those of the full compliance S = C^-1, E_i = 1/S_ii,
 // nu_ij = -S_ji/S_ii, G_ij = 1/S_kk (theory/Orthotropic.hpp). With controlShear off the cell's
@@ -43,6 +53,7 @@ class StressProbe : public Engine {
   // measures 1/S_kk. The two differ by the packing's couplings between components (0.2 % measured
   // between G_yz and C_44 of a 300-sphere packing); the static solve gives both.
   bool holdOtherStrains = false;
+  bool twoSided = false;           // a loading and an unloading side from one relaxed state (above)
   // The gain and the step counts below are per reference step (Scene::referenceDt), as the
   // servo's: a step stepScale reference steps long closes stepScale times the error, ramps
   // stepScale times as far and counts for stepScale steps, so that the probe takes the same time,
@@ -65,6 +76,11 @@ class StressProbe : public Engine {
   Mat3 refDeformation = Mat3::Identity();
   Vec6 target = Vec6::Zero(), stress = Vec6::Zero();
   Vec6 dStress = Vec6::Zero(), dStrain = Vec6::Zero();
+  // A two-sided probe's sides (the first with `sign`, the second with -sign); dStress and dStrain
+  // are (first - second) / 2. A one-sided probe's first side is its result, its second zero.
+  Vec6 dStressFirst = Vec6::Zero(), dStrainFirst = Vec6::Zero();
+  Vec6 dStressSecond = Vec6::Zero(), dStrainSecond = Vec6::Zero();
+  int side = 0;                    // 0: the first side (or Relax), 1: the second
   Real gamma = 0, unbalanced = 0;
   long steps = 0, relaxSteps = 0, rampStepsDone = 0, holdSteps = 0;
 
@@ -74,9 +90,15 @@ class StressProbe : public Engine {
   void apply(Scene& scene) override;
   // The control logic alone, for a host that snapshots and sets friction itself (the YADE
   // adapter): begin() checks the parameters and resets the stages, update() returns the cell's
-  // engineering strain rates (Voigt, extension positive).
+  // engineering strain rates (Voigt, extension positive). A two-sided probe through update()
+  // alone needs the host to keep its state as it was when Relax ended (the step whose update()
+  // turned the stage to Ramp, before that step's rates act) and, when update() returns with
+  // restorePending(), to put that state back before it applies the rates returned (those of that
+  // step), then call restored(). apply() does this on the scene.
   void begin(const Vec6& hold);
   Vec6 update(const CellMeasurement& m, Real dt);
+  bool restorePending() const { return restorePending_; }
+  void restored() { restorePending_ = false; }
   std::string name() const override { return "StressProbe"; }
   bool readsCellMeasures() const override { return true; }
 
@@ -91,7 +113,11 @@ class StressProbe : public Engine {
 
  private:
   Real strainMeasure() const;      // gamma of the current dStrain
+  void finishSide();
   std::shared_ptr<Scene> snapshot_;
+  std::shared_ptr<Scene> relaxed_;  // the scene as Relax ended (two-sided, apply())
+  Vec6 relaxRates_ = Vec6::Zero();  // the rates of the step Relax ended
+  bool restorePending_ = false;
   Vec6 holdGoal_ = Vec6::Zero();
   Real rampRate_ = 0;
   long settled_ = 0;

@@ -245,7 +245,10 @@ void exportControl() {
                      "Hold the shear stresses (default) or the cell's shear strains (x, y, z probes only).")
       .def_readwrite("hold_other_strains", &StressProbe::holdOtherStrains,
                      "Hold the five other strains instead of their stresses: the probe measures C_kk, not 1/S_kk.")
-      .def_readwrite("sign", &StressProbe::sign, "+1 loads, -1 unloads (checked by start/begin)")
+      .def_readwrite("sign", &StressProbe::sign,
+                     "+1 loads, -1 unloads (checked by start/begin); two-sided: the first side's")
+      .def_readwrite("two_sided", &StressProbe::twoSided,
+                     "Run a second side with -sign from the relaxed state; the increments are the half differences.")
       .def_readwrite("gamma_target", &StressProbe::gammaTarget, "Eq. (12) at which the ramp stops")
       .def_readwrite("increment", &StressProbe::increment)
       .def_readwrite("probe_friction", &StressProbe::probeFriction)
@@ -267,6 +270,15 @@ void exportControl() {
       .add_property("d_stress", &getVec6<StressProbe, &StressProbe::dStress>, "Voigt stress increment (Pa).")
       .add_property("d_strain", &getVec6<StressProbe, &StressProbe::dStrain>,
                     "Voigt strain increment (engineering shears), compression positive.")
+      .add_property("d_stress_first", &getVec6<StressProbe, &StressProbe::dStressFirst>,
+                    "The first side's stress increment.")
+      .add_property("d_strain_first", &getVec6<StressProbe, &StressProbe::dStrainFirst>,
+                    "The first side's strain increment.")
+      .add_property("d_stress_second", &getVec6<StressProbe, &StressProbe::dStressSecond>,
+                    "A two-sided probe's second side (with -sign): its stress increment.")
+      .add_property("d_strain_second", &getVec6<StressProbe, &StressProbe::dStrainSecond>,
+                    "A two-sided probe's second side: its strain increment.")
+      .def_readonly("side", &StressProbe::side, "0: the first side (or Relax), 1: the second")
       .def_readonly("gamma", &StressProbe::gamma)
       .def_readonly("unbalanced", &StressProbe::unbalanced)
       .def_readonly("steps", &StressProbe::steps)

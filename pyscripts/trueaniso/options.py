@@ -26,6 +26,15 @@ DEFAULT_TIME_STEP = "per-axis"
 # The rule of a study or a specimen that records none: every one made before the rule was recorded.
 UNRECORDED_TIME_STEP = "smallest-inertia"
 PATHS = ("true-triaxial", "cross-anisotropic")  # stress_states.PATHS
+PROBE_SIDES = ("auto", "one", "two")  # ProbeOptions.sides
+# What a study that records no probe sides (fingerprint probe.sides) was probed with.
+UNRECORDED_PROBE_SIDES = "one"
+# A probe's settle steps (ProbeOptions.settle_steps None): the speed/error scan's 100 on spheres
+# (docs/speed-vs-error.md); 300 for a two-sided probe, whose sides' Holds on clump2 packings ended
+# before their slow modes had followed (reciprocity 0.54 % at the worst of 39 states at 100, 0.33 % at
+# 300, 2000 clumps; docs/studies/clumps.md 5j).
+SETTLE_STEPS = 100
+TWO_SIDED_SETTLE_STEPS = 300
 AXES = ("x", "y", "z", "yz", "xz", "xy")  # triaxial.AXES
 
 
@@ -203,7 +212,9 @@ class ProbeOptions(_Options):
         gain: gain of the probe's servo.
         relative_tolerance: stress error allowed on the held components, relative to the increment.
         unbalanced: unbalanced force at which the relaxation ends.
-        settle_steps: steps in a row within tolerance that end a stage.
+        settle_steps: steps in a row within tolerance that end a stage (None: 100, or 300 for a
+            two-sided probe, whose Hold otherwise ends before a clump packing's slow modes have
+            followed the increment: docs/triaxial.md, "Two-sided probes").
         ramp_steps: steps of the ramp of the stress increment.
         max_steps: the probe gives up after this many steps.
         control_shear: True holds the shear stresses; False the cell's shear strains (normal axes
@@ -212,6 +223,12 @@ class ProbeOptions(_Options):
             stiffness $C_{kk}$, not $1/S_{kk}$ (docs/cell.md).
         time_step: the time step rule, "per-axis" or "smallest-inertia". The gain and the step
             counts are per step of smallest-inertia, so either rule probes over the same time.
+        sides: "two" probes each axis from the relaxed state once with the sign and once against
+            it and takes the half difference (a central difference: what the held state does by
+            itself during the probe cancels); "one" is the paper's one-sided probe; "auto" (the
+            default) is "two" where the scene has clumps and their rotations are free, where a
+            one-sided probe's Poisson's ratios are 1-2 % off the exact static compliance, and
+            "one" elsewhere (docs/triaxial.md, "Two-sided probes").
 
     Raises:
         trueaniso.refusal.InputError: a value of the wrong type or out of range, in one line.
@@ -223,7 +240,8 @@ class ProbeOptions(_Options):
         (1e-06, True)
     """
     OWNER = "probe"
-    NOT_FINGERPRINTED = ("gamma", "restrain_rotations", "skip_detection", "damping", "gain")
+    # sides and settle_steps: recorded as they resolve on the study's specimen (fingerprint).
+    NOT_FINGERPRINTED = ("gamma", "restrain_rotations", "skip_detection", "damping", "gain", "sides", "settle_steps")
 
     gamma: float = 1e-6
     increment: float = 0.0
@@ -233,12 +251,13 @@ class ProbeOptions(_Options):
     gain: float = 0.03
     relative_tolerance: float = 2e-3
     unbalanced: float = 1e-5
-    settle_steps: int = 100
+    settle_steps: object = None
     ramp_steps: int = 300
     max_steps: int = 2_000_000
     control_shear: bool = True
     hold_other_strains: bool = False
     time_step: str = DEFAULT_TIME_STEP
+    sides: str = "auto"
 
     def __post_init__(self):
         o = self.OWNER
@@ -251,18 +270,40 @@ class ProbeOptions(_Options):
         put(self, "gain", _real(o, "gain", self.gain, 0.0, 1.0, low_open=True))
         for name in ("relative_tolerance", "unbalanced"):
             put(self, name, _real(o, name, getattr(self, name), 0.0, low_open=True))
-        for name in ("settle_steps", "ramp_steps"):
-            put(self, name, _integer(o, name, getattr(self, name), 0))
+        if self.settle_steps is not None:
+            put(self, "settle_steps", _integer(o, "settle_steps", self.settle_steps, 0))
+        put(self, "ramp_steps", _integer(o, "ramp_steps", self.ramp_steps, 0))
         put(self, "max_steps", _integer(o, "max_steps", self.max_steps, 1))
         if self.time_step not in TIME_STEP_RULES:
             _refuse(o, "time_step", self.time_step, "one of %s" % ", ".join(TIME_STEP_RULES))
+        if not (isinstance(self.sides, str) and self.sides in PROBE_SIDES):
+            _refuse(o, "sides", self.sides, "one of %s" % ", ".join(PROBE_SIDES))
 
-    def fingerprint(self):
+    def two_sided(self, clumps, rotations_blocked=False):
+        """Whether a probe with these options is two-sided on a scene with (`clumps`) or without
+        clumps whose rotations are or are not blocked scene-wide: "auto" makes it two-sided where
+        the bodies are clumps free to rotate."""
+        if self.sides == "auto":
+            return bool(clumps) and not (self.restrain_rotations or rotations_blocked)
+        return self.sides == "two"
+
+    def settle(self, two_sided):
+        """The steps in a row within tolerance that end a stage: `settle_steps`, or when that is None
+        SETTLE_STEPS, TWO_SIDED_SETTLE_STEPS for a two-sided probe."""
+        if self.settle_steps is not None:
+            return self.settle_steps
+        return TWO_SIDED_SETTLE_STEPS if two_sided else SETTLE_STEPS
+
+    def fingerprint(self, clumps=False, rotations_blocked=False):
         """What a study's metadata.json records of it (fingerprint.probe): gamma, rotations,
-        detection and damping by their names there, then every other field but the gain."""
+        detection and damping by their names there, then every other field but the gain, the sides
+        and the settle steps as they resolve on a specimen with or without `clumps` (an "auto" or a
+        None is no answer: a study asked for two sides and one left at "auto" on clumps are one)."""
         out = dict(gamma=self.gamma, rotations="restrained" if self.restrain_rotations else "free",
                    detection="off" if self.skip_detection else "on", damping=self.damping)
         out.update({k: v for k, v in self.keywords().items() if k not in self.NOT_FINGERPRINTED})
+        two = self.two_sided(clumps, rotations_blocked)
+        out.update(sides="two" if two else "one", settle_steps=self.settle(two))
         return out
 
 

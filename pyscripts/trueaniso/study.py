@@ -167,7 +167,7 @@ def study_fingerprint(specimen_meta, assembly, path, servo, probe, recipe=None, 
     fp = dict(specimen=specimen_meta["sha256"], assembly=assembly,
               code=provenance.code_version(), threads=engines.threads(), path=path.path,
               state=_recorded(dict(damping=servo.damping, **servo.fingerprint())),
-              probe=_recorded(probe.fingerprint()))
+              probe=_recorded(probe.fingerprint(assembly != "sphere", specimen_meta.get("block_rotations"))))
     if recipe:
         fp["recipe"] = recipe
     stepped_by = _host_fingerprint(host)

@@ -48,6 +48,7 @@ LABELS = {"assembly": "the assembly (assembly: sphere, clump1 or clump2)", "code
           "probe.gamma": "the probe strain (--gamma; probe.gamma)",
           "probe.rotations": "the probes' rotations (--rotations; probe.rotations)",
           "probe.detection": "the probes' contact detection (--skip-detection; probe.detection)",
+          "probe.sides": "the probes' sides (--probe-sides; probe.sides)",
           "path": "the loading path (--path)"}
 
 
@@ -286,13 +287,16 @@ def require_layout(out, meta):
 
 
 def with_unrecorded_rules(fingerprint):
-    """A study's fingerprint with the time step rules it does not record filled in: the rule it was
-    made with (options.UNRECORDED_TIME_STEP), so that the rule continued is no difference."""
-    from .options import UNRECORDED_TIME_STEP
+    """A study's fingerprint with the time step rules and probe sides it does not record filled in:
+    what it was made with (options.UNRECORDED_TIME_STEP, UNRECORDED_PROBE_SIDES), so that the same
+    setting continued is no difference."""
+    from .options import UNRECORDED_PROBE_SIDES, UNRECORDED_TIME_STEP
     out = dict(fingerprint)
     for part in ("state", "probe"):
         if isinstance(out.get(part), dict) and "time_step" not in out[part]:
             out[part] = dict(out[part], time_step=UNRECORDED_TIME_STEP)
+    if isinstance(out.get("probe"), dict) and "sides" not in out["probe"]:
+        out["probe"] = dict(out["probe"], sides=UNRECORDED_PROBE_SIDES)
     return out
 
 

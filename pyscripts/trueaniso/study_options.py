@@ -11,7 +11,7 @@ from .refusal import InputError
 
 
 def add_probe_options(p, probes_default):
-    """--gamma, --probes, --rotations, --skip-detection, --damping."""
+    """--gamma, --probes, --rotations, --skip-detection, --probe-sides, --damping."""
     from . import triaxial
     lo, hi = triaxial.GAMMA_RANGE
     p.add_argument("--gamma", type=cli.finite, default=options.ProbeOptions.gamma,
@@ -24,6 +24,10 @@ def add_probe_options(p, probes_default):
                    help="particle rotations during probes")
     p.add_argument("--skip-detection", action="store_true",
                    help="no contact detection during probes (nothing slides, the network cannot change)")
+    p.add_argument("--probe-sides", choices=options.PROBE_SIDES, default=options.ProbeOptions.sides,
+                   help="two: each probe also run against its sign from the same relaxed state, the half difference "
+                        "kept (what the held state does alone cancels); one: the paper's one-sided probe; auto: two "
+                        "on clumps with rotations free, one elsewhere (docs/triaxial.md, 'Two-sided probes')")
     p.add_argument("--damping", type=cli.finite, default=options.ServoOptions.damping,
                    help="local non-viscous damping while states are reached and probed, in (0, 1)")
 
@@ -115,5 +119,5 @@ def objects(o, path="true-triaxial"):
             options.ServoOptions(damping=o.damping, friction=o.mu, path_rate=o.path_rate, time_step=o.time_step,
                                  rolling_stiffness=o.rolling_stiffness, rolling_friction=o.rolling_friction),
             options.ProbeOptions(gamma=o.gamma, damping=o.damping, restrain_rotations=o.rotations == "restrained",
-                                 skip_detection=o.skip_detection,
+                                 skip_detection=o.skip_detection, sides=o.probe_sides,
                                  time_step=getattr(o, "probe_time_step", None) or o.time_step))

@@ -20,8 +20,8 @@ from .refusal import InputError
 # readers of result files check rows against them); their names stay importable here.
 from .stress_states import PATHS, SIGMA_H, TABLE_C1, b_of, path_mean_stress, table_c1_states  # noqa: F401
 
-__all__ = ["table_c1_states", "b_of", "path_stresses", "reach_state", "stress_as_held", "probe", "probe_state",
-           "cross_anisotropic_states", "StateNotReached"]
+__all__ = ["table_c1_states", "b_of", "path_stresses", "reach_state", "stress_as_held", "probe", "two_sides",
+           "probe_state", "cross_anisotropic_states", "StateNotReached"]
 
 
 def paths(states):
@@ -280,7 +280,9 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
 
     From the held state, sliding is suppressed (friction 1e23), the scene relaxes, and the stress on
     `axis` rises until the strain invariant gamma reaches the options' `gamma` while the other stresses are
-    held.
+    held. A two-sided probe (the options' `sides`; by default on clumps free to rotate) then does the
+    same from the relaxed state with the stress lowered, and its increments are the half differences
+    of the two sides'.
 
     Args:
         scene: the engines' Scene at a held state (`reach_state`, or a specimen).
@@ -288,7 +290,8 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
             stresses then held at zero), or six Voigt components (`stress_as_held`).
         axis: "x", "y", "z" (a normal stress: $E_i$, $\nu_{ij}$) or "yz", "xz", "xy" (a shear stress: $G_{ij}$);
             or 0-5.
-        sign: +1 loads, -1 unloads.
+        sign: +1 loads, -1 unloads (a two-sided probe: the side run first, whose orientation its
+            increments keep).
         options: `options.ProbeOptions`, how the state is probed: gamma (the strain invariant of
             Eq. 12 the probe stops at), a fixed stress increment instead, restrained rotations,
             contact detection, damping, the probe servo's gain and tolerances, its stages' steps,
@@ -302,7 +305,9 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
     Returns:
         dict: ``modulus`` and ``E`` (Eq. 10) with ``nu_ij`` (Eq. 11) of a normal probe, or ``G`` of a
         shear probe, in Pa; ``d_stress`` and ``d_strain`` (Voigt increments), ``gamma``, ``steps``,
-        ``wall_time`` and how it ran (``rotations``, ``detection``, ``damping``).
+        ``wall_time`` and how it ran (``rotations``, ``detection``, ``damping``, ``sides``: 1 or 2;
+        ``sign`` is 0 for two sides, whose increments are also given one side each,
+        ``d_stress_sides`` and ``d_strain_sides``).
 
     Raises:
         ValueError: an unknown axis, a gamma <= 0, a scene without bodies, or held stresses that are
@@ -336,7 +341,8 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
     p.hold_other_strains = hold_other_strains
     p.restrain_rotations = restrain_rotations
     p.gain, p.relative_tolerance, p.unbalanced_tolerance = o.gain, o.relative_tolerance, o.unbalanced
-    p.settle_steps, p.ramp_steps, p.max_steps = o.settle_steps, o.ramp_steps, o.max_steps
+    p.two_sided = two_sided = o.two_sided(scene.has_clumps, scene.block_rotations)
+    p.settle_steps, p.ramp_steps, p.max_steps = o.settle(two_sided), o.ramp_steps, o.max_steps
     # The cap only matters in the relax stage; probes move strains of ~1e-6.
     p.max_strain_rate = 10.0
     chain = dem.Chain(scene, damping=damping, controllers=[p], rule=o.time_step)
@@ -358,7 +364,7 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
         dem.refresh(scene)
     if p.stage == "failed":
         raise StateNotReached(p.message)
-    out = dict(axis=AXES[axis], sign=sign, modulus=float(p.modulus),
+    out = dict(axis=AXES[axis], sign=0 if two_sided else sign, sides=2 if two_sided else 1, modulus=float(p.modulus),
                d_stress=p.d_stress.tolist(), d_strain=p.d_strain.tolist(), gamma=float(p.gamma),
                steps=int(p.steps), relax_steps=int(p.relax_steps), ramp_steps=int(p.ramp_steps_done),
                hold_steps=int(p.hold_steps), wall_time=time.time() - t0,
@@ -367,11 +373,48 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
                detection="off" if skip_detection else "on", damping=damping,
                detection_calls=int(chain.detection.applied), control_shear=bool(control_shear),
                hold_other_strains=bool(hold_other_strains))
+    if two_sided:  # each side's increments (the first with `sign`): their half sum is what the state did alone
+        out["d_stress_sides"] = [p.d_stress_first.tolist(), p.d_stress_second.tolist()]
+        out["d_strain_sides"] = [p.d_strain_first.tolist(), p.d_strain_second.tolist()]
     if axis < 3:
         out["E"] = out["modulus"]
         for j in range(3):
             if j != axis:
                 out["nu_%s%s" % (AXES[axis], AXES[j])] = float(p.poisson_ratio(j))
+    else:
+        out["G"] = out["modulus"]
+    return out
+
+
+def two_sides(first, second):
+    """The two-sided probe of two one-sided ones from the same state, `first` with a sign and
+    `second` against it (a host whose engine runs one side at a time: YADE's loop): the increments
+    are the half differences, the moduli theirs, the steps and the wall time the sums; the same
+    as our engine's two-sided StressProbe computes.
+
+    Example:
+        >>> from trueaniso import specimen_file, triaxial
+        >>> scene, meta = specimen_file.load("tests/data/spheres-150-s4.npz")
+        >>> up, down = (triaxial.probe(scene, [100e3] * 3, "z", sign=s, sides="one") for s in (1, -1))
+        >>> r = triaxial.two_sides(up, down)
+        >>> r["sides"], r["sign"], abs(r["E"] / triaxial.probe(scene, [100e3] * 3, "z", sides="two")["E"] - 1) < 1e-3
+        (2, 0, True)
+    """
+    axis = AXES.index(first["axis"])
+    ds = 0.5 * (np.asarray(first["d_stress"]) - np.asarray(second["d_stress"]))
+    de = 0.5 * (np.asarray(first["d_strain"]) - np.asarray(second["d_strain"]))
+    out = dict(first, sign=0, sides=2, d_stress=ds.tolist(), d_strain=de.tolist(), modulus=float(ds[axis] / de[axis]),
+               gamma=float(abs(de[axis]) if axis >= 3 else engines.gamma(de[:3])),
+               d_stress_sides=[list(first["d_stress"]), list(second["d_stress"])],
+               d_strain_sides=[list(first["d_strain"]), list(second["d_strain"])])
+    for k in ("steps", "relax_steps", "ramp_steps", "hold_steps", "wall_time"):
+        if k in first and k in second:
+            out[k] = first[k] + second[k]
+    if axis < 3:
+        out["E"] = out["modulus"]
+        for j in range(3):
+            if j != axis:
+                out["nu_%s%s" % (AXES[axis], AXES[j])] = float(-de[j] / de[axis])
     else:
         out["G"] = out["modulus"]
     return out

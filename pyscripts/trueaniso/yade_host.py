@@ -26,6 +26,7 @@ import time
 import numpy as np
 
 from . import dem, engines, fabric, triaxial
+from .options import ProbeOptions
 from .triaxial import StateNotReached
 
 # What the YADE engines of the plugin do not offer of the stepper's protocol options: a study that
@@ -156,12 +157,25 @@ def steps_for(reference_steps, scale):
 
 
 def probe(scene, hold, axis, sign=1, gamma=1e-6, increment=0.0, restrain_rotations=False, skip_detection=False,
-          damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5, settle_steps=100, ramp_steps=300,
+          damping=0.4, gain=0.03, relative_tolerance=2e-3, unbalanced=1e-5, settle_steps=None, ramp_steps=300,
           max_steps=2_000_000, chunk=500, progress=None, time_step=dem.REFERENCE_TIME_STEP, **others):
-    """triaxial.probe in YADE's loop (StressProbe): the same result dict. The scene is not changed."""
+    """triaxial.probe in YADE's loop (StressProbe): the same result dict. The scene is not changed.
+    A two-sided probe (`sides`, ProbeOptions.two_sided) is two probes from the imported scene, one
+    with `sign` and one against it: their Relax stages are the same steps, as in our stepper's
+    engine, which runs its Relax once."""
     from yade.wrapper import StressProbe
+    sides = others.pop("sides", ProbeOptions.sides)
     _check_options(others, UNSUPPORTED_PROBE, "StressProbe")
     axis = triaxial.validate_probe(axis, gamma)
+    o = ProbeOptions(sides=sides, restrain_rotations=bool(restrain_rotations), settle_steps=settle_steps)
+    two_sided = o.two_sided(scene.has_clumps, scene.block_rotations)
+    settle_steps = o.settle(two_sided)
+    if two_sided:
+        kw = dict(gamma=gamma, increment=increment, restrain_rotations=restrain_rotations,
+                  skip_detection=skip_detection, damping=damping, gain=gain, relative_tolerance=relative_tolerance, unbalanced=unbalanced,
+                  settle_steps=settle_steps, ramp_steps=ramp_steps, max_steps=max_steps, chunk=chunk,
+                  progress=progress, time_step=time_step, sides="one", **others)
+        return triaxial.two_sides(probe(scene, hold, axis, sign, **kw), probe(scene, hold, axis, -sign, **kw))
     dem.refresh(scene)
     triaxial.check_held_state(scene, hold)
     hold6 = np.zeros(6)

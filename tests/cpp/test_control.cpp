@@ -453,6 +453,99 @@ TEST(StressProbe, HoldingShearStrainsGivesTheNormalBlockModuli) {
   }
 }
 
+namespace {
+
+// The linear cell with a state that moves by itself: at held stresses its strain creeps at a
+// constant rate (stress = sigma0 + C (strain - creep t)), as a clump packing's held state does with
+// sliding suppressed (bodies rolling on their neighbours). A one-sided probe counts the creep of
+// its Ramp and Hold as response; the two sides of a two-sided probe count the same creep, which
+// their half difference cancels.
+struct CreepingCell {
+  LinearCell cell;
+  Vec6 creep = (Vec6() << 2e-7, -1e-7, 1.6e-7, 0, 0, 0).finished();  // strain per second
+  Real t = 0;
+  CellMeasurement measure() const {
+    CellMeasurement m = cell.measure();
+    m.stress -= cell.C * (creep * t);
+    return m;
+  }
+  void advance(const Vec6& rates) {
+    cell.advance(rates);
+    t += cell.dt;
+  }
+};
+
+// Runs `probe` on the cell as a host that calls update() alone: it keeps the cell as it was when
+// Relax ended and puts it back when the probe asks (restorePending).
+StressProbe runOnCreepingCell(StressProbe probe, CreepingCell cell, bool restore = true) {
+  probe.relativeTolerance = 1e-6;
+  probe.law = CellServoLaw{0.05, 1e3};
+  probe.begin(cell.cell.sigma0);
+  CreepingCell relaxed = cell;
+  long n = 0;
+  while (probe.stage != StressProbe::Stage::Done && probe.stage != StressProbe::Stage::Failed && n < 400000) {
+    const StressProbe::Stage before = probe.stage;
+    const Vec6 rates = probe.update(cell.measure(), cell.cell.dt);
+    if (before == StressProbe::Stage::Relax && probe.stage == StressProbe::Stage::Ramp) relaxed = cell;
+    if (restore && probe.restorePending()) {
+      cell = relaxed;
+      probe.restored();
+    }
+    cell.advance(rates);
+    ++n;
+  }
+  return probe;
+}
+
+}  // namespace
+
+// On the creeping cell (2e-7 strain per second, 2e-11 over a probe's ~1,000 steps of 1e-7 s: the
+// most the probe's 1e-6 stress tolerance lets the servo follow) the one-sided probe's Poisson's
+// ratios are off the compliance by 1.1-1.3e-4 of their value, the two-sided probe's by 0.5-3.8e-6
+// (the creep over the difference of the two sides' lengths, and the tolerance): the one beyond
+// 8e-5, the other within 1e-5. Its increments are the half differences of its sides, the second
+// side run against `sign` from the relaxed state, and `sign` is left as given.
+TEST(StressProbe, TwoSidedCancelsWhatTheHeldStateDoesAlone) {
+  const Mat6 S = LinearCell().C.inverse();
+  for (int axis = 0; axis < 3; ++axis) {
+    StressProbe one;
+    one.axis = axis;
+    StressProbe two = one;
+    two.twoSided = true;
+    const StressProbe a = runOnCreepingCell(one, CreepingCell()), b = runOnCreepingCell(two, CreepingCell());
+    ASSERT_EQ(a.stage, StressProbe::Stage::Done) << a.message;
+    ASSERT_EQ(b.stage, StressProbe::Stage::Done) << b.message;
+    Real worstOne = 0, worstTwo = 0;
+    for (int j = 0; j < 3; ++j)
+      if (j != axis) {
+        const Real nu = -S(j, axis) / S(axis, axis);
+        worstOne = std::max(worstOne, std::abs(a.poissonRatio(j) / nu - 1));
+        worstTwo = std::max(worstTwo, std::abs(b.poissonRatio(j) / nu - 1));
+      }
+    EXPECT_GT(worstOne, 8e-5) << "axis " << axis;  // the one-sided probe counts the creep
+    EXPECT_LT(worstTwo, 1e-5) << "axis " << axis;
+    EXPECT_NEAR(b.modulus() * S(axis, axis), 1.0, 1e-5) << "axis " << axis;
+    EXPECT_EQ(b.dStrain, (0.5 * (b.dStrainFirst - b.dStrainSecond)).eval());
+    EXPECT_EQ(b.dStress, (0.5 * (b.dStressFirst - b.dStressSecond)).eval());
+    EXPECT_GT(b.dStressFirst[axis], 0);
+    EXPECT_LT(b.dStressSecond[axis], 0);
+    EXPECT_EQ(b.sign, 1);
+    EXPECT_EQ(b.side, 1);
+    EXPECT_EQ(b.steps, b.relaxSteps + b.rampStepsDone + b.holdSteps);
+    EXPECT_EQ(b.relaxSteps, a.relaxSteps);  // one Relax for both sides
+    EXPECT_EQ(a.side, 0);
+    EXPECT_EQ(a.dStrainSecond, Vec6::Zero());
+  }
+}
+
+// The second side starts from the relaxed state or not at all: a host that does not put it back
+// is refused at its next update(), not given the second side's strain from the wrong state.
+TEST(StressProbe, TwoSidedRefusesAHostThatDoesNotRestore) {
+  StressProbe p;
+  p.twoSided = true;
+  EXPECT_THROW(runOnCreepingCell(p, CreepingCell(), false), InputError);
+}
+
 // A probe that never settles (the unbalanced force stays high) stops at maxSteps with a message;
 // bad parameters are refused before anything runs.
 TEST(StressProbe, FailsCleanlyAndRefusesBadParameters) {

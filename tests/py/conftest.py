@@ -21,6 +21,17 @@ os.environ["PYTHONPATH"] = os.pathsep.join([os.path.join(REPO, "pyscripts")]
 os.environ.setdefault("TRUEANISO_LEVEL", "x86-64")
 
 
+
+def assert_page_is_its_data(tmp_path, page, rewrite):
+    """A committed page (path under docs/) is what its generator writes from the committed data:
+    `rewrite(path)` rewrites a copy of it, which must come out byte for byte the same."""
+    committed = os.path.join(REPO, "docs", page)
+    doc = tmp_path / os.path.basename(page)
+    shutil.copy(committed, doc)
+    rewrite(str(doc))
+    with open(committed) as f:
+        assert doc.read_text() == f.read()
+
 # The files of the most CPU time first (largest first), the others after them in their order:
 # pytest-xdist hands whole files to its workers (--dist loadfile) in the order collected, and a long
 # file handed out last keeps one worker busy while the other has nothing left to do.

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import REPO
+from conftest import REPO, assert_page_is_its_data
 from trueaniso import clump_shapes, dem, engines, specimen, specimen_file, statics, triaxial
 
 
@@ -297,7 +297,7 @@ def test_static_solve_equals_probe_mean_on_clumps(packing, rotations):
     st = statics.static_stiffness(scene, rotations=rotations)
     E_static, nu_static = np.array(st["E"]), np.array(st["nu"])
     tight = dict(ramp_steps=2000, gain=0.01, settle_steps=200, relative_tolerance=1e-4, unbalanced=1e-7,
-                 restrain_rotations=not rotations)
+                 restrain_rotations=not rotations, sides="one")
     for axis in range(3):
         up = triaxial.probe(scene, hold, axis, **tight)
         down = triaxial.probe(scene, hold, axis, sign=-1, **tight)
@@ -306,6 +306,37 @@ def test_static_solve_equals_probe_mean_on_clumps(packing, rotations):
             if j != axis:
                 name = "nu_%s%s" % ("xyz"[axis], "xyz"[j])
                 assert 0.5 * (up[name] + down[name]) == pytest.approx(nu_static[axis, j], abs=6e-4)
+
+
+@pytest.mark.parametrize("skip_detection", [False, True])
+def test_two_sided_probe_is_the_two_one_sided_probes(packing, skip_detection):
+    """A two-sided probe (ProbeOptions.sides; "auto", the default, makes it on clumps free to
+    rotate) relaxes once and runs its two sides from the relaxed state: each side is, bit for bit,
+    the one-sided probe of its sign from the same state (the engine puts the relaxed scene back,
+    shear forces and contact list with it, and the detection builds again only if it built in
+    between; with the detection off, the list of the start serves both sides), its increments are
+    the half differences, its steps one Relax and two Ramps and Holds; triaxial.two_sides (the YADE
+    host's) makes the same from the two one-sided probes. Its stages settle 300 steps, a one-sided
+    probe's 100 (options.TWO_SIDED_SETTLE_STEPS). With rotations restrained, or on spheres, "auto"
+    is one-sided."""
+    scene, _ = specimen_file.load(packing)
+    hold = triaxial.stress_as_held(scene)
+    kw = dict(skip_detection=skip_detection)
+    two = triaxial.probe(scene, hold, "x", **kw)
+    up = triaxial.probe(scene, hold, "x", sides="one", settle_steps=300, **kw)  # a two-sided probe's settle steps
+    down = triaxial.probe(scene, hold, "x", sign=-1, sides="one", settle_steps=300, **kw)
+    assert (two["sides"], two["sign"], up["sides"], up["sign"], down["sign"]) == (2, 0, 1, 1, -1)
+    assert two["d_strain_sides"] == [up["d_strain"], down["d_strain"]]
+    assert two["d_stress_sides"] == [up["d_stress"], down["d_stress"]]
+    assert two["d_strain"] == (0.5 * (np.array(up["d_strain"]) - np.array(down["d_strain"]))).tolist()
+    assert two["steps"] == up["steps"] + down["steps"] - down["relax_steps"]
+    assert two["relax_steps"] == up["relax_steps"] == down["relax_steps"]
+    both = triaxial.two_sides(up, down)
+    assert (both["E"], both["nu_xy"], both["nu_xz"], both["d_strain"]) == (two["E"], two["nu_xy"], two["nu_xz"],
+                                                                           two["d_strain"])
+    assert triaxial.probe(scene, hold, "x", restrain_rotations=True, **kw)["sides"] == 1
+    spheres, _ = specimen_file.load(os.path.join(REPO, "tests", "data", "spheres-150-s4.npz"))
+    assert triaxial.probe(spheres, triaxial.stress_as_held(spheres), "x")["sides"] == 1
 
 
 def test_servo_reaches_a_true_triaxial_state_on_clumps(packing):
@@ -498,10 +529,7 @@ def test_clump2_variant_tables_are_those_of_their_data(tmp_path):
     sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump_recipe_variants as crv
     data = os.path.join(REPO, "docs", "data", "clump-recipes")
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
-    crv.write_doc(str(doc), data)
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: crv.write_doc(doc, data))
     with open(os.path.join(data, "state21-frictionless-s1", "probes.csv")) as f:
         E = {(r["state"], r["probe"]): float(r["E"]) for r in csv.DictReader(f)}
     ratio = E[("21", "x")] / E[("1", "x")]
@@ -536,11 +564,9 @@ def test_clump2_recipe_screen_table_is_that_of_its_data(tmp_path):
     sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump2_recipe_screen as screen
     data = os.path.join(REPO, "docs", "data", "clump2-recipes")
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
     import _bench
-    _bench.replace_block(str(doc), "clump2-recipes", screen.table(data, screen.ROWS, screen.PAPER))
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: _bench.replace_block(
+        doc, "clump2-recipes", screen.table(data, screen.ROWS, screen.PAPER)))
     with open(os.path.join(data, "default-1000-s1", "probes.csv")) as f:
         e = {r["state"]: float(r["void_ratio"]) for r in csv.DictReader(f)}
     assert len(e) == 39 and max(abs(v - e["1"]) for v in e.values()) < 1e-4
@@ -604,10 +630,8 @@ def test_the_default_clump1_grows_at_the_friction_that_meets_the_papers_void_rat
         before = json.load(f)
     assert before["parameters"]["mu_prep"] == clump_recipes.variant("clump1", "grown-at-0.002")["mu_prep"] == 0.002
     assert abs(before["summary"]["void_ratio"] - 0.445) > 0.01
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
-    _bench.replace_block(str(doc), "clump1-recipes", screen.table(data, screen.ROWS1, screen.PAPER1))
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: _bench.replace_block(
+        doc, "clump1-recipes", screen.table(data, screen.ROWS1, screen.PAPER1)))
 
 
 def _assert_seeds_block_is_its_data(tmp_path, groups, assembly, block):
@@ -617,10 +641,7 @@ def _assert_seeds_block_is_its_data(tmp_path, groups, assembly, block):
     data = os.path.join(REPO, "docs", "data")
     text = seeds.table([(label, [seeds.headlines(os.path.join(data, d)) for d in ds]) for label, ds in groups],
                        assembly)
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
-    seeds.write_block(str(doc), block, text)
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: seeds.write_block(doc, block, text))
 
 
 def test_clump2_seeds_table_and_reciprocity_are_those_of_their_data(tmp_path):
@@ -643,19 +664,21 @@ def test_clump2_seeds_table_and_reciprocity_are_those_of_their_data(tmp_path):
 def test_clump1_old_new_table_and_its_claims_are_those_of_their_data(tmp_path):
     """docs/studies/clumps.md 5i: the table is what trueaniso.analysis.seeds writes from the committed
     studies, and what the text and docs/departures.md say of them holds on each of the three seeds of
-    2000 clumps: e within 0.01 of the paper's 0.445, constant to 1e-4 along the 39 states, Zm never below
-    its isotropic value at q < 0, and at the far end of each of the ten paths above it at q < 0 and below
-    it at q > 0 (near the isotropic state, at b = 1 and q 15-30 kPa, it can move by a contact either way)."""
+    2000 clumps and on the one of 4000: e within 0.01 of the paper's 0.445, constant to 1e-4 along
+    the 39 states, Zm never below its isotropic value at q < 0, and at the far end of each of the ten
+    paths above it at q < 0 and below it at q > 0 (near the isotropic state, at b = 1 and q 15-30 kPa,
+    it can move by a contact either way)."""
     import csv
     from trueaniso.analysis import seeds
     data = os.path.join(REPO, "docs", "data")
     groups = [("default (mu_prep 0.01), 2000 clumps, 39 states", ["clump1-2000/s1", "clump1-2000/s2", "clump1-2000/s3"]),
+              ("default (mu_prep 0.01), 4000 clumps, 39 states", ["clump1-4000/s1"]),
               ("default (mu_prep 0.01), 1000 clumps, states 1, 9, 21, 33",
                ["clump1-recipes/mu-prep-0.01", "clump1-recipes/mu-prep-0.01-s2"]),
               ("pentamer at mu_prep 0.002, nine states", ["clump1-recipes/default-1000-s1"]),
               ("trimer (grown-to-target), 39 states", ["clump1-4000-s1"])]
     _assert_seeds_block_is_its_data(tmp_path, groups, "clump1", "clump1-old-new")
-    for d in groups[0][1]:
+    for d in groups[0][1] + groups[1][1]:
         h = seeds.headlines(os.path.join(data, d))
         assert h["states"] == 39 and abs(h["e"] - 0.445) < 0.01 and h["e_change"] < 1e-4
         with open(os.path.join(data, d, "probes.csv")) as f:

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import REPO, one_line_error, run_script
+from conftest import REPO, assert_page_is_its_data, one_line_error, run_script
 from trueaniso import clump_recipes, clump_specimen, dem, engines, specimen_file
 
 DIMERS = os.path.join(REPO, "tests", "data", "clump1-200-s4.npz")
@@ -157,12 +157,8 @@ def test_prepare_specimen_takes_clump1s_variants(tmp_path, name, keyword):
 def test_the_clump1_preparation_table_is_that_of_its_data(tmp_path):
     """docs/studies/clumps.md's clump1 preparation table is what clump1_prep.py --doc writes from
     docs/data/clump1-prep (no number typed by hand)."""
-    import shutil
     sys.path.insert(0, os.path.join(REPO, "bench"))
     import clump1_prep
-    doc = tmp_path / "clumps.md"
-    shutil.copy(os.path.join(REPO, "docs", "studies", "clumps.md"), doc)
     import _bench
-    _bench.replace_block(str(doc), "clump1-prep", clump1_prep.table(clump1_prep.rows_of(
-        os.path.join(REPO, "docs", "data", "clump1-prep"))))
-    assert doc.read_text() == open(os.path.join(REPO, "docs", "studies", "clumps.md")).read()
+    assert_page_is_its_data(tmp_path, "studies/clumps.md", lambda doc: _bench.replace_block(
+        doc, "clump1-prep", clump1_prep.table(clump1_prep.rows_of(os.path.join(REPO, "docs", "data", "clump1-prep")))))

@@ -50,6 +50,8 @@ def test_reach_state_refuses_a_wrong_type_before_any_step(scene, keywords, words
     (dict(skip_detection=0), "skip_detection must be True or False"),
     (dict(settle_steps=-1), "settle_steps must be an integer >= 0"),
     (dict(relative_tolerance="2e-3"), "relative_tolerance must be a number"),
+    (dict(sides="both"), "sides must be one of auto, one, two, not 'both'"),
+    (dict(sides=2), "sides must be one of auto, one, two, not 2"),
 ])
 def test_probe_refuses_a_wrong_type_before_any_step(scene, keywords, words):
     s = scene.copy()
@@ -82,8 +84,10 @@ def test_objects_and_keywords_are_one_setting():
 def test_a_committed_study_s_fingerprint_is_made_again():
     """docs/data/b1-clump2-4000-s1 was run by the keywords (per-axis states, rotations restrained),
     its probes at smallest-inertia, which it does not record (a study that records no rule was made
-    with it): its recorded state and probe settings, with that rule, are the objects' fingerprint
-    of the same options."""
+    with it), and one-sided, which it does not record either (the probes were one-sided before the
+    sides were recorded): its recorded state and probe settings, with that rule and those sides,
+    are the objects' fingerprint of the same options, the sides resolved on its specimen (rotations
+    restrained: one-sided, also under the default "auto")."""
     from trueaniso import study_dir
     directory = os.path.join(REPO, "docs", "data", "b1-clump2-4000-s1")
     assert study_dir.time_step_rules_of(directory) == ("per-axis", "smallest-inertia")
@@ -92,12 +96,16 @@ def test_a_committed_study_s_fingerprint_is_made_again():
     servo = ServoOptions(time_step="per-axis")
     probe = ProbeOptions(restrain_rotations=True, time_step="smallest-inertia")
     assert dict(damping=servo.damping, **servo.fingerprint()) == fp["state"]
-    assert probe.fingerprint() == fp["probe"]
+    assert probe.fingerprint() == fp["probe"] and fp["probe"]["sides"] == "one"
     meta = specimen_file.read(SPECIMEN)[1]
     old = study.fingerprint(meta, "sphere", 1e-6, True, False, 0.4, dict(time_step="per-axis"),
                             dict(time_step="smallest-inertia"))
     new = study.study_fingerprint(meta, "sphere", PathOptions(), servo, probe)
     assert old == new and old["state"] == fp["state"] and old["probe"] == fp["probe"]
+    clumps = study.study_fingerprint(meta, "clump2", PathOptions(), servo, ProbeOptions())["probe"]
+    # "auto": two sides on clumps free to rotate, and their settle steps
+    assert (clumps["sides"], clumps["settle_steps"], new["probe"]["settle_steps"]) == ("two", 300, 100)
+    assert ProbeOptions(sides="two").fingerprint() == ProbeOptions().fingerprint(clumps=True)
     # the whole load at once is recorded as text (metadata.json stays standard JSON)
     assert study.fingerprint(meta, "sphere", 1e-6, False, False, 0.4, dict(path_rate=math.inf))["state"]["path_rate"] \
         == "inf"

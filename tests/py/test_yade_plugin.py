@@ -661,9 +661,11 @@ def test_host_yade_steps_the_study_of_our_stepper_on_clumps(plugin, tmp_path):
     """The committed 200-dimer packing: reaching state 21 from the specimen is chaotic at this size
     (our own stepper under its two time step rules ends at E_z 255 and 219 MPa, e 0.6247 and
     0.6280), so the hosts are compared on one held state: our stepper's state 21 checkpoint is the
-    specimen of both studies, which hold it and probe it. E_i within the probe's error of each other
-    and of the static solve (measured: 3.1e-3 apart; YADE's probes 1.7-3.3e-3 from the static solve,
-    ours 0.8-1.3e-3); the contact counts within one (an edge contact: 457 against 456 measured)."""
+    specimen of both studies, which hold it and probe it, two-sided on both hosts (clumps free to
+    rotate: the plugin's two probes against our engine's one Relax). E_i within the probe's error of
+    each other and of the static solve (measured: 9.6e-4 apart; YADE's probes 2.1-6.6e-4 from the
+    static solve, ours 0.9-5.9e-4; one-sided they were 3.1e-3 apart, 1.7-3.3e-3 and 0.8-1.3e-3); the
+    contact counts within one (an edge contact: 457 against 456 measured)."""
     spec = os.path.join(REPO, "tests", "data", "clump1-200-s4.npz")
     run_states_on("trueaniso", spec, tmp_path / "first", "--ids", "21")
     held = tmp_path / "first" / "states" / "21.npz"

@@ -134,7 +134,7 @@ def scalar_moduli_vs_zm(rows, path, who=None, paper=None):
         >>> png = os.path.join(tempfile.mkdtemp(), "fig11.png")
         >>> fits = figures.scalar_moduli_vs_zm(results.read_probes("docs/data/spheres-53004-s1"), png)
         >>> print("R^2 of K: %.3f, of G: %.3f" % (fits["K"]["r2"], fits["G"]["r2"]))
-        R^2 of K: 0.999, of G: 0.999
+        R^2 of K: 0.892, of G: 0.923
         >>> os.path.getsize(png) > 10000
         True
     """

@@ -147,7 +147,7 @@ def states_from_rows(rows):
         >>> states = hyperelastic.states_from_rows(results.read_probes("docs/data/spheres-53004-s1"))
         >>> m = hyperelastic.scalar_moduli(states["1"]["E"], states["1"]["nu"])
         >>> print("%d states; at state 1: K = %.0f MPa, G = %.0f MPa" % (len(states), m["K"] / 1e6, m["G"] / 1e6))
-        39 states; at state 1: K = 136 MPa, G = 138 MPa
+        39 states; at state 1: K = 140 MPa, G = 147 MPa
     """
     out = {}
     ax = "xyz"

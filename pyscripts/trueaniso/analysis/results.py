@@ -112,7 +112,7 @@ def read_probes(path, need=("state", "probe", "E"), material=None):
         >>> rows = results.read_probes("docs/data/spheres-53004-s1")
         >>> r = next(r for r in rows if r["state"] == "21" and r["probe"] == "z")
         >>> print("%d rows; state 21: E_z = %.0f MPa" % (len(rows), float(r["E"]) / 1e6))
-        117 rows; state 21: E_z = 316 MPa
+        117 rows; state 21: E_z = 345 MPa
     """
     path = table_path(path)
     try:
