@@ -80,9 +80,10 @@ def validate(o):
     ranks, rank = mpi_ranks()
     if ranks > 1 and not o.mpi:
         # Each rank would run its own study in --out: one holds the lock, the others refuse, and
-        # mpiexec then kills the one at work. Rank 0 says so; the others leave quietly.
+        # mpiexec then kills the one at work. Rank 0 says so and fails; the others leave with status
+        # 0, since a rank failing first would have mpiexec stop rank 0 before it has said why.
         if rank != 0:
-            raise SystemExit(2)
+            raise SystemExit(0)
         raise cli.InputError("mpiexec started this script on %d ranks without --mpi; for MPI workers start as "
                              "mpiexec -n K /usr/bin/python3 -m mpi4py.futures pyscripts/run_states.py --mpi ..."
                              % ranks)
