@@ -112,6 +112,8 @@ def options():
     p.add_argument("--tile", type=int, default=1, help="step the specimen tiled K x K x K times (K^3 x its spheres)")
     p.add_argument("--yade-steps", type=int, default=0, help="timed steps of YADE (0: 2000), slower by an order")
     p.add_argument("--doc", help="Markdown file whose stepper table is replaced")
+    p.add_argument("--machine-note", default="",
+                   help="said after the machine in the table's first line (e.g. that other work was paused)")
     p.add_argument("--block", default="stepper", help="name of the table's markers in --doc (one block per specimen)")
     p.add_argument("--also-build", metavar="DIR",
                    help="also time ours from this build tree, e.g. one configured with -DTRUEANISO_ARCH=x86-64-v3")
@@ -251,7 +253,7 @@ def main():
              "over the rounds; x %d thread%s: ours / ours on %d thread%s in the same round, median and range. "
              "Build: the x86-64 level of the engines ours ran (the package loads the fastest the processor "
              "runs; TRUEANISO_LEVEL chooses another)."
-             % (_bench.machine(), n, (" (%s tiled %d x %d x %d)" % (os.path.basename(o.specimen), o.tile, o.tile, o.tile)
+             % (_bench.machine() + (", " + o.machine_note if o.machine_note else ""), n, (" (%s tiled %d x %d x %d)" % (os.path.basename(o.specimen), o.tile, o.tile, o.tile)
                                       if o.tile > 1 else ""), meta["summary"]["void_ratio"], meta["summary"]["Zm"], dt, o.repeats,
                 time.strftime("%Y-%m-%d"), threads[0], plural, threads[0], plural), "",
              "| threads | step | build | %s |" % " | ".join(["trueaniso", "x %d thread%s" % (threads[0], plural)]

@@ -72,7 +72,7 @@ bool ContactDetection::needsRebuild(const Scene& s) const {
   const Real* const radius = s.members.radius.data();
   const Vec3* const ref = refPos_.data();
   const Real* const refRadius = refRadius_.data();
-#pragma omp parallel for schedule(static) reduction(max : maxDisp2, maxGrow, rmax) if (worthThreads(nm))
+#pragma omp parallel for schedule(static) reduction(max : maxDisp2, maxGrow, rmax) if (worthThreadsBeside(nm, s.contacts.size()))
   for (int m = 0; m < nm; ++m) {
     const Vec3 carried = diagonal ? Vec3(ref[m].cwiseProduct(scale)) : Vec3(T * ref[m]);
     maxDisp2 = std::max(maxDisp2, (pos[m] - carried).squaredNorm());
@@ -153,7 +153,7 @@ void ContactDetection::rebuild(Scene& s) {
   nthreads = omp_get_max_threads();
 #endif
   std::vector<std::vector<Candidate>> found(nthreads);
-#pragma omp parallel if (worthThreads(nm))
+#pragma omp parallel if (worthThreadsBeside(nm, C.size()))
   {
     int t = 0;
 #ifdef _OPENMP

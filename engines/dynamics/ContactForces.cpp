@@ -4,11 +4,16 @@
 #include <cmath>
 
 #include "core/Parallel.hpp"
+#include "measure/CellLanes.hpp"
 #include "measure/Reduce.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+
+// Vectors of four lanes (measure/CellLanes.hpp) are passed only to functions that are always
+// inlined: GCC's note that such a call would change the ABI on the baseline does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace trueaniso {
 
@@ -110,6 +115,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     // clump2 preparations; docs/benchmarks.md, "Two contacts at a time", with what it gained).
     constexpr int kBatch = HertzMindlin::Batch::kSize;
     static_assert(kSumBlock % kBatch == 0, "a batch of pairs lies in one block of the measures' sums");
+    static_assert(kBatch % kLanes == 0, "a batch padded to whole lanes fits its arrays");
     // A touching pair's motion, by component like the law's batch: its relative velocity (the
     // bodies' and the affine field's), the spins of its bodies and the lever arms to the contact
     // point. The loops over it that hold no choice run two pairs at a time (see HertzMindlin::Batch).
@@ -127,14 +133,15 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       Real dx[kBatch], dy[kBatch], dz[kBatch], rsum[kBatch], dist2[kBatch], overlap[kBatch], inv[kBatch];
     };
     Gap gap;
-    // The cell measures' terms of the batch's touching pairs (measure/CellSums.hpp), term by term
-    // (a row a term, a column a pair), and the running sums of the block of pairs this thread is in.
-    alignas(64) Real terms[kCellTerms][kBatch];
-    CellSums blockSums;
+    // The running sums of the cell measures' terms (measure/CellLanes.hpp) of the block of pairs
+    // this thread is in.
+    CellLaneSums blockSums;
     int pairOf[kBatch];      // the touching pairs of the batch, in pair order
     Vec3 branches[kBatch];   // their branch vectors
-    HertzMindlin::Batch q;
-    Motion v;
+    for (Vec3& L : branches) L.setZero();  // (the measures' last lanes read past a batch's last contact)
+    // Zeros at first: the measures' last lanes read past a batch's last contact (and mask it).
+    HertzMindlin::Batch q{};
+    Motion v{};
     const Real halfDt = 0.5 * dt;
     for (int c0 = lo; c0 < hi; c0 += kBatch) {
       const int c1 = std::min(hi, c0 + kBatch);
@@ -296,25 +303,28 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
       }
       if (measure) {
         // The terms of contactMeasures from the values just stored (F = N n + F_s, the branch, n,
-        // k_n), the batch's contacts side by side (a loop without a choice: vector lanes, the
-        // arithmetic of one contact unchanged), zeros for a contact without load; then added to
-        // the running sums of their block (measure/CellSums.hpp) contact after contact in pair
-        // order, the sixteen sums side by side. Each sum adds what the separate pass adds, in its
-        // order, and a zero leaves a sum's bits (cellTermsColumn). Computed one contact at a time, the
-        // terms added 1.30 M instructions to the 5.02 M of a step of 4000 spheres (callgrind,
-        // x86-64-v3); side by side, 0.88 M.
-        Real Lx[kBatch], Ly[kBatch], Lz[kBatch];  // the branches by component, as the loop below reads them
-        for (int k = 0; k < m; ++k) {
-          Lx[k] = branches[k].x(); Ly[k] = branches[k].y(); Lz[k] = branches[k].z();
+        // N and the overlap for k_n), four contacts side by side in vector lanes, each contact's
+        // arithmetic that of the separate pass, and added to the running sums of their block
+        // contact after contact in pair order (measure/CellLanes.hpp): each sum adds what the
+        // separate pass adds, in its order. The lanes past the batch's last contact are masked
+        // as no contact (addCellTermsOf).
+        int k = 0;
+        Lanes Lx, Ly, Lz;
+        for (; k + kLanes <= m; k += kLanes) {
+          loadVectorLanes(branches[k].data(), Lx, Ly, Lz);
+          addCellTerms(loadLanes(v.Fx + k), loadLanes(v.Fy + k), loadLanes(v.Fz + k), Lx, Ly, Lz, loadLanes(q.nx + k),
+                       loadLanes(q.ny + k), loadLanes(q.nz + k), loadLanes(q.N + k), loadLanes(q.delta + k), ratio,
+                       blockSums);
         }
-        for (int k = 0; k < m; ++k)
-          cellTermsColumn(v.Fx[k], v.Fy[k], v.Fz[k], Lx[k], Ly[k], Lz[k], q.nx[k], q.ny[k], q.nz[k], q.N[k] > 0,
-                          HertzMindlin::normalStiffness(q.N[k], q.delta[k]), ratio, terms, k);
-        for (int k = 0; k < m; ++k) blockSums.loaded += q.N[k] > 0;
-        blockSums.addColumns(terms, m);
+        if (k < m) {
+          loadVectorLanes(branches[k].data(), Lx, Ly, Lz);
+          addCellTermsOf(m - k, loadLanes(v.Fx + k), loadLanes(v.Fy + k), loadLanes(v.Fz + k), Lx, Ly, Lz,
+                         loadLanes(q.nx + k), loadLanes(q.ny + k), loadLanes(q.nz + k), loadLanes(q.N + k),
+                         loadLanes(q.delta + k), ratio, blockSums);
+        }
         if (c1 == hi || c1 % kSumBlock == 0) {  // the block's last batch
-          pairSums[c0 / kSumBlock] = blockSums;
-          blockSums = CellSums{};
+          pairSums[c0 / kSumBlock] = blockSums.cellSums();
+          blockSums = CellLaneSums{};
         }
       }
     }

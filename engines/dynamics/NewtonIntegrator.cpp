@@ -107,7 +107,7 @@ void NewtonIntegrator::integrate(Scene& s) const {
   // Single spheres: each member position is its body's, copied where the body moves, on the team
   // (a copy of the whole array after the loop was serial work the second thread waited through).
   Vec3* const memberPos = !Clumps && s.members.size() == nb ? s.members.pos.data() : nullptr;
-#pragma omp parallel if (worthThreads(nb))
+#pragma omp parallel if (worthThreadsBeside(nb, s.contacts.size()))
   {
     int waiting[kClumpLanes];  // this thread's clumps whose rotation is still to do
     int nw = 0;

@@ -7,7 +7,7 @@
 // as it sums the threads' force buffers, instead of a second walk over the contacts and bodies. It
 // adds them in the blocks of measure/Reduce.hpp, each block's terms in pair (body) order and the
 // blocks in their order, as the separate pass (contactMeasures) does: the same bits, on any number
-// of threads (tests/cpp/test_dynamics.cpp, "FusedMeasures...").
+// of threads (tests/cpp/test_fused_measures.cpp).
 #include <cmath>
 
 #include "core/Types.hpp"
@@ -20,31 +20,37 @@ namespace trueaniso {
 // body 2.
 constexpr int kCellTerms = 16;
 
-// The kCellTerms terms of a contact into column k of rows of terms (a row a term): F (x) L, the
-// diagonal of Eq. (32) (measure/ContactTerms.hpp, operation for operation) and |F|, for a contact
-// with load (N > 0); zeros for one without. n is the unit normal, kn the contact's k_n (Eq. 5; 0
-// for a contact without stiffness, whose Eq. (32) terms are then zeros), ratio = k_s / k_n. Adding
-// a zero to a running sum that started at +0 leaves its bits (in round-to-nearest no sum of such
-// terms is -0), so a sum may add every contact's column where the separate pass adds only the
-// loaded ones. On scalars and without a branch, so that a loop over contacts runs it several
-// contacts at a time (vector lanes; dynamics/ContactForces.cpp), each contact's arithmetic that of
-// one alone.
-template <int Columns>
-__attribute__((always_inline)) inline void cellTermsColumn(Real Fx, Real Fy, Real Fz, Real Lx, Real Ly, Real Lz,
-                                                           Real nx, Real ny, Real nz, bool loaded, Real kn, Real ratio,
-                                                           Real (*terms)[Columns], int k) {
-  terms[0][k] = loaded ? Fx * Lx : 0.0; terms[1][k] = loaded ? Fx * Ly : 0.0; terms[2][k] = loaded ? Fx * Lz : 0.0;
-  terms[3][k] = loaded ? Fy * Lx : 0.0; terms[4][k] = loaded ? Fy * Ly : 0.0; terms[5][k] = loaded ? Fy * Lz : 0.0;
-  terms[6][k] = loaded ? Fz * Lx : 0.0; terms[7][k] = loaded ? Fz * Ly : 0.0; terms[8][k] = loaded ? Fz * Lz : 0.0;
-  Real K[6];
-  affineStiffnessTerms(loaded ? kn : 0.0, ratio, nx, ny, nz, Lx, Ly, Lz, K);
-  for (int I = 0; I < 6; ++I) terms[9 + I][k] = K[I];
-  terms[15][k] = loaded ? std::sqrt(Fx * Fx + Fy * Fy + Fz * Fz) : 0.0;
+// The kCellTerms terms of a contact into t: F (x) L, the diagonal of Eq. (32)
+// (measure/ContactTerms.hpp, operation for operation) and |F|. n is the unit normal, kn the
+// contact's k_n (Eq. 5), ratio = k_s / k_n. For a contact without load F and kn are zero, and so is
+// every term (+0 or -0): -0 added to any sum leaves its bits (x + -0 = x in round-to-nearest, for
+// x = +0 too), and +0 added to a sum that is not -0 does too (no sum of such terms starting at +0
+// is -0), so a sum may add every touching contact's terms where the separate pass adds only the
+// loaded ones. T is Real (one contact) or a vector of contacts side by side, one a lane
+// (measure/CellLanes.hpp: the force loop), each contact's arithmetic the same; sqrt takes a T.
+// done(g) is called when terms 4g..4g+3 are in t, so that a caller may add them while the next are
+// computed (fewer values held at once).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"  // T a vector: always inlined, never called (CellLanes.hpp)
+template <class T, class Sqrt, class Done>
+__attribute__((always_inline)) inline void cellTerms(const T& Fx, const T& Fy, const T& Fz, const T& Lx, const T& Ly,
+                                                     const T& Lz, const T& nx, const T& ny, const T& nz, const T& kn,
+                                                     Real ratio, T* t, Sqrt sqrt, Done done) {
+  t[0] = Fx * Lx; t[1] = Fx * Ly; t[2] = Fx * Lz; t[3] = Fy * Lx;
+  done(0);
+  t[4] = Fy * Ly; t[5] = Fy * Lz; t[6] = Fz * Lx; t[7] = Fz * Ly;
+  done(1);
+  t[8] = Fz * Lz;
+  affineStiffnessTerms<T>(kn, ratio, nx, ny, nz, Lx, Ly, Lz, t + 9);
+  done(2);
+  t[15] = sqrt(Fx * Fx + Fy * Fy + Fz * Fz);
+  done(3);
 }
+#pragma GCC diagnostic pop
 
 // Running sums of contacts' terms, one for each term, each adding its contacts in their order.
 struct CellSums {
-  alignas(32) Real sum[kCellTerms] = {};  // +0 each (see cellTermsColumn)
+  alignas(32) Real sum[kCellTerms] = {};  // +0 each (see cellTerms)
   long loaded = 0;                        // contacts with N > 0
 
   Mat3 stress() const {  // sum of F (x) L over the loaded contacts
@@ -61,19 +67,13 @@ struct CellSums {
     loaded += o.loaded;
     return *this;
   }
-  // One contact with N > 0: F, L, n, kn and ratio as cellTermsColumn takes them.
+  // One contact with N > 0: F, L, n, kn and ratio as cellTerms takes them.
   void addContact(const Vec3& F, const Vec3& L, const Vec3& n, Real kn, Real ratio) {
-    Real t[kCellTerms][1];
-    cellTermsColumn(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), true, kn, ratio, t, 0);
-    for (int j = 0; j < kCellTerms; ++j) sum[j] += t[j][0];
+    Real t[kCellTerms];
+    cellTerms<Real>(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), kn, ratio, t,
+                    [](Real x) { return std::sqrt(x); }, [](int) {});
+    for (int j = 0; j < kCellTerms; ++j) sum[j] += t[j];
     ++loaded;
-  }
-  // Columns 0..m-1 of rows of terms (cellTermsColumn), column after column: each sum adds its
-  // contacts in their order, the sixteen sums side by side.
-  template <int Columns>
-  __attribute__((always_inline)) void addColumns(const Real (*terms)[Columns], int m) {
-    for (int k = 0; k < m; ++k)
-      for (int j = 0; j < kCellTerms; ++j) sum[j] += terms[j][k];
   }
 };
 

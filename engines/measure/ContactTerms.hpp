@@ -17,15 +17,18 @@ inline void addStressTerm(const Vec3& F, const Vec3& L, Mat3& acc) { acc.noalias
 //    k_s u + (k_n - k_s) n (n.u), the stress sym(dF (x) L)_ij: the ij ij component of Eq. (32)
 //    symmetrised over (ij) and (kl), as the static solve's affine part. With
 //    nu = (n_i L_j + n_j L_i) / 2 it is k_s (L_i^2 + L_j^2) / 4 + (k_n - k_s) nu^2.
-// On scalars, so that a loop over contacts runs it several at a time (dynamics/ContactForces.cpp).
-__attribute__((always_inline)) inline void affineStiffnessTerms(Real kn, Real ratio, Real nx, Real ny, Real nz, Real Lx,
-                                                                Real Ly, Real Lz, Real* k) {
-  const Real ks = ratio * kn, kd = (1.0 - ratio) * kn, quarter = 0.25 * ks;
-  const Real xx = Lx * Lx, yy = Ly * Ly, zz = Lz * Lz;
+// On scalars (T = Real), or on several contacts side by side (T a vector of them, one contact a
+// lane: measure/CellLanes.hpp), each contact's arithmetic the same.
+template <class T>
+__attribute__((always_inline)) inline void affineStiffnessTerms(const T& kn, Real ratio, const T& nx, const T& ny,
+                                                                const T& nz, const T& Lx, const T& Ly, const T& Lz,
+                                                                T* k) {
+  const T ks = ratio * kn, kd = (1.0 - ratio) * kn, quarter = 0.25 * ks;
+  const T xx = Lx * Lx, yy = Ly * Ly, zz = Lz * Lz;
   k[0] = xx * (ks + kd * nx * nx);
   k[1] = yy * (ks + kd * ny * ny);
   k[2] = zz * (ks + kd * nz * nz);
-  const Real yz = 0.5 * (ny * Lz + nz * Ly), xz = 0.5 * (nx * Lz + nz * Lx), xy = 0.5 * (nx * Ly + ny * Lx);
+  const T yz = 0.5 * (ny * Lz + nz * Ly), xz = 0.5 * (nx * Lz + nz * Lx), xy = 0.5 * (nx * Ly + ny * Lx);
   k[3] = quarter * (yy + zz) + kd * yz * yz;
   k[4] = quarter * (xx + zz) + kd * xz * xz;
   k[5] = quarter * (xx + yy) + kd * xy * xy;
@@ -34,7 +37,7 @@ __attribute__((always_inline)) inline void affineStiffnessTerms(Real kn, Real ra
 // The same terms added to acc, for a contact with kn > 0.
 inline void addAffineStiffnessTerm(Real kn, Real ratio, const Vec3& n, const Vec3& L, Vec6& acc) {
   Real k[6];
-  affineStiffnessTerms(kn, ratio, n.x(), n.y(), n.z(), L.x(), L.y(), L.z(), k);
+  affineStiffnessTerms<Real>(kn, ratio, n.x(), n.y(), n.z(), L.x(), L.y(), L.z(), k);
   for (int I = 0; I < 6; ++I) acc[I] += k[I];
 }
 

@@ -373,6 +373,58 @@ TEST(ContactForces, SmallScenesStayOnOneThread) {
 #endif
 }
 
+// The integrator and the detection run on the team when the step's contact loop does, even with
+// fewer bodies than parallelMinimum() (core/Parallel.hpp, worthThreadsBeside), and give the same
+// bits as on one thread: each body is integrated on its own, the displacement check takes a
+// maximum, the pairs found are joined in index order. A sheared cell with a velocity gradient, so
+// that the affine map and the sheared check run too.
+TEST(NewtonIntegrator, AndTheDetectionGiveTheSameBitsOnATeam) {
+#ifdef _OPENMP
+  const int saved = omp_get_max_threads();
+  Mat3 shape = Mat3::Identity();
+  shape(0, 1) = 0.05;
+  auto s = randomGasIn(shape, 1500, 0.62, 9);
+  for (int b = 0; b < s->bodies.size(); b += 2) s->bodies.angVel[b] = Vec3(50, -30, 20);
+  s->cell.velGrad(0, 2) = 2.0;
+  s->cell.velGrad(1, 1) = -1.0;
+  ContactDetection first;
+  first.rebuild(*s);
+  s->detectionInvalid = false;
+  ContactForces().apply(*s);
+  s->dt = 0.2 * TimeStepper::stiffnessBound(*s);
+  ASSERT_FALSE(worthThreads(s->bodies.size()));
+  ASSERT_TRUE(worthThreadsBeside(s->bodies.size(), s->contacts.size()));
+  std::vector<Scene> byThreads;
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    Scene t = *s;
+    NewtonIntegrator newton;
+    newton.damping = 0.2;
+    for (int k = 0; k < 5; ++k) newton.apply(t);  // the same forces every step: the integrator alone
+    ContactDetection detection = first;
+    EXPECT_TRUE(detection.needsRebuild(t) == first.needsRebuild(t));
+    detection.rebuild(t);
+    byThreads.push_back(t);
+  }
+  omp_set_num_threads(saved);
+  const Scene &a = byThreads[0], &b = byThreads[1];
+  for (int k = 0; k < a.bodies.size(); ++k) {
+    ASSERT_EQ(a.bodies.pos[k], b.bodies.pos[k]) << "body " << k;
+    ASSERT_EQ(a.bodies.vel[k], b.bodies.vel[k]) << "body " << k;
+    ASSERT_EQ(a.bodies.angVel[k], b.bodies.angVel[k]) << "body " << k;
+  }
+  ASSERT_EQ(a.cell.hSize, b.cell.hSize);
+  ASSERT_EQ(a.contacts.size(), b.contacts.size());
+  for (int c = 0; c < a.contacts.size(); ++c) {
+    ASSERT_EQ(a.contacts.m1[c], b.contacts.m1[c]) << "pair " << c;
+    ASSERT_EQ(a.contacts.m2[c], b.contacts.m2[c]) << "pair " << c;
+    ASSERT_EQ(a.contacts.shift[c], b.contacts.shift[c]) << "pair " << c;
+  }
+#else
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+}
+
 // A contact refresh at unchanged positions gives back every tangential force bit for bit, however
 // often it runs (each refresh once shifted them by ~3e-19 N, and the shift accumulated).
 TEST(ContactRefresh, IsExactAtTheSamePositions) {

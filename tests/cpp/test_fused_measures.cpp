@@ -6,6 +6,7 @@
 // multiply-adds where it chooses (SameBits.hpp).
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #ifdef _OPENMP
@@ -16,14 +17,20 @@
 #include "RandomGas.hpp"
 #include "SameBits.hpp"
 #include "clump/ClumpTemplate.hpp"
+#include "contact/HertzMindlin.hpp"
 #include "control/TrueTriaxialServo.hpp"
 #include "core/Parallel.hpp"
 #include "dynamics/Simulation.hpp"
 #include "dynamics/TimeStepper.hpp"
+#include "measure/CellLanes.hpp"
 #include "measure/CellSums.hpp"
 #include "measure/ContactTerms.hpp"
 #include "measure/Reduce.hpp"
 #include "measure/Stress.hpp"
+
+// Vectors of four lanes (measure/CellLanes.hpp) are passed only to functions that are always
+// inlined: GCC's note that such a call would change the ABI on the baseline does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
 
 using namespace trueaniso;
 using namespace trueaniso::testing;
@@ -201,41 +208,81 @@ TEST_P(FusedMeasures, DriveTheServoAsTheSeparatePass) {
   EXPECT_LE(worst, tol * b->cell.hSize.norm());
 }
 
-// One contact's column of terms, as the force loop writes them for a batch of contacts side by
-// side: a loaded contact's are the Love-Weber term F (x) L and the diagonal of Eq. (32) of
-// measure/ContactTerms.hpp and |F|; a contact without load writes +0 in every row, which leaves
-// every running sum's bits.
-TEST(CellTermsColumn, IsTheContactTermsOrZerosWithoutLoad) {
+// One contact's terms: the Love-Weber term F (x) L, the diagonal of Eq. (32) of
+// measure/ContactTerms.hpp and |F|.
+TEST(CellTerms, AreTheContactTerms) {
   const Vec3 F(-3.5, 1.25, 7.0), L(1e-4, -2e-4, 0.5e-4), n = L.normalized();
   const Real kn = 2.5e5, ratio = 0.8;
-  Real terms[kCellTerms][4];
-  for (int j = 0; j < kCellTerms; ++j)
-    for (int k = 0; k < 4; ++k) terms[j][k] = -1.0;  // every entry written below
-  cellTermsColumn(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), true, kn, ratio, terms, 1);
-  cellTermsColumn(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), false, kn, ratio, terms, 2);
+  Real t[kCellTerms];
+  int done = 0;
+  cellTerms<Real>(F.x(), F.y(), F.z(), L.x(), L.y(), L.z(), n.x(), n.y(), n.z(), kn, ratio, t,
+                  [](Real x) { return std::sqrt(x); }, [&](int g) { EXPECT_EQ(g, done++); });
+  EXPECT_EQ(done, kCellTerms / 4);
   Mat3 stress = Mat3::Zero();
   addStressTerm(F, L, stress);
   Vec6 stiffness = Vec6::Zero();
   addAffineStiffnessTerm(kn, ratio, n, L, stiffness);
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) EXPECT_NEAR(terms[3 * i + j][1], stress(i, j), test::kSameBits * stress.norm());
-  for (int I = 0; I < 6; ++I) EXPECT_NEAR(terms[9 + I][1], stiffness[I], test::kSameBits * stiffness.norm());
-  EXPECT_NEAR(terms[15][1], F.norm(), test::kSameBits * F.norm());
-  for (int j = 0; j < kCellTerms; ++j) {
-    EXPECT_EQ(terms[j][2], 0.0) << "term " << j;
-    EXPECT_FALSE(std::signbit(terms[j][2])) << "term " << j;
-    EXPECT_EQ(terms[j][0], -1.0);  // the other columns untouched
-    EXPECT_EQ(terms[j][3], -1.0);
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(t[3 * i + j], stress(i, j), test::kSameBits * stress.norm());
+  for (int I = 0; I < 6; ++I) EXPECT_NEAR(t[9 + I], stiffness[I], test::kSameBits * stiffness.norm());
+  EXPECT_NEAR(t[15], F.norm(), test::kSameBits * F.norm());
+}
+
+// Four contacts side by side, as the force loop adds them (measure/CellLanes.hpp), against the
+// separate pass's sums of the loaded ones contact after contact: the same bits on the baseline. A
+// contact without load (N = 0, its force and overlap as any other's, the signs of its branch mixed
+// so that its terms include -0) leaves the sums' bits and is not counted; so do the lanes past a
+// batch's last contact, whatever they hold (addCellTermsOf).
+TEST(CellLanes, AddFourContactsAsTheSeparatePassAddsThem) {
+  const Real ratio = 0.8;
+  std::mt19937_64 gen(5);
+  std::uniform_real_distribution<Real> U(-1, 1);
+  Real Fx[8], Fy[8], Fz[8], nx[8], ny[8], nz[8], N[8], delta[8];
+  Vec3 L[8];  // read four at a time by loadVectorLanes
+  for (int k = 0; k < 8; ++k) {
+    L[k] = 1e-4 * Vec3(U(gen), U(gen), U(gen));
+    const Vec3 n = L[k].normalized(), F = 10 * Vec3(U(gen), U(gen), U(gen));
+    Fx[k] = F.x(); Fy[k] = F.y(); Fz[k] = F.z();
+    nx[k] = n.x(); ny[k] = n.y(); nz[k] = n.z();
+    N[k] = 5 + U(gen);
+    delta[k] = 1e-6 * (2 + U(gen));
   }
-  // Added column after column, a sum starting at +0 keeps its bits through the zero column.
-  CellSums a, b;
-  Real only[kCellTerms][1];
-  for (int j = 0; j < kCellTerms; ++j) only[j][0] = terms[j][1];
-  a.addColumns(only, 1);
-  Real both[kCellTerms][2];
-  for (int j = 0; j < kCellTerms; ++j) { both[j][0] = terms[j][1]; both[j][1] = terms[j][2]; }
-  b.addColumns(both, 2);
-  for (int j = 0; j < kCellTerms; ++j) EXPECT_EQ(a.sum[j], b.sum[j]) << "term " << j;
+  N[2] = 0;  // touching, without load
+  L[2] = Vec3(-1e-4, 2e-4, -3e-4);
+  for (int k = 6; k < 8; ++k)  // lanes past the last contact: they hold anything
+    Fx[k] = Fy[k] = Fz[k] = nx[k] = ny[k] = nz[k] = N[k] = delta[k] = std::numeric_limits<Real>::quiet_NaN();
+  L[6] = L[7] = Vec3::Constant(std::numeric_limits<Real>::infinity());
+  CellLaneSums lanes;
+  Lanes Lx, Ly, Lz;
+  loadVectorLanes(L[0].data(), Lx, Ly, Lz);
+  addCellTerms(loadLanes(Fx), loadLanes(Fy), loadLanes(Fz), Lx, Ly, Lz, loadLanes(nx), loadLanes(ny), loadLanes(nz),
+               loadLanes(N), loadLanes(delta), ratio, lanes);
+  loadVectorLanes(L[4].data(), Lx, Ly, Lz);
+  for (int l = 0; l < kLanes; ++l) EXPECT_EQ(Vec3(Lx[l], Ly[l], Lz[l]), L[4 + l]) << "lane " << l;
+  addCellTermsOf(2, loadLanes(Fx + 4), loadLanes(Fy + 4), loadLanes(Fz + 4), Lx, Ly, Lz, loadLanes(nx + 4),
+                 loadLanes(ny + 4), loadLanes(nz + 4), loadLanes(N + 4), loadLanes(delta + 4), ratio, lanes);
+  const CellSums fused = lanes.cellSums();
+  CellSums separate;
+  for (int k = 0; k < 6; ++k)
+    if (N[k] > 0)
+      separate.addContact(Vec3(Fx[k], Fy[k], Fz[k]), L[k], Vec3(nx[k], ny[k], nz[k]),
+                          HertzMindlin::normalStiffness(N[k], delta[k]), ratio);
+  EXPECT_EQ(separate.loaded, 5);
+  EXPECT_EQ(fused.loaded, separate.loaded);
+  for (int j = 0; j < kCellTerms; ++j) {
+    EXPECT_NEAR(fused.sum[j], separate.sum[j], test::kSameBits * std::abs(separate.sum[j])) << "term " << j;
+    EXPECT_FALSE(std::signbit(fused.sum[j]) && fused.sum[j] == 0) << "term " << j;
+  }
+  // A contact without load alone: every term +0 or -0, and the sums stay +0.
+  CellLaneSums none;
+  const Lanes zero = {}, one = {1, 1, 1, 1}, minus = -one;
+  addCellTerms(one, minus, one, minus, one, minus, one, zero, zero, zero, one, ratio, none);
+  const CellSums empty = none.cellSums();
+  EXPECT_EQ(empty.loaded, 0);
+  for (int j = 0; j < kCellTerms; ++j) {
+    EXPECT_EQ(empty.sum[j], 0.0) << "term " << j;
+    EXPECT_FALSE(std::signbit(empty.sum[j])) << "term " << j;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(SpheresAndClumpsOnOneAndTwoThreads, FusedMeasures,
