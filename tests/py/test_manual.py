@@ -183,8 +183,8 @@ def _bench_names(path):
 
 def test_the_benchmark_tables_are_where_the_scripts_write_them():
     """Every heading a bench script writes under is a line of a benchmarks page (docs/benchmarks.md
-    or docs/studies/benchmarks.md), and every "Reproduce:" line
-    of the docs that runs a bench script with --doc names a block that page holds between markers
+    or docs/studies/benchmarks.md), and every "Reproduce:" line or command under a table of the
+    docs that runs a bench script with --doc names a block that page holds between markers
     (renaming a heading or a marker without the script, or the reverse, fails here)."""
     lines = []
     for page in (os.path.join(DOCS, "benchmarks.md"), os.path.join(DOCS, "studies", "benchmarks.md")):
@@ -200,8 +200,11 @@ def test_the_benchmark_tables_are_where_the_scripts_write_them():
     for page in glob.glob(os.path.join(DOCS, "*.md")) + glob.glob(os.path.join(DOCS, "studies", "*.md")):
         with open(page) as f:
             text = f.read()
-        for command in re.findall(r"Reproduce: `([^`]*bench/[^`]*--doc [^`]*)`", text):
-            words = shlex.split(command)
+        commands = re.findall(r"Reproduce: `([^`]*bench/[^`]*--doc [^`]*)`", text)
+        commands += re.findall(r"^ {4}(/usr/bin/python3 bench/.*--doc .*)$", re.sub(r"\\\n\s*", " ", text),
+                               flags=re.M)  # a command block (under a table, or a continued line joined)
+        for command in commands:
+            words = shlex.split(command, comments=True)
             script = next(w for w in words if w.startswith("bench/"))
             doc = words[words.index("--doc") + 1]
             names = [words[words.index("--block") + 1]] if "--block" in words else \
