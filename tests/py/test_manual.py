@@ -45,25 +45,35 @@ def _text(out, page):
 
 
 def test_the_script_reference_holds_every_script_s_help(manual):
-    """Every user script (pyscripts/*.py), analysis tool and benchmark script has its --help in the
-    reference, as the script prints it (a new script is picked up without an edit of the page)."""
+    """Every user script (pyscripts/*.py) and analysis tool (python3 -m trueaniso.analysis.X) has
+    its --help in the scripts reference, as the script prints it, and no benchmark script does: the
+    product's entry points only. Every benchmark script (bench/*.py) has its --help on the studies'
+    page of them. A new script is picked up without an edit of either page."""
     proc, out = manual
     assert proc.returncode == 0
     html = _text(out, os.path.join("reference", "scripts.html"))
+    bench_html = _text(out, os.path.join("studies", "bench-scripts.html"))
     scripts = sorted(glob.glob(os.path.join(REPO, "pyscripts", "*.py")))
     bench = sorted(p for p in glob.glob(os.path.join(REPO, "bench", "*.py"))
                    if not os.path.basename(p).startswith("_"))
     assert len(scripts) >= 3 and len(bench) >= 10
-    for path in scripts + bench:
+    for path in scripts:
         rel = os.path.relpath(path, REPO)
         assert rel in html, "%s has no section in reference/scripts" % rel
-    assert html.count("usage:") >= len(scripts) + len(bench), "a section without the script's usage"
-    for tool in ("report", "figures", "zeta_contrast", "cross_anisotropy", "path_fidelity"):
+    tools = ("report", "figures", "zeta_contrast", "cross_anisotropy", "path_fidelity", "seeds")
+    for tool in tools:
         assert "python3 -m trueaniso.analysis.%s" % tool in html
+    assert html.count("usage:") >= len(scripts), "a section without the script's usage"  # the tools' may be prose
+    for path in bench:
+        rel = os.path.relpath(path, REPO)
+        assert "usage: %s" % os.path.basename(path) not in html, "%s in the user's reference" % rel
+        assert rel in bench_html, "%s has no section in studies/bench-scripts" % rel
+    assert bench_html.count("usage:") >= len(bench), "a benchmark section without the script's usage"
     cores = os.cpu_count() or 1
-    for said in (r"all\s+%d\s+cores" % cores, r"at most\s+%d\s+\(" % (4 * cores)):
-        assert not re.search(said, html), "the help names this machine's core count: %s" % said
-    assert REPO not in html, "the help names this checkout's path"
+    for page in (html, bench_html):
+        for said in (r"all\s+%d\s+cores" % cores, r"at most\s+%d\s+\(" % (4 * cores)):
+            assert not re.search(said, page), "the help names this machine's core count: %s" % said
+        assert REPO not in page, "the help names this checkout's path"
 
 
 def test_the_api_reference_documents_every_module(manual):
