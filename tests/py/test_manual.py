@@ -583,3 +583,27 @@ def test_the_index_opens_with_an_example_that_prints_what_it_shows():
                           env=dict(os.environ, OMP_NUM_THREADS="1"))
     assert done.returncode == 0, done.stderr[-3000:]
     assert done.stdout == shown
+
+
+def test_the_api_page_s_examples_and_the_index_s_call_the_public_modules_and_run():
+    """The index's example and the Python API page's call the package one way: through the modules
+    a script calls (trueaniso.PUBLIC_MODULES), not the internal ones (the engines' module among
+    them). The API page's examples, run in order from the repository's root on a committed
+    300-sphere specimen in place of the tutorial's, run."""
+    import trueaniso
+    with open(os.path.join(DOCS, "reference", "python-api.md")) as f:
+        api = re.findall(r"```python\n(.*?)```", f.read(), flags=re.S)
+    with open(os.path.join(DOCS, "index.md")) as f:
+        index = re.findall(r"```python\n(.*?)```", f.read(), flags=re.S)[:1]
+    assert len(api) >= 2 and index
+    for code in api + index:
+        for imported in re.findall(r"^from trueaniso(\.\w+)? import (.+)$", code, flags=re.M):
+            names = [imported[0][1:]] if imported[0] else [n.strip() for n in imported[1].split(",")]
+            internal = [n for n in names if n not in trueaniso.PUBLIC_MODULES]
+            assert not internal, "an example imports internal modules: %s" % internal
+        assert not re.search(r"\bengines\.", code), "an example calls the engines' module:\n" + code
+    code = "\n".join(api).replace("results/tutorial/specimen.npz", "tests/data/spheres-300-s6.npz")
+    assert "spheres-300-s6.npz" in code
+    done = subprocess.run([PYTHON, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=600,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    assert done.returncode == 0, done.stderr[-3000:]
