@@ -244,7 +244,7 @@ def test_the_committed_records_pass():
     """The control: every committed study's records are its own."""
     for d in ("spheres-4000-s1", "spheres-53004-s1", "clump1-4000-s1", "clump2-4000-s1", "b1-clump2-4000-s1",
               "b1-clump2-1000-s1", "clump1-2000/s1", "clump1-2000/s2", "clump1-2000/s3", "clump2-2000/s1",
-              "clump2-2000/s2", "clump2-2000/s3", "clump1-4000/s1"):
+              "clump2-2000/s2", "clump2-2000/s3", "clump1-4000/s1", "clump2-4000/s1"):
         assert report.b1_records(os.path.join(DATA, d))
 
 
