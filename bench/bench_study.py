@@ -4,7 +4,9 @@ for built checkouts of the code (before and after a change), with where its time
     /usr/bin/python3 bench/bench_study.py --tree BEFORE --label before --specimen S.npz
     /usr/bin/python3 bench/bench_study.py --tree . --label after --specimen S.npz
     /usr/bin/python3 bench/bench_study.py --tree . --label after --prepare --assembly clump2 --n 4000 --seed 1
-    /usr/bin/python3 bench/bench_study.py --tabulate [--doc docs/benchmarks.md --block study-clock]
+    /usr/bin/python3 bench/bench_study.py --tabulate --label after --doc docs/benchmarks.md
+    /usr/bin/python3 bench/bench_study.py --tabulate --label before --label after \
+        --doc docs/studies/benchmarks.md --block study-clock-change
 
 A study run is `TREE/pyscripts/run_study.py --specimen S --ids IDS --threads 1` (all 39 states of
 Table C1 unless --ids names fewer; their probes on z, x and y; the static solves of the isotropic
@@ -33,12 +35,16 @@ time is the own time of the Python function that calls them, which is why those 
 parts. The profiler adds a cost to each Python call, so to the Python part, not to the engines'.
 
 --tabulate (alone, or after the runs) writes one row per label, assembly and specimen: steps of the
-states and probes, wall and CPU seconds, and the first label's time over each later label's (the
-speed-up; --label gives the order, the first the reference); then the seconds of the states, the
-probes and the static solves by the study's own timers (probes.csv, the statics records) and of
-each part by the profile. Labels that did not run the same states of the same specimen are not
-compared. With --doc the table between <!-- NAME:begin --> and <!-- NAME:end --> (--block)
-is replaced.
+states and probes, wall and CPU seconds, and, with more than one label, the first label's time over
+each later label's (the speed-up; --label chooses the labels and their order, the first the
+reference; all, by name, when none is given); then the seconds of the states, the probes and the
+static solves by the study's own timers (probes.csv, the statics records) and of each part by the
+profile. Labels that did not run the same states of the same specimen are not compared. Under the
+table, the commands that made its runs, as a reader runs them in a checkout: a tree other than
+this one is named by its label in capitals, said to be a built checkout of its commit, and the
+--runs folders and specimens by their paths in the checkout. With --doc the table between
+<!-- NAME:begin --> and <!-- NAME:end --> (--block) is replaced: docs/benchmarks.md holds the
+current code's (study-clock), docs/studies/benchmarks.md the codes compared (study-clock-change).
 """
 import csv
 import json
@@ -58,7 +64,7 @@ from trueaniso import cli  # noqa: E402
 
 REPO = os.path.dirname(HERE)
 ALL_IDS = list(range(1, 40))
-HEADING = "## The whole study's clock"  # docs/benchmarks.md's section of this table
+HEADING = "## The whole study's clock"  # the section of both benchmarks pages (docs/, docs/studies/)
 PARTS = ("stepping", "measurement", "statics", "io", "analysis", "python")
 PART_NAMES = dict(stepping="stepping", measurement="measurement", statics="statics", io="I/O", analysis="analysis",
                   python="Python")
@@ -131,8 +137,8 @@ def options(argv=None):
     p.add_argument("--tree", action="append", default=None,
                    help="a built checkout to time (default: this one); give it again for another, each with --label")
     p.add_argument("--label", action="append", default=None,
-                   help="the name of each --tree in the table; with --tabulate alone, the codes' order (the first is "
-                        "the reference of the speed-up)")
+                   help="the name of each --tree in the table; with --tabulate, the codes tabulated, in order (the "
+                        "first is the reference of the speed-up; default: every label in --runs)")
     p.add_argument("--specimen", help="specimen file (.npz) the study runs on")
     p.add_argument("--ids", default="1-39", help="Table C1 states of this run: numbers and ranges")
     p.add_argument("--time-step", choices=("smallest-inertia", "per-axis"),
@@ -412,20 +418,37 @@ def resplit(run):
 
 
 def table(o, order):
-    """The Markdown tables of the recorded runs, labels in `order` first (the first is the reference
-    of the speed-up), each --runs folder a round; returns (text, notes, load averages)."""
+    """The Markdown tables of the recorded runs of the labels in `order` (the first is the reference
+    of the speed-up; every label when empty), each --runs folder a round; returns (text, notes, load
+    averages, whether codes are compared)."""
     recs = [r for k, runs in enumerate(o.rounds) for r in records(runs, k)]
     studies = [r for r in recs if r["kind"] == "study"]
     preps = [r for r in recs if r["kind"] == "prepare"]
     if not studies and not preps:
         cli.fail("no runs recorded in %s: time some first (--specimen or --prepare)" % ", ".join(o.rounds))
-    labels = [lb for lb in order if any(r["label"] == lb for r in recs)]
-    labels += sorted({r["label"] for r in recs} - set(labels))
+    if order:
+        missing = [lb for lb in order if not any(r["label"] == lb for r in recs)]
+        if missing:
+            cli.fail("--label %s: no runs of that label in %s" % (", ".join(missing), ", ".join(o.rounds)))
+        recs = [r for r in recs if r["label"] in order]
+        studies = [r for r in recs if r["kind"] == "study"]
+        preps = [r for r in recs if r["kind"] == "prepare"]
+    labels = list(order) or sorted({r["label"] for r in recs})
     rank = {lb: k for k, lb in enumerate(labels)}
-    clock = ["| assembly | particles | code | states | steps: states | steps: probes | rounds | wall (s) | CPU (s) | "
-             "wall: first / this | CPU: first / this |", "|---|---|---|---|---|---|---|---|---|---|---|"]
-    where = ["| assembly | code | states (s) | probes (s) | static solves (s) | %s |" % " | ".join(
-        PART_NAMES[k] for k in PARTS), "|---|---|---|---|---|%s" % ("---|" * len(PARTS))]
+    # One code alone (the current code's table): no speed-up columns, and no label to tell codes apart.
+    compared = len(labels) > 1
+
+    def code(label, details):
+        return "%s (%s)" % (label, details) if compared else details
+
+    def who(assembly, label):
+        return "%s %s" % (assembly, label) if compared else assembly
+    clock = ["| assembly | particles | code | states | steps: states | steps: probes | rounds | wall (s) | CPU (s) |%s"
+             % (" wall: first / this | CPU: first / this |" if compared else ""),
+             "|---|---|---|---|---|---|---|---|---|%s" % ("---|---|" if compared else "")]
+    where = ["| assembly |%s states (s) | probes (s) | static solves (s) | %s |" % (
+        " code |" if compared else "", " | ".join(PART_NAMES[k] for k in PARTS)),
+        "|---|%s---|---|---|%s" % ("---|" if compared else "", "---|" * len(PARTS))]
     groups = {}
     for r in studies:
         groups.setdefault((r["assembly"], r["n"], r["sha256"]), {}).setdefault(r["label"], []).append(totals(r))
@@ -440,23 +463,23 @@ def table(o, order):
             ts = by_label[label]
             t = ts[0]
             if any((u["state_steps"], u["probe_steps"]) != (t["state_steps"], t["probe_steps"]) for u in ts):
-                notes.append("%s %s: its rounds took different steps (%s)" % (
-                    assembly, label, ", ".join("%d + %d" % (u["state_steps"], u["probe_steps"]) for u in ts)))
+                notes.append("%s: its rounds took different steps (%s)" % (
+                    who(assembly, label), ", ".join("%d + %d" % (u["state_steps"], u["probe_steps"]) for u in ts)))
             paired = [(ref[u["round"]], u) for u in ts if u["round"] in ref and ref[u["round"]]["ids"] == u["ids"]]
-            code = "%s (%s, %s, %s)" % (label, t["commit"], t["level"], t["time_step"])
-            clock.append("| %s | %d | %s | %s | %d | %d | %d | %s | %s | %s | %s |" % (
-                assembly, n, code, said_ids(t["ids"]), t["state_steps"], t["probe_steps"], len(ts),
-                said_values([u["wall"] for u in ts]), said_values([u["cpu"] for u in ts]),
-                said_values([a["wall"] / u["wall"] for a, u in paired], 2) if paired else "-",
-                said_values([a["cpu"] / u["cpu"] for a, u in paired], 2) if paired else "-"))
+            ratios = " %s | %s |" % (said_values([a["wall"] / u["wall"] for a, u in paired], 2) if paired else "-",
+                                     said_values([a["cpu"] / u["cpu"] for a, u in paired], 2) if paired else "-")
+            clock.append("| %s | %d | %s | %s | %d | %d | %d | %s | %s |%s" % (
+                assembly, n, code(label, "%s, %s, %s" % (t["commit"], t["level"], t["time_step"])), said_ids(t["ids"]),
+                t["state_steps"], t["probe_steps"], len(ts), said_values([u["wall"] for u in ts]),
+                said_values([u["cpu"] for u in ts]), ratios if compared else ""))
             med = lambda key: said_values([u[key] for u in ts])  # noqa: E731
-            where.append("| %s | %s | %s | %s | %s | %s |" % (
-                assembly, label, med("state_seconds"), med("probe_seconds"), med("statics_seconds_recorded"),
-                " | ".join(said_values([u["split"][k] for u in ts]) for k in PARTS)))
+            where.append("| %s |%s %s | %s | %s | %s |" % (
+                assembly, " %s |" % label if compared else "", med("state_seconds"), med("probe_seconds"),
+                med("statics_seconds_recorded"), " | ".join(said_values([u["split"][k] for u in ts]) for k in PARTS)))
             for u in ts:
                 if u["runs"] > 1:
-                    notes.append("%s %s%s: timed in %d runs (states %s), their times added" % (
-                        assembly, label, " (round %d)" % (u["round"] + 1) if len(o.rounds) > 1 else "", u["runs"],
+                    notes.append("%s%s: timed in %d runs (states %s), their times added" % (
+                        who(assembly, label), " (round %d)" % (u["round"] + 1) if len(o.rounds) > 1 else "", u["runs"],
                         "; ".join(said_ids(p["ids"]) for r in studies if r["label"] == label and r["round"] == u["round"]
                                   and (r["assembly"], r["n"], r["sha256"]) == key for p in r["parts"])))
             if not paired and label != ref_label:
@@ -474,12 +497,12 @@ def table(o, order):
             PART_NAMES[k] for k in PARTS), "|---|---|---|---|---|---|%s" % ("---|" * len(PARTS))]
         for r in sorted(preps, key=lambda r: (order_of.get(r["assembly"], 9), rank[r["label"]], r["round"])):
             part = resplit(r)
-            rows.append("| %s | %d | %s (%s, %s) | %s | %.0f | %.0f | %s |" % (
-                r["assembly"], r["n"], r["label"], r["commit"], r.get("level", r["built_level"]), r["recipe_asked"],
-                r["wall"], r["cpu"], " | ".join("%.0f" % part[k] for k in PARTS)))
+            rows.append("| %s | %d | %s | %s | %.0f | %.0f | %s |" % (
+                r["assembly"], r["n"], code(r["label"], "%s, %s" % (r["commit"], r.get("level", r["built_level"]))),
+                r["recipe_asked"], r["wall"], r["cpu"], " | ".join("%.0f" % part[k] for k in PARTS)))
         text += ("\n\n" if text else "") + "Preparation (prepare_specimen.py), in seconds:\n\n" + "\n".join(rows)
     loads = [x for r in studies for x in totals(r)["loads"]] + [r["load_after"] for r in preps if "load_after" in r]
-    return text, notes, loads
+    return text, notes, loads, compared
 
 
 def said_ids(ids):
@@ -489,46 +512,130 @@ def said_ids(ids):
     return ",".join(map(str, ids))
 
 
-def commands(o):
-    """The commands that made the recorded runs, one line each, round by round, then the table's."""
-    out = []
-    default = os.path.join(REPO, "results", "bench-study")
+def inside(path, folder):
+    path, folder = os.path.abspath(path), os.path.abspath(folder)
+    return path == folder or path.startswith(folder + os.sep)
 
-    def runs_option(runs):
-        return "" if os.path.abspath(runs) == default else " --runs " + shlex.quote(runs)
+
+class Shown:
+    """How the commands under a table name the runs' places, so that a reader can run them in a
+    checkout of their own: a tree this checkout is `.` (the default, left out), any other the name
+    of its label in capitals (BEFORE), said to be a built checkout of its commit; a --runs folder
+    outside this checkout results/bench-study (the first round, the default) or
+    results/bench-study-K (round K); a specimen file in a --runs folder is named in its round's,
+    one in this checkout by its path from the root, one elsewhere as specimens/NAME."""
+
+    def __init__(self, rounds):
+        self.rounds = [os.path.abspath(r) for r in rounds]
+        self.trees = {}  # placeholder: the commits of the runs that named it
+        self.specimens = {}  # a specimen from outside this checkout: what its record says it is
+
+    def runs(self, k):
+        folder = self.rounds[k]
+        if inside(folder, REPO):
+            return os.path.relpath(folder, REPO)
+        return os.path.join("results", "bench-study") + ("-%d" % (k + 1) if k else "")
+
+    def runs_option(self, k):
+        shown = self.runs(k)
+        return "" if shown == os.path.join("results", "bench-study") else " --runs " + shlex.quote(shown)
+
+    def tree(self, record, commit):
+        if os.path.abspath(record["tree"]) == REPO:
+            return ""
+        name = record["label"].upper()
+        self.trees.setdefault(name, set()).add(commit.replace("-dirty", ""))
+        return " --tree " + shlex.quote(name)
+
+    def specimen(self, record):
+        path = record["specimen"]
+        for k in range(len(self.rounds)):
+            if inside(path, self.rounds[k]):
+                return os.path.join(self.runs(k), os.path.relpath(path, self.rounds[k]))
+        if inside(path, REPO):
+            return os.path.relpath(path, REPO)
+        shown = os.path.join("specimens", os.path.basename(path))
+        self.specimens[shown] = "a %s specimen of the %s recipe, %d particles, prepared at %s, sha256 %s..." % (
+            record["assembly"], record.get("recipe", "default"), record["n"], record.get("level", "x86-64"),
+            record["sha256"][:12])
+        return shown
+
+    def doc(self, path):
+        return os.path.relpath(path, REPO) if inside(path, REPO) else path
+
+    def said(self):
+        """What the placeholder trees and the specimens named in specimens/ are, in words ('' when
+        there are none): 'BEFORE is a built checkout of 9c084da (...)'."""
+        said = []
+        if self.trees:
+            names = sorted(self.trees)
+            first = names[0], sorted(self.trees[names[0]])[0]
+            said.append("%s %s %s, made by `git worktree add --detach %s %s` and `./setup.sh _trueaniso` in it" % (
+                " and ".join(names), "is a built checkout of" if len(names) == 1 else "are built checkouts of",
+                " and ".join(" or ".join(sorted(self.trees[n])) for n in names), first[0], first[1]))
+        said += ["%s is %s" % (name, what) for name, what in sorted(self.specimens.items())]
+        return "; ".join(said)
+
+
+def commands(o, labels):
+    """The commands that made the recorded runs of `labels` (all when empty), a command that ran in
+    more than one round (each --runs folder) once, with the rounds it ran in; then the table's.
+    Returns (lines, the sentence that says what the placeholder trees are)."""
+    shown = Shown(o.rounds)
+    lines, rounds_of = [], {}
     for k, runs in enumerate(o.rounds):
         for r in sorted(records(runs, k), key=lambda r: (r["kind"] != "prepare", r["assembly"], r["label"])):
-            base = "/usr/bin/python3 bench/bench_study.py --tree %s --label %s" % (shlex.quote(r["tree"]), r["label"])
+            if labels and r["label"] not in labels:
+                continue
             if r["kind"] == "prepare":
-                out.append("%s --prepare --assembly %s --n %d --seed %d%s%s" % (
+                base = "/usr/bin/python3 bench/bench_study.py%s --label %s" % (shown.tree(r, r["commit"]), r["label"])
+                found = ["%s --prepare --assembly %s --n %d --seed %d%s" % (
                     base, r["assembly"], r["n"], r["seed"], "" if r["recipe_asked"] == "default" else
-                    " --recipe " + r["recipe_asked"], runs_option(runs)))
+                    " --recipe " + r["recipe_asked"])]
             else:
                 rule = " --time-step " + r["time_step_asked"] if r.get("time_step_asked") else ""
-                out += ["%s --specimen %s --ids %s%s%s" % (base, shlex.quote(r["specimen"]), said_ids(p["ids"]), rule,
-                                                          runs_option(runs)) for p in r["parts"]]
+                found = ["/usr/bin/python3 bench/bench_study.py%s --label %s --specimen %s --ids %s%s" % (
+                    shown.tree(r, p["commit"]), r["label"], shlex.quote(shown.specimen(r)),
+                    said_ids(p["ids"]), rule) for p in r["parts"]]
+            for command in found:
+                if command not in rounds_of:
+                    lines.append(command)
+                rounds_of.setdefault(command, []).append(k)
+    out = []
+    for command in lines:
+        ks = rounds_of[command]
+        again = [shown.runs(k) for k in ks[1:]]
+        out.append(command + shown.runs_option(ks[0]) + (
+            "   # and again with --runs %s (a round each)" % ", ".join(again) if again else ""))
+    # The rounds in their order: each named when there are more than one (the first is the default's).
     tab = "/usr/bin/python3 bench/bench_study.py --tabulate%s%s" % (
-        "".join(" --label %s" % lb for lb in (o.label or [])), "".join(runs_option(runs) for runs in o.rounds))
+        "".join(" --label %s" % lb for lb in labels),
+        "".join(" --runs " + shlex.quote(shown.runs(k)) if len(o.rounds) > 1 else shown.runs_option(k)
+                for k in range(len(o.rounds))))
     if o.note:
         tab += " --note " + shlex.quote(o.note)
     if o.doc:
-        tab += " --doc %s --block %s" % (shlex.quote(os.path.relpath(o.doc, REPO) if os.path.abspath(o.doc).startswith(
-            REPO + os.sep) else o.doc), o.block)
-    return out + [tab]
+        tab += " --doc %s --block %s" % (shlex.quote(shown.doc(o.doc)), o.block)
+    return out + [tab], shown.said()
 
 
 def write_table(o):
-    body, notes, loads = table(o, o.labels if o.label else [])
+    labels = o.labels if o.label else []
+    body, notes, loads, compared = table(o, labels)
+    lines, trees = commands(o, labels)
     load = "one-minute load average %.1f-%.1f at the end of the runs" % (min(loads), max(loads)) if loads else ""
     text = ("Machine: %s%s; one engine thread, %s; %s. "
             "Steps, wall and CPU time of the whole run (CPU: the process's user and system seconds), the median over "
-            "its rounds (each --runs folder a round) and their range; first / this: the first code's time over this "
-            "one's in the same round, on the same specimen and states. The parts are each function's own time under Python's profiler (cProfile), whose sum is the "
-            "run's wall time within the profiler's cost.%s\n\n%s\n\nReproduce (one run a line, then the table):\n\n%s"
+            "its rounds (each --runs folder a round) and their range%s. The parts are each function's own time under "
+            "Python's profiler (cProfile), whose sum is the run's wall time within the profiler's cost.%s\n\n%s\n\n"
+            "Reproduce (one run a line, then the table%s):\n\n%s"
             % (_bench.machine(), ", " + o.note if o.note else "", load or "no load average recorded",
                time.strftime("%Y-%m-%d"),
+               "; first / this: the first code's time over this one's in the same round, on the same specimen and "
+               "states" if compared else "",
                "".join(" %s." % (n[0].upper() + n[1:]) for n in notes), body,
-               "\n".join("    " + c for c in commands(o))))
+               "; " + trees if trees else "",
+               "\n".join("    " + c for c in lines)))
     print(text)
     if o.doc:
         _bench.replace_block(o.doc, o.block, text, heading=HEADING)

@@ -4,7 +4,8 @@ A page holding a line ``<!-- generated: KIND -->`` gets Markdown in its place (`
 
 * ``scripts``: every user script's ``--help`` (pyscripts/*.py);
 * ``analysis-tools``: the ``--help`` of every analysis module that runs as a tool;
-* ``bench``: the ``--help`` of every benchmark script (bench/*.py);
+* ``bench``: the ``--help`` of every benchmark script (bench/*.py), on a page of the studies
+  (studies/bench-scripts): the scripts reference lists the product's scripts only;
 * ``python-api``: an autodoc section per module of the ``trueaniso`` package and its ``analysis``:
   the modules a user's script calls first (``trueaniso.PUBLIC_MODULES``, each with the functions
   of its ``__all__``), then the internal ones under a heading that says so; docstrings are Google
@@ -117,9 +118,9 @@ def help_text(args):
     return machine_independent(done.stdout)
 
 
-def help_section(title, args):
+def help_section(title, args, level=3):
     body = help_text(args).rstrip()
-    return "### `%s`\n\n```text\n%s\n```\n\n" % (title, body)
+    return "%s `%s`\n\n```text\n%s\n```\n\n" % ("#" * level, title, body)
 
 
 def generate(kind):
@@ -128,7 +129,7 @@ def generate(kind):
     if kind == "analysis-tools":
         return "".join(help_section("python3 -m " + m, ["-m", m]) for m in analysis_tools())
     if kind == "bench":
-        return "".join(help_section(s, [s]) for s in bench_scripts())
+        return "".join(help_section(s, [s], level=2) for s in bench_scripts())  # a page of its own
     if kind == "python-api":
         return python_api()
     if kind == "yade-classes":

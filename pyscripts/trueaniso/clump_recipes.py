@@ -34,14 +34,14 @@ def recipe(assembly, **overrides):
 # their own keywords) that differ from the assembly's defaults (docs/specimens.md; docs/clumps.md,
 # section 5b, has the clumps' measurements).
 VARIANTS = {
-    # spheres: the friction switched to 0.5 at the final pressure, the radii grown there at 0.015 (the
-    # default until the unloading: it loses 0.34 of Zm along the Table C1 paths); the radii grown at
+    # spheres: the friction switched to 0.5 at the final pressure, the radii grown there at 0.015
+    # (without the unloading the packing loses 0.34 of Zm along the Table C1 paths); the radii grown at
     # 0.015 to 5 kPa only, without the unloading (700,000 steps at 1000 and 4000 spheres, its creep
     # to 5 kPa); and the default unloaded to 5 kPa instead of 20 (denser: e 0.572, Zm 5.89 at 1000
-    # spheres) (docs/specimens.md, "Old and new recipes").
+    # spheres) (docs/studies/specimens.md, "Spheres: old and new recipes").
     "sphere": {"grown-to-target": dict(switch_fraction=1.0), "grown-to-switch": dict(unload=False, switch_fraction=0.05),
                "unloaded-to-5kPa": dict(switch_fraction=0.05)},
-    # clump2 as it was made before the free expansion at 0.25: rotations blocked and friction 0.01 up to
+    # clump2 without the free expansion at 0.25: rotations blocked and friction 0.01 up to
     # the target, long axes weighted 0.5, the friction switched to 0.5 at the target (e 0.629 at 4000
     # clumps, compacting along the Table C1 paths); and that recipe grown frictionless (mu_prep 0):
     # fewer rattlers and a higher Zm at 1000 clumps, e 0.01 below the paper's 0.636 instead of above.
@@ -54,7 +54,7 @@ VARIANTS = {
     # too): p is reached 5 times sooner, and the packing's densification at friction 0.002, which
     # the stage waits out, then sets the steps. With --time-step per-axis, 2.1-4.0 times fewer steps
     # at 300 clumps, e and E_z/E_x within the recipe's scatter between seeds (docs/clumps.md, 5c).
-    # clump1 as it was made before the unloading: three balls (trimer-2.0, e 0.470 at 4000 clumps,
+    # clump1 without the unloading, of three balls (trimer-2.0, e 0.470 at 4000 clumps,
     # where the smoother pentamer-2.0 packs to 0.439 at 300), grown at friction 0.002, the friction
     # switched at the target.
     # clump1 grown (and unloaded) at friction 0.002 instead of 0.01, the pentamer recipe otherwise:

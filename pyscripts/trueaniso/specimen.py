@@ -16,8 +16,9 @@ Recipe (choices and reasons are in docs/specimens.md):
    shears a little) until every principal stress and every shear stress is within
    ``stress_tolerance`` and the unbalanced force below ``unbalanced``.
 
-A switch pressure at the target skips step 3 (the named variant ``grown-to-target``, the earlier
-default); ``grown-to-switch`` grows the radii to the switch pressure only (clump_recipes.VARIANTS).
+A switch pressure at the target skips step 3 (the named variant ``grown-to-target``, whose packings
+lose contacts along the Table C1 paths: docs/path-fidelity.md); ``grown-to-switch`` grows the radii
+to the switch pressure only (clump_recipes.VARIANTS).
 """
 import math
 import time
@@ -192,7 +193,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
             `mu_prep`, in balance), where the friction becomes `mu_final` and the cell servo
             compresses it to `pressure`. None: `switch_fraction` of `pressure`
             (default_switch_pressure); `pressure`: no unloading, the friction switched at the target
-            (the variant grown-to-target, every file before the unloading).
+            (the variant grown-to-target).
         switch_fraction: the default switch pressure's share of `pressure` (20 %).
         unload: False grows the radii to `switch_pressure` only, without the unloading (the variant
             grown-to-switch). The time step and rate caps are those of `pressure`, the unloading's

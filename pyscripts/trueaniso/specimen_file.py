@@ -10,12 +10,12 @@ summary and software versions. ``meta["sha256"]`` is a SHA-256 of the whole cont
 
 A clump is a body with several members: ``member_offsets`` (its principal frame) and ``radii`` are
 its template scaled to its size, ``masses`` and ``inertia`` its mass and principal moments, and
-``volumes`` its solid volume (the void ratio's), stored since version 4 so that every process that
-loads the file gets the same bits: recomputed from the members (the union, by CGAL, cached once per
-shape), its last bits depended on which clump of the shape the process had met first, and a
-resumed study's void ratios differed from the uninterrupted run's. A stored volume is checked
-against the union (1e-9) and a sphere's against $\frac{4}{3}\pi r^3$; a sphere's is recomputed from its
-radius, as before. A version-3 file (no volumes) is read with the union's volumes. A clump whose
+``volumes`` its solid volume (the void ratio's). The volume is stored, not recomputed on load, so
+that every process that loads the file gets the same bits: the union of the members (by CGAL,
+cached once per shape) rounds differently with the clump of the shape a process meets first, and a
+resumed study's void ratios would differ from an uninterrupted run's. A stored volume is checked
+against the union (1e-9) and a sphere's against $\frac{4}{3}\pi r^3$; a sphere's volume is computed
+from its radius. A version-3 file (no volumes) is read with the union's volumes. A clump whose
 members do not overlap into one body is refused like any other invalid field.
 
 Loading checks format, version, checksum, then every field (``meta_problem``, ``contents_problem``,

@@ -1,7 +1,9 @@
-"""bench_study.py, the whole study's clock (docs/benchmarks.md, "The whole study's clock"): what it
-refuses before any run, and that its tables add up what the runs recorded (steps from probes.csv,
-parts of a study timed in two runs added, the speed-up the first code's time over the other's, no
-speed-up between runs of other states). Timings are printed, never asserted."""
+"""bench_study.py, the whole study's clock (docs/benchmarks.md and docs/studies/benchmarks.md, "The
+whole study's clock"): what it refuses before any run, that its tables add up what the runs
+recorded (steps from probes.csv, parts of a study timed in two runs added, the speed-up the first
+code's time over the other's, no speed-up between runs of other states, one code's table without
+one), and that the commands under a table name the checkout's paths, not this machine's. Timings
+are printed, never asserted."""
 import csv
 import json
 import os
@@ -58,11 +60,21 @@ def test_the_tables_add_up_the_runs(tmp_path, specimen_150):
         assert proc.returncode == 0, proc.stderr
     again = bench("--tree", REPO, "--label", "b", "--specimen", specimen_150, "--runs", runs, "--ids", "21")
     assert again.returncode == 0 and "already timed" in again.stdout  # nothing run twice
-    proc = bench("--tabulate", "--runs", runs, "--label", "a", "--doc", doc, "--note", "nothing paused")
+    proc = bench("--tabulate", "--runs", runs, "--label", "a", "--label", "b", "--label", "c", "--doc", doc,
+                 "--note", "nothing paused")
     assert proc.returncode == 0, proc.stderr
     text = doc.read_text()
     assert text.startswith("# B\n\n<!-- study-clock:begin -->\nMachine: ") and text.endswith("<!-- study-clock:end -->\n\nafter\n")
     assert "nothing paused" in text and "timed in 2 runs (states 1; 21)" in text and "c ran states 1, a no round of the same: not compared" in text
+    # The commands under the table run in a reader's checkout: this tree is the default (no --tree),
+    # the runs folder outside the checkout is the default's, the specimen outside it is named in
+    # specimens/ and said what it is; no path of this machine is printed.
+    commands = [ln.strip() for ln in text.splitlines() if ln.startswith("    /usr/bin/python3 bench/bench_study.py")]
+    assert "/usr/bin/python3 bench/bench_study.py --label a --specimen specimens/spheres-150-s4.npz --ids 1" in commands
+    assert commands[-1] == ("/usr/bin/python3 bench/bench_study.py --tabulate --label a --label b --label c --note "
+                            "'nothing paused' --doc %s --block study-clock" % doc)
+    assert "specimens/spheres-150-s4.npz is a sphere specimen of the default recipe, 150 particles" in text
+    assert str(tmp_path) not in text.replace(str(doc), "") and REPO not in text and "--tree" not in text
 
     record = {lb: json.loads((runs / lb / "spheres-150-s4.json").read_text()) for lb in "abc"}
     assert [p["ids"] for p in record["a"]["parts"]] == [[1], [21]]
@@ -87,11 +99,29 @@ def test_the_tables_add_up_the_runs(tmp_path, specimen_150):
     moved = json.loads((tmp_path / "round2" / "b" / "spheres-150-s4.json").read_text())
     moved["parts"][0]["wall"] *= 3.0
     (tmp_path / "round2" / "b" / "spheres-150-s4.json").write_text(json.dumps(moved))
-    proc = bench("--tabulate", "--runs", runs, "--runs", tmp_path / "round2", "--label", "a")
+    proc = bench("--tabulate", "--runs", runs, "--runs", tmp_path / "round2", "--label", "a", "--label", "b")
     assert proc.returncode == 0, proc.stderr
     b2 = {r[2].split(" ")[0]: r for r in _rows(proc.stdout, "sphere") if r[1] == "150"}["b"]
     assert b2[6] == "2" and b2[7] == "%.0f (%.0f-%.0f)" % (2.0 * wall["b"], wall["b"], 3.0 * wall["b"])
     assert float(b2[9]) == round(wall["a"] / wall["b"], 2) and "1 of its 2 rounds without a run of a" in proc.stdout
+    # b's run, made in both rounds, is one command with the second round named; c is not tabulated
+    assert ("/usr/bin/python3 bench/bench_study.py --label b --specimen specimens/spheres-150-s4.npz --ids 1,21   "
+            "# and again with --runs results/bench-study-2 (a round each)") in proc.stdout
+    assert "--label c" not in proc.stdout and "| c (" not in proc.stdout
+
+    # One code alone (the current code's table): no speed-up columns and no label; a tree other
+    # than this checkout is named by its label in capitals and said to be a checkout of its commit.
+    moved = json.loads((runs / "b" / "spheres-150-s4.json").read_text())
+    moved["tree"], moved["parts"][0]["commit"] = "/elsewhere/tree", "1234567"
+    (runs / "b" / "spheres-150-s4.json").write_text(json.dumps(moved))
+    proc = bench("--tabulate", "--runs", runs, "--label", "b")
+    assert proc.returncode == 0, proc.stderr
+    alone = _rows(proc.stdout, "sphere")
+    assert alone[0][2].startswith("1234567, ") and len(alone[0]) == 9 and "first / this" not in proc.stdout
+    assert "--tree B --label b --specimen specimens/spheres-150-s4.npz" in proc.stdout
+    assert "B is a built checkout of 1234567, made by `git worktree add --detach B 1234567`" in proc.stdout
+    proc = bench("--tabulate", "--runs", runs, "--label", "d")
+    assert proc.returncode == 2 and "--label d: no runs of that label" in proc.stderr
 
     where = {r[1]: r for r in _rows(text, "sphere") if r[1] != "150"}
     states_s = sum({r["state"]: float(r["state_wall_time"]) for r in rows}.values())

@@ -45,25 +45,35 @@ def _text(out, page):
 
 
 def test_the_script_reference_holds_every_script_s_help(manual):
-    """Every user script (pyscripts/*.py), analysis tool and benchmark script has its --help in the
-    reference, as the script prints it (a new script is picked up without an edit of the page)."""
+    """Every user script (pyscripts/*.py) and analysis tool (python3 -m trueaniso.analysis.X) has
+    its --help in the scripts reference, as the script prints it, and no benchmark script does: the
+    product's entry points only. Every benchmark script (bench/*.py) has its --help on the studies'
+    page of them. A new script is picked up without an edit of either page."""
     proc, out = manual
     assert proc.returncode == 0
     html = _text(out, os.path.join("reference", "scripts.html"))
+    bench_html = _text(out, os.path.join("studies", "bench-scripts.html"))
     scripts = sorted(glob.glob(os.path.join(REPO, "pyscripts", "*.py")))
     bench = sorted(p for p in glob.glob(os.path.join(REPO, "bench", "*.py"))
                    if not os.path.basename(p).startswith("_"))
     assert len(scripts) >= 3 and len(bench) >= 10
-    for path in scripts + bench:
+    for path in scripts:
         rel = os.path.relpath(path, REPO)
         assert rel in html, "%s has no section in reference/scripts" % rel
-    assert html.count("usage:") >= len(scripts) + len(bench), "a section without the script's usage"
-    for tool in ("report", "figures", "zeta_contrast", "cross_anisotropy", "path_fidelity"):
+    tools = ("report", "figures", "zeta_contrast", "cross_anisotropy", "path_fidelity", "seeds")
+    for tool in tools:
         assert "python3 -m trueaniso.analysis.%s" % tool in html
+    assert html.count("usage:") >= len(scripts), "a section without the script's usage"  # the tools' may be prose
+    for path in bench:
+        rel = os.path.relpath(path, REPO)
+        assert "usage: %s" % os.path.basename(path) not in html, "%s in the user's reference" % rel
+        assert rel in bench_html, "%s has no section in studies/bench-scripts" % rel
+    assert bench_html.count("usage:") >= len(bench), "a benchmark section without the script's usage"
     cores = os.cpu_count() or 1
-    for said in (r"all\s+%d\s+cores" % cores, r"at most\s+%d\s+\(" % (4 * cores)):
-        assert not re.search(said, html), "the help names this machine's core count: %s" % said
-    assert REPO not in html, "the help names this checkout's path"
+    for page in (html, bench_html):
+        for said in (r"all\s+%d\s+cores" % cores, r"at most\s+%d\s+\(" % (4 * cores)):
+            assert not re.search(said, page), "the help names this machine's core count: %s" % said
+        assert REPO not in page, "the help names this checkout's path"
 
 
 def test_the_api_reference_documents_every_module(manual):
@@ -183,8 +193,8 @@ def _bench_names(path):
 
 def test_the_benchmark_tables_are_where_the_scripts_write_them():
     """Every heading a bench script writes under is a line of a benchmarks page (docs/benchmarks.md
-    or docs/studies/benchmarks.md), and every "Reproduce:" line
-    of the docs that runs a bench script with --doc names a block that page holds between markers
+    or docs/studies/benchmarks.md), and every "Reproduce:" line or command under a table of the
+    docs that runs a bench script with --doc names a block that page holds between markers
     (renaming a heading or a marker without the script, or the reverse, fails here)."""
     lines = []
     for page in (os.path.join(DOCS, "benchmarks.md"), os.path.join(DOCS, "studies", "benchmarks.md")):
@@ -200,8 +210,11 @@ def test_the_benchmark_tables_are_where_the_scripts_write_them():
     for page in glob.glob(os.path.join(DOCS, "*.md")) + glob.glob(os.path.join(DOCS, "studies", "*.md")):
         with open(page) as f:
             text = f.read()
-        for command in re.findall(r"Reproduce: `([^`]*bench/[^`]*--doc [^`]*)`", text):
-            words = shlex.split(command)
+        commands = re.findall(r"Reproduce: `([^`]*bench/[^`]*--doc [^`]*)`", text)
+        commands += re.findall(r"^ {4}(/usr/bin/python3 bench/.*--doc .*)$", re.sub(r"\\\n\s*", " ", text),
+                               flags=re.M)  # a command block (under a table, or a continued line joined)
+        for command in commands:
+            words = shlex.split(command, comments=True)
             script = next(w for w in words if w.startswith("bench/"))
             doc = words[words.index("--doc") + 1]
             names = [words[words.index("--block") + 1]] if "--block" in words else \
@@ -570,3 +583,27 @@ def test_the_index_opens_with_an_example_that_prints_what_it_shows():
                           env=dict(os.environ, OMP_NUM_THREADS="1"))
     assert done.returncode == 0, done.stderr[-3000:]
     assert done.stdout == shown
+
+
+def test_the_api_page_s_examples_and_the_index_s_call_the_public_modules_and_run():
+    """The index's example and the Python API page's call the package one way: through the modules
+    a script calls (trueaniso.PUBLIC_MODULES), not the internal ones (the engines' module among
+    them). The API page's examples, run in order from the repository's root on a committed
+    300-sphere specimen in place of the tutorial's, run."""
+    import trueaniso
+    with open(os.path.join(DOCS, "reference", "python-api.md")) as f:
+        api = re.findall(r"```python\n(.*?)```", f.read(), flags=re.S)
+    with open(os.path.join(DOCS, "index.md")) as f:
+        index = re.findall(r"```python\n(.*?)```", f.read(), flags=re.S)[:1]
+    assert len(api) >= 2 and index
+    for code in api + index:
+        for imported in re.findall(r"^from trueaniso(\.\w+)? import (.+)$", code, flags=re.M):
+            names = [imported[0][1:]] if imported[0] else [n.strip() for n in imported[1].split(",")]
+            internal = [n for n in names if n not in trueaniso.PUBLIC_MODULES]
+            assert not internal, "an example imports internal modules: %s" % internal
+        assert not re.search(r"\bengines\.", code), "an example calls the engines' module:\n" + code
+    code = "\n".join(api).replace("results/tutorial/specimen.npz", "tests/data/spheres-300-s6.npz")
+    assert "spheres-300-s6.npz" in code
+    done = subprocess.run([PYTHON, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=600,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    assert done.returncode == 0, done.stderr[-3000:]

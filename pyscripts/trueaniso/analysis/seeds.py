@@ -1,10 +1,10 @@
 r"""Headline numbers of one study, and their mean and standard deviation over the seeds of a recipe.
 
     /usr/bin/python3 -m trueaniso.analysis.seeds STUDY_DIR [STUDY_DIR ...]
-    /usr/bin/python3 -m trueaniso.analysis.seeds --label "new recipe" DIR DIR DIR --label "old recipe" DIR DIR
+    /usr/bin/python3 -m trueaniso.analysis.seeds --label default DIR DIR DIR --label grown-to-target DIR DIR
 
 The first form prints one row per study; the second the table of the manual (docs/studies/specimens.md,
-"Old and new recipes"): one column per label, each number the mean +/- sample standard deviation
+"Spheres: old and new recipes"): one column per label, each number the mean +/- sample standard deviation
 over that label's studies (one seed: its value, and the count says so), the paper's value beside.
 
 A study is a run_study.py or run_states.py directory: probes.csv, metadata.json, and where written,
