@@ -678,7 +678,7 @@ def test_clump1_old_new_table_and_its_claims_are_those_of_their_data(tmp_path):
     from trueaniso.analysis import seeds
     data = os.path.join(REPO, "docs", "data")
     groups = [("default (mu_prep 0.01), 2000 clumps, 39 states", ["clump1-2000/s1", "clump1-2000/s2", "clump1-2000/s3"]),
-              ("default (mu_prep 0.01), 4000 clumps, 39 states", ["clump1-4000/s1"]),
+              ("default (mu_prep 0.01), 4000 clumps, 39 states, one-sided probes", ["clump1-4000/s1"]),
               ("default (mu_prep 0.01), 1000 clumps, states 1, 9, 21, 33",
                ["clump1-recipes/mu-prep-0.01", "clump1-recipes/mu-prep-0.01-s2"]),
               ("pentamer at mu_prep 0.002, nine states", ["clump1-recipes/default-1000-s1"]),
