@@ -144,6 +144,17 @@ def run_worker(script, code, threads, args, timeout=7200, build=None):
     return json.loads(line[-1][6:])
 
 
+def state_ids(text):
+    """--ids of the benches: state numbers, ranges A-B and single numbers separated by commas
+    ('4,12', '1-39', '1-3,21') -> ints in that order; ValueError on anything else. What states a
+    bench takes it checks itself."""
+    ids = []
+    for piece in str(text).split(","):
+        a, _, b = piece.partition("-")
+        ids += range(int(a), int(b or a) + 1)
+    return ids
+
+
 def tile_counts(text):
     """--tiles: the tiling counts K, whole numbers separated by commas; one line of error otherwise."""
     from trueaniso import cli

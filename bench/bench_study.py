@@ -119,11 +119,8 @@ def split(profile_path):
 
 def parse_ids(text):
     """--ids: Table C1 states by number, ranges A-B and single numbers separated by commas."""
-    ids = []
     try:
-        for piece in text.split(","):
-            a, _, b = piece.partition("-")
-            ids += range(int(a), int(b or a) + 1)
+        ids = _bench.state_ids(text)
     except ValueError:
         cli.fail("--ids takes state numbers and ranges separated by commas (1-39, 1,5,21), not %r" % text)
     bad = [i for i in ids if i not in ALL_IDS]

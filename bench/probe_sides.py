@@ -71,14 +71,6 @@ VARIANTS = dict(screen=SCREEN, two_sided=TWO_SIDED, sides=SIDES, spheres=SPHERES
 PAIRS = ((0, 1), (0, 2), (1, 2))
 
 
-def ids_of(text):
-    out = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out += [str(i) for i in range(int(a), int(b) + 1)] if b else [a]
-    return out
-
-
 def asymmetry(S):
     """seeds.reciprocity_errors' measure on a 3x3 compliance (S_ji = -nu_ij/E_i)."""
     return max(abs(S[i][j] - S[j][i]) / (0.5 * (abs(S[i][j]) + abs(S[j][i]))) for i, j in PAIRS)
@@ -315,7 +307,7 @@ def main():
     if not (o.states and o.out):
         raise cli.InputError("give --states and --out (or --doc)")
     try:
-        ids = ids_of(o.ids)
+        ids = [str(i) for i in _bench.state_ids(o.ids)]
     except ValueError:
         raise cli.InputError("--ids %r: give state ids as 4,12 or 1-39" % o.ids) from None
     missing = [i for i in ids if not os.path.isfile(os.path.join(o.states, "%s.npz" % i))]

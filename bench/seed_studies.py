@@ -30,10 +30,10 @@ COPIED = ("probes.csv", "metadata.json", "summary.json", "statics_isotropic.json
 
 def ids(text):
     """'1-39' or '1,5,21' -> '1,2,...' (run_study.py's form)."""
-    if "-" in text and "," not in text:
-        a, b = (int(x) for x in text.split("-"))
-        return ",".join(str(i) for i in range(a, b + 1))
-    return text
+    try:
+        return ",".join(str(i) for i in _bench.state_ids(text))
+    except ValueError:
+        cli.fail("--ids %r: give Table C1 states as 1-39 or 1,5,21" % text)
 
 
 def run(o):

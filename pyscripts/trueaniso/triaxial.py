@@ -376,11 +376,17 @@ def probe(scene, hold, axis, sign=1, options=None, chunk=500, progress=None, **s
     if two_sided:  # each side's increments (the first with `sign`): their half sum is what the state did alone
         out["d_stress_sides"] = [p.d_stress_first.tolist(), p.d_stress_second.tolist()]
         out["d_strain_sides"] = [p.d_strain_first.tolist(), p.d_strain_second.tolist()]
+    return _named_moduli(out, axis, p.poisson_ratio)
+
+
+def _named_moduli(out, axis, poisson):
+    """`out` with its modulus named: E and the nu_ij of poisson(j) (Eqs. 10-11) for a normal axis,
+    G for a shear axis."""
     if axis < 3:
         out["E"] = out["modulus"]
         for j in range(3):
             if j != axis:
-                out["nu_%s%s" % (AXES[axis], AXES[j])] = float(p.poisson_ratio(j))
+                out["nu_%s%s" % (AXES[axis], AXES[j])] = float(poisson(j))
     else:
         out["G"] = out["modulus"]
     return out
@@ -410,14 +416,7 @@ def two_sides(first, second):
     for k in ("steps", "relax_steps", "ramp_steps", "hold_steps", "wall_time"):
         if k in first and k in second:
             out[k] = first[k] + second[k]
-    if axis < 3:
-        out["E"] = out["modulus"]
-        for j in range(3):
-            if j != axis:
-                out["nu_%s%s" % (AXES[axis], AXES[j])] = float(-de[j] / de[axis])
-    else:
-        out["G"] = out["modulus"]
-    return out
+    return _named_moduli(out, axis, lambda j: -de[j] / de[axis])
 
 
 def probe_state(scene, hold, axes=(2, 0, 1), **kw):
