@@ -1,5 +1,5 @@
-"""The whole study's clock: the default study (run_study.py) timed end to end on one engine thread,
-for built checkouts of the code (before and after a change), with where its time goes.
+"""The whole study's clock: the default study (run_study.py) timed end to end on one engine thread
+(or --threads), for built checkouts of the code (before and after a change), with where its time goes.
 
     /usr/bin/python3 bench/bench_study.py --tree BEFORE --label before --specimen S.npz
     /usr/bin/python3 bench/bench_study.py --tree . --label after --specimen S.npz
@@ -8,7 +8,8 @@ for built checkouts of the code (before and after a change), with where its time
     /usr/bin/python3 bench/bench_study.py --tabulate --label before --label after \
         --doc docs/studies/benchmarks.md --block study-clock-change
 
-A study run is `TREE/pyscripts/run_study.py --specimen S --ids IDS --threads 1` (all 39 states of
+A study run is `TREE/pyscripts/run_study.py --specimen S --ids IDS --threads T` (T is --threads, 1
+unless given; the study's own default is every core; all 39 states of
 Table C1 unless --ids names fewer; their probes on z, x and y; the static solves of the isotropic
 state and of state 21; the figures and the report), a process of its own that imports that tree's
 package and engines (TRUEANISO_BUILD=TREE/build; the level each tree's package chooses) into
@@ -140,6 +141,9 @@ def options(argv=None):
     p.add_argument("--ids", default="1-39", help="Table C1 states of this run: numbers and ranges")
     p.add_argument("--time-step", choices=("smallest-inertia", "per-axis"),
                    help="run_study.py --time-step for the states and probes (default: the tree's own default)")
+    p.add_argument("--threads", type=cli.count, default=1,
+                   help="engine threads of the timed run (run_study.py or prepare_specimen.py --threads); a label's "
+                        "runs all take the same")
     p.add_argument("--prepare", action="store_true", help="time the preparation of a specimen instead of a study")
     p.add_argument("--assembly", type=cli.assembly, default="sphere", help="--prepare: sphere, clump1 or clump2")
     p.add_argument("--n", type=cli.at_least(100, "a study specimen"), default=4000, help="--prepare: particles")
@@ -224,10 +228,10 @@ def git_commit(tree):
     return (head.stdout.strip() or "?") + ("-dirty" if dirty.stdout.strip() else "")
 
 
-def timed(tree, script, args, prof, log):
-    """Runs TREE/pyscripts/SCRIPT ARGS under the profiler on one engine thread; returns its wall and
-    CPU seconds, the load average before it and the engines' level it loaded."""
-    env = dict(os.environ, OMP_NUM_THREADS="1", TRUEANISO_BUILD=os.path.join(tree, "build"))
+def timed(tree, script, args, prof, log, threads=1):
+    """Runs TREE/pyscripts/SCRIPT ARGS under the profiler on `threads` engine threads; returns its
+    wall and CPU seconds, the load average before it and the engines' level it loaded."""
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), TRUEANISO_BUILD=os.path.join(tree, "build"))
     env.pop("TRUEANISO_LEVEL", None)  # the level the tree's package chooses: its default
     cmd = ["/usr/bin/python3", "-c", WORKER, os.path.join(tree, "pyscripts", script), prof] + list(args)
     load = os.getloadavg()[0]
@@ -313,13 +317,16 @@ def run_study(o, tree, label):
     out = os.path.join(o.runs, label, name)
     path = record_path(o.runs, label, name)
     record = load_record(path) or dict(kind="study", label=label, tree=tree, specimen=o.specimen, **info, parts=[],
-                                       time_step_asked=o.time_step)
+                                       time_step_asked=o.time_step, threads=o.threads)
     if record["sha256"] != info["sha256"]:
         cli.fail("%s records a study of another specimen file than %s (another checksum): another --runs, or "
                  "remove it" % (path, o.specimen))
     if record.get("time_step_asked") != o.time_step:
         cli.fail("%s records a study run with --time-step %s, this run asks %s: another --label" % (
             path, record.get("time_step_asked") or "(the default)", o.time_step or "the default"))
+    if record.get("threads", 1) != o.threads:
+        cli.fail("%s records a study on %d engine thread(s), this run asks %d: another --label" % (
+            path, record.get("threads", 1), o.threads))
     done = {i for part in record["parts"] for i in part["ids"]}
     todo = [i for i in o.ids if i not in done]
     if not todo:
@@ -332,11 +339,11 @@ def run_study(o, tree, label):
     os.makedirs(out, exist_ok=True)
     prof = os.path.join(o.runs, label, "%s-%d.prof" % (name, len(record["parts"]) + 1))
     log = os.path.join(o.runs, label, "%s-%d.log" % (name, len(record["parts"]) + 1))
-    args = ["--specimen", o.specimen, "--ids", ",".join(map(str, todo)), "--threads", "1",
+    args = ["--specimen", o.specimen, "--ids", ",".join(map(str, todo)), "--threads", str(o.threads),
             "--progress-every", "600", "--out", out] + (["--time-step", o.time_step] if o.time_step else [])
     print("%s: run_study.py %s (%s)" % (label, shlex.join(args), tree), flush=True)
     since = time.time()
-    clock = timed(tree, "run_study.py", args, prof, log)
+    clock = timed(tree, "run_study.py", args, prof, log, o.threads)
     part = dict(ids=todo, started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), commit=git_commit(tree),
                 built_level=build_level(tree), **clock, split=split(prof), profile=prof, **study_times(out, todo, since))
     record["parts"].append(part)
@@ -349,20 +356,24 @@ def run_study(o, tree, label):
 def run_preparation(o, tree, label):
     name = "%s-%d-s%d%s" % (o.assembly, o.n, o.seed, "-" + o.recipe if o.recipe else "")
     path = record_path(o.runs, label, "prepare-" + name)
-    if load_record(path):
+    done = load_record(path)
+    if done and done.get("threads", 1) != o.threads:
+        cli.fail("%s records a preparation on %d engine thread(s), this run asks %d: another --label" % (
+            path, done.get("threads", 1), o.threads))
+    if done:
         print("%s: the preparation of %s already timed (%s)" % (label, name, path))
-        return load_record(path)
+        return done
     os.makedirs(os.path.join(o.runs, label, "specimens"), exist_ok=True)
     spec = os.path.join(o.runs, label, "specimens", name + ".npz")
-    args = ["--assembly", o.assembly, "--n", str(o.n), "--seed", str(o.seed), "--threads", "1",
+    args = ["--assembly", o.assembly, "--n", str(o.n), "--seed", str(o.seed), "--threads", str(o.threads),
             "--progress-every", "600", "--out", spec] + (["--recipe", o.recipe] if o.recipe else [])
     prof = os.path.join(o.runs, label, "prepare-%s.prof" % name)
     log = os.path.join(o.runs, label, "prepare-%s.log" % name)
     print("%s: prepare_specimen.py %s (%s)" % (label, shlex.join(args), tree), flush=True)
-    clock = timed(tree, "prepare_specimen.py", args, prof, log)
+    clock = timed(tree, "prepare_specimen.py", args, prof, log, o.threads)
     info = specimen_info(spec)
     record = dict(kind="prepare", label=label, tree=tree, specimen=spec, **info, recipe_asked=o.recipe or "default",
-                  seed=o.seed, started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), commit=git_commit(tree),
+                  seed=o.seed, threads=o.threads, started=time.strftime("%Y-%m-%dT%H:%M:%S%z"), commit=git_commit(tree),
                   built_level=build_level(tree), **clock, split=split(prof), profile=prof)
     save_record(path, record)
     print("%s: prepared %s in %.1f s wall, %.1f s CPU" % (label, spec, record["wall"], record["cpu"]), flush=True)
@@ -391,7 +402,8 @@ def totals(record):
     parts = record["parts"]
     t = dict(ids=sorted(i for p in parts for i in p["ids"]), wall=sum(p["wall"] for p in parts),
              cpu=sum(p["cpu"] for p in parts), runs=len(parts), round=record["round"],
-             commit=parts[-1]["commit"], level=parts[-1]["level"], time_step=parts[-1]["state_time_step"])
+             commit=parts[-1]["commit"], level=parts[-1]["level"], time_step=parts[-1]["state_time_step"],
+             threads=record.get("threads", 1))
     for key in ("state_steps", "probe_steps", "state_seconds", "probe_seconds", "statics_seconds_recorded"):
         t[key] = sum(p[key] for p in parts)
     t["split"] = {k: sum(resplit(p)[k] for p in parts) for k in PARTS}
@@ -466,7 +478,8 @@ def table(o, order):
             ratios = " %s | %s |" % (said_values([a["wall"] / u["wall"] for a, u in paired], 2) if paired else "-",
                                      said_values([a["cpu"] / u["cpu"] for a, u in paired], 2) if paired else "-")
             clock.append("| %s | %d | %s | %s | %d | %d | %d | %s | %s |%s" % (
-                assembly, n, code(label, "%s, %s, %s" % (t["commit"], t["level"], t["time_step"])), said_ids(t["ids"]),
+                assembly, n, code(label, "%s, %s, %s%s" % (t["commit"], t["level"], t["time_step"], said_threads(t))),
+                said_ids(t["ids"]),
                 t["state_steps"], t["probe_steps"], len(ts), said_values([u["wall"] for u in ts]),
                 said_values([u["cpu"] for u in ts]), ratios if compared else ""))
             med = lambda key: said_values([u[key] for u in ts])  # noqa: E731
@@ -495,11 +508,18 @@ def table(o, order):
         for r in sorted(preps, key=lambda r: (order_of.get(r["assembly"], 9), rank[r["label"]], r["round"])):
             part = resplit(r)
             rows.append("| %s | %d | %s | %s | %.0f | %.0f | %s |" % (
-                r["assembly"], r["n"], code(r["label"], "%s, %s" % (r["commit"], r.get("level", r["built_level"]))),
+                r["assembly"], r["n"], code(r["label"], "%s, %s%s" % (r["commit"], r.get("level", r["built_level"]),
+                                                                     said_threads(r))),
                 r["recipe_asked"], r["wall"], r["cpu"], " | ".join("%.0f" % part[k] for k in PARTS)))
         text += ("\n\n" if text else "") + "Preparation (prepare_specimen.py), in seconds:\n\n" + "\n".join(rows)
     loads = [x for r in studies for x in totals(r)["loads"]] + [r["load_after"] for r in preps if "load_after" in r]
-    return text, notes, loads, compared
+    return text, notes, loads, compared, {r.get("threads", 1) for r in recs}
+
+
+def said_threads(record):
+    """', 2 threads' for a run on more than one engine thread; '' for one (the machine line says it)."""
+    n = record.get("threads", 1)
+    return ", %d threads" % n if n != 1 else ""
 
 
 def said_ids(ids):
@@ -585,14 +605,15 @@ def commands(o, labels):
             if labels and r["label"] not in labels:
                 continue
             if r["kind"] == "prepare":
-                base = "/usr/bin/python3 bench/bench_study.py%s --label %s" % (shown.tree(r, r["commit"]), r["label"])
+                base = "/usr/bin/python3 bench/bench_study.py%s --label %s%s" % (
+                    shown.tree(r, r["commit"]), r["label"], threads_option(r))
                 found = ["%s --prepare --assembly %s --n %d --seed %d%s" % (
                     base, r["assembly"], r["n"], r["seed"], "" if r["recipe_asked"] == "default" else
                     " --recipe " + r["recipe_asked"])]
             else:
                 rule = " --time-step " + r["time_step_asked"] if r.get("time_step_asked") else ""
-                found = ["/usr/bin/python3 bench/bench_study.py%s --label %s --specimen %s --ids %s%s" % (
-                    shown.tree(r, p["commit"]), r["label"], shlex.quote(shown.specimen(r)),
+                found = ["/usr/bin/python3 bench/bench_study.py%s --label %s%s --specimen %s --ids %s%s" % (
+                    shown.tree(r, p["commit"]), r["label"], threads_option(r), shlex.quote(shown.specimen(r)),
                     said_ids(p["ids"]), rule) for p in r["parts"]]
             for command in found:
                 if command not in rounds_of:
@@ -616,17 +637,24 @@ def commands(o, labels):
     return out + [tab], shown.said()
 
 
+def threads_option(record):
+    n = record.get("threads", 1)
+    return " --threads %d" % n if n != 1 else ""
+
+
 def write_table(o):
     labels = o.labels if o.label else []
-    body, notes, loads, compared = table(o, labels)
+    body, notes, loads, compared, threads = table(o, labels)
     lines, trees = commands(o, labels)
     load = "one-minute load average %.1f-%.1f at the end of the runs" % (min(loads), max(loads)) if loads else ""
-    text = ("Machine: %s%s; one engine thread, %s; %s. "
+    text = ("Machine: %s%s; %s, %s; %s. "
             "Steps, wall and CPU time of the whole run (CPU: the process's user and system seconds), the median over "
             "its rounds (each --runs folder a round) and their range%s. The parts are each function's own time under "
             "Python's profiler (cProfile), whose sum is the run's wall time within the profiler's cost.%s\n\n%s\n\n"
             "Reproduce (one run a line, then the table%s):\n\n%s"
-            % (_bench.machine(), ", " + o.note if o.note else "", load or "no load average recorded",
+            % (_bench.machine(), ", " + o.note if o.note else "",
+               "one engine thread" if threads == {1} else "engine threads as the code column says (one unless said)",
+               load or "no load average recorded",
                time.strftime("%Y-%m-%d"),
                "; first / this: the first code's time over this one's in the same round, on the same specimen and "
                "states" if compared else "",

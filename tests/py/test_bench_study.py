@@ -152,3 +152,23 @@ def test_an_interrupted_run_is_not_timed_again_as_if_whole(tmp_path, specimen_15
     (runs / "a" / "spheres-150-s4.json").unlink()  # as if the run had been killed before its record
     proc = bench("--tree", REPO, "--label", "a", "--specimen", specimen_150, "--runs", runs, "--ids", "1,21")
     one_line_error(proc, "already has rows of states 1", "remove")
+
+
+def test_a_run_on_two_threads_says_so(tmp_path, specimen_150):
+    """--threads 2 reaches run_study.py, the table's code column and the command under the table
+    say it, and the same label on another thread count is refused before any run."""
+    runs = tmp_path / "runs"
+    proc = bench("--tree", REPO, "--label", "two", "--threads", "2", "--specimen", specimen_150, "--runs", runs,
+                 "--ids", "1")
+    assert proc.returncode == 0, proc.stderr
+    record = json.loads((runs / "two" / "spheres-150-s4.json").read_text())
+    assert record["threads"] == 2
+    with open(runs / "two" / "spheres-150-s4" / "metadata.json") as f:
+        assert json.load(f)["runs"][-1]["versions"]["threads"] == 2
+    one_line_error(bench("--tree", REPO, "--label", "two", "--specimen", specimen_150, "--runs", runs, "--ids", "21"),
+                   "another --label")
+    proc = bench("--tabulate", "--runs", runs)
+    assert proc.returncode == 0, proc.stderr
+    assert _rows(proc.stdout, "sphere")[0][2].endswith(", 2 threads")
+    assert "engine threads as the code column says" in proc.stdout
+    assert "bench/bench_study.py --label two --threads 2 --specimen specimens/spheres-150-s4.npz --ids 1" in proc.stdout
