@@ -2,7 +2,9 @@
 // cubic packing in closed form, YADE's unbalanced force, refusal of an unstable step.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
+#include <vector>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -194,6 +196,32 @@ TEST(Stress, MeasuresAreTheirContactSumsAndIndependentOfThreads) {
   EXPECT_EQ(byThreads.front().stress, byThreads.back().stress);
   EXPECT_EQ(byThreads.front().stiffness, byThreads.back().stiffness);
   EXPECT_EQ(byThreads.front().unbalanced, byThreads.back().unbalanced);
+}
+
+// The time step's bounds, minima over the bodies, run on the team when the contact loop does
+// (fewer bodies than worthThreads asks for, contacts enough): the same bits on one thread and two.
+TEST(TimeStepper, BoundsOnATeamAreTheSerialOnes) {
+  auto s = randomGasIn(Mat3::Identity(), 1500, 0.6, 5);
+  s->dt = 1e-6;
+  Driver driver(s);
+  driver.evaluate();
+  ASSERT_FALSE(worthThreads(s->bodies.size()));
+  ASSERT_TRUE(worthThreadsBeside(s->bodies.size(), s->contacts.size()));
+  std::vector<Real> perAxis, stiffness;
+#ifdef _OPENMP
+  const int saved = omp_get_max_threads();
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+#endif
+    perAxis.push_back(TimeStepper::perAxisBound(*s));
+    stiffness.push_back(TimeStepper::stiffnessBound(*s));
+#ifdef _OPENMP
+  }
+  omp_set_num_threads(saved);
+#endif
+  ASSERT_TRUE(std::isfinite(perAxis.front()) && perAxis.front() > 0);
+  EXPECT_EQ(perAxis.front(), perAxis.back());
+  EXPECT_EQ(stiffness.front(), stiffness.back());
 }
 
 // A step above the two-body limit of the stiffest contact is refused before it is taken.
