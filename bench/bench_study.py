@@ -324,9 +324,7 @@ def run_study(o, tree, label):
     if record.get("time_step_asked") != o.time_step:
         cli.fail("%s records a study run with --time-step %s, this run asks %s: another --label" % (
             path, record.get("time_step_asked") or "(the default)", o.time_step or "the default"))
-    if record.get("threads", 1) != o.threads:
-        cli.fail("%s records a study on %d engine thread(s), this run asks %d: another --label" % (
-            path, record.get("threads", 1), o.threads))
+    same_threads(record, path, o.threads)
     done = {i for part in record["parts"] for i in part["ids"]}
     todo = [i for i in o.ids if i not in done]
     if not todo:
@@ -353,14 +351,19 @@ def run_study(o, tree, label):
     return record
 
 
+def same_threads(record, path, threads):
+    """A label's runs all take one thread count: a run asking another is refused before it starts."""
+    if record.get("threads", 1) != threads:
+        cli.fail("%s records a %s on %d engine thread(s), this run asks %d: another --label" % (
+            path, "preparation" if record["kind"] == "prepare" else "study", record.get("threads", 1), threads))
+
+
 def run_preparation(o, tree, label):
     name = "%s-%d-s%d%s" % (o.assembly, o.n, o.seed, "-" + o.recipe if o.recipe else "")
     path = record_path(o.runs, label, "prepare-" + name)
     done = load_record(path)
-    if done and done.get("threads", 1) != o.threads:
-        cli.fail("%s records a preparation on %d engine thread(s), this run asks %d: another --label" % (
-            path, done.get("threads", 1), o.threads))
     if done:
+        same_threads(done, path, o.threads)
         print("%s: the preparation of %s already timed (%s)" % (label, name, path))
         return done
     os.makedirs(os.path.join(o.runs, label, "specimens"), exist_ok=True)

@@ -61,10 +61,10 @@ void forEachLoadedContact(const Contacts& C, int b, F&& f) {
 
 }  // namespace
 
-// The bounds' loops over bodies run on the team whenever the step's contact loop does (a minimum
-// is exact in any order, so the bits are the serial loop's): every tenth step they are 8.5 % of a
-// bare step's instructions at 4000 spheres (per-axis rule), fewer bodies than worthThreads asks
-// for, which left the second core waiting.
+// The bounds' loops over bodies run on the team whenever the step's contact loop does, though a
+// scene of 4000 spheres has fewer bodies than worthThreads asks for: every tenth step they are
+// 8.5 % of a bare step's instructions there (per-axis rule). A minimum is exact in any order, so
+// the bits are the serial loop's.
 Real TimeStepper::stiffnessBound(const Scene& s) {
   const Bodies& B = s.bodies;
   const Contacts& C = s.contacts;
