@@ -4,8 +4,10 @@ busy processes: each run is `run_study.py --specimen S --ids IDS --threads T` in
 with GOMP_SPINCOUNT set to each count ("libgomp": unset, with OMP_WAIT_POLICY=passive unset too
 and the count libgomp's own, 300,000, forced), the variants alternating within a round; its time
 is what the study's log says it stepped (each state's "reached in ... (X s)" and "probes done
-(X s)"). --busy K starts K processes that spin on their own for the whole benchmark, as another
-job on the machine would.
+(X s)"). --busy K starts K processes that spin on their own for the whole benchmark, each in a
+session of its own, as a job started from another terminal is (Linux schedules each session as a
+group: a busy loop in the benchmark's own session takes its time slices from the study's threads
+instead).
 
     /usr/bin/python3 bench/bench_team_spin.py --specimen S.npz --busy 0,1 --doc docs/studies/benchmarks.md
 """
@@ -69,7 +71,7 @@ def main(argv=None):
     variants = [(1, "libgomp")] + [(2, s) for s in spins]
     rows = []
     for busy in busy_counts:
-        loops = [subprocess.Popen([sys.executable, "-c", BUSY_LOOP]) for _ in range(busy)]
+        loops = [subprocess.Popen([sys.executable, "-c", BUSY_LOOP], start_new_session=True) for _ in range(busy)]
         try:
             times = {v: [] for v in variants}
             for _ in range(a.rounds):
@@ -87,7 +89,7 @@ def main(argv=None):
                                                                      min(t), max(t), statistics.median(t) / base))
     lines = ["Machine: %s; %s. State(s) %s of %s; the seconds the study stepped (its states and probes, its "
              "own timers), median and range of %d rounds, the variants alternating; busy: processes that "
-             "spin beside the study." % (_bench.machine(), __import__("datetime").date.today().isoformat(),
+             "spin beside the study, each in a session of its own." % (_bench.machine(), __import__("datetime").date.today().isoformat(),
                                          a.ids, os.path.basename(a.specimen), a.rounds),
              "",
              "| busy | threads | GOMP_SPINCOUNT | stepping (s) | x one thread |",

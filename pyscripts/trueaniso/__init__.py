@@ -26,10 +26,10 @@ REPO_ROOT = os.path.dirname(os.path.dirname(_HERE))
 # How long a thread of the engines' OpenMP team spins at a barrier before it sleeps, in libgomp's
 # turns (about 100 a microsecond). libgomp's own default, 300,000, is right for a team alone on its
 # cores; beside another busy process the waiting thread spins away the time slice its partner
-# needs, and a step of 4000 spheres on two threads took 20 times as long as on one (probes of state
-# 1: 50.7 s against 1.6 s). At 10,000 the same took 5.8 s, and alone on its cores a state stepped
-# as fast as at the default (docs/benchmarks.md, "Threads beside other work"). libgomp reads the
-# setting when it loads, with the engines; a user's GOMP_SPINCOUNT or OMP_WAIT_POLICY is kept.
+# needs: state 1 of 4000 spheres and its probes stepped 58 s on two threads against 2.0 s on one.
+# At 10,000 the same took 5.5 s, and alone on the cores the study stepped as fast as at libgomp's
+# count (docs/studies/benchmarks.md, "Two threads"). libgomp reads the setting when it loads, with
+# the engines; a user's GOMP_SPINCOUNT or OMP_WAIT_POLICY is kept.
 TEAM_SPIN_COUNT = "10000"
 
 

@@ -1,7 +1,7 @@
 """How long the engines' OpenMP team spins at a barrier before it sleeps (trueaniso.TEAM_SPIN_COUNT):
 the package sets libgomp's GOMP_SPINCOUNT before the engines load, unless the user set it or a wait
 policy, which are kept. libgomp prints what it took with OMP_DISPLAY_ENV=verbose. Why the value:
-docs/benchmarks.md, "Threads beside other work"."""
+docs/studies/benchmarks.md, "Two threads"."""
 import os
 import subprocess
 import sys
