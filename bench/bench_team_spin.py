@@ -11,7 +11,6 @@ instead).
 
     /usr/bin/python3 bench/bench_team_spin.py --specimen S.npz --busy 0,1 --doc docs/studies/benchmarks.md
 """
-import argparse
 import os
 import re
 import statistics
@@ -19,7 +18,8 @@ import subprocess
 import sys
 import tempfile
 
-import _bench
+import _bench  # noqa: E402  (it makes trueaniso importable)
+from trueaniso import cli  # noqa: E402
 
 LIBGOMP_DEFAULT = "300000"
 BUSY_LOOP = "while True:\n    pass\n"
@@ -30,7 +30,7 @@ def stepping_seconds(log):
     reached = re.findall(r"reached in \d+ steps \(([0-9.]+) s\)", log)
     probes = re.findall(r"probes done \(([0-9.]+) s\)", log)
     if not reached or not probes:
-        raise RuntimeError("the study's log names no state reached or no probes done:\n" + log[-2000:])
+        cli.fail("the study's log names no state reached or no probes done:\n" + log[-2000:], 1)
     return sum(map(float, reached + probes))
 
 
@@ -43,40 +43,47 @@ def one_run(specimen, ids, threads, spin, timeout):
                             "--out", os.path.join(out, "study")], env=env, capture_output=True, text=True,
                            timeout=timeout)
     if p.returncode != 0:
-        raise RuntimeError("run_study.py failed (%d):\n%s" % (p.returncode, p.stderr[-2000:]))
+        cli.fail("run_study.py failed (%d):\n%s" % (p.returncode, p.stderr[-2000:]), 1)
     return stepping_seconds(p.stdout + p.stderr)
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--specimen", required=True)
-    ap.add_argument("--ids", default="1", help="Table C1 states (run_study.py --ids)")
-    ap.add_argument("--spins", default="libgomp,10000,3000,1000,0",
-                    help="GOMP_SPINCOUNT values on two threads; libgomp: libgomp's own count")
-    ap.add_argument("--busy", default="0,1", help="busy processes beside, one table row group each")
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--timeout", type=float, default=1800)
-    ap.add_argument("--doc")
-    ap.add_argument("--block", default="team-spin")
-    a = ap.parse_args(argv)
-    spins = [s.strip() for s in a.spins.split(",") if s.strip()]
-    for s in spins:
-        if s != "libgomp" and not s.isdigit():
-            ap.error("--spins: %r is neither libgomp nor a count" % s)
-    busy_counts = [int(k) for k in a.busy.split(",")]
-    if a.rounds < 1 or min(busy_counts) < 0:
-        ap.error("--rounds >= 1 and --busy >= 0")
-    if not os.path.exists(a.specimen):
-        ap.error("no specimen %s" % a.specimen)
-    variants = [(1, "libgomp")] + [(2, s) for s in spins]
+def options():
+    p = cli.Parser(description=cli.description(__doc__))
+    p.add_argument("--specimen", required=True, help="specimen file (.npz) the study starts from")
+    p.add_argument("--ids", default="1", help="Table C1 states (run_study.py --ids)")
+    p.add_argument("--spins", default="libgomp,10000,3000,1000,0",
+                   help="GOMP_SPINCOUNT values on two threads, comma separated; libgomp: libgomp's own count")
+    p.add_argument("--busy", default="0,1", help="busy processes beside the study, comma separated: a row group each")
+    p.add_argument("--rounds", type=int, default=3, help="rounds, the variants alternating in each")
+    p.add_argument("--timeout", type=float, default=1800, help="seconds a study run may take")
+    p.add_argument("--doc", help="Markdown file whose table is replaced")
+    p.add_argument("--block", default="team-spin", help="name of the table's markers in --doc")
+    o = cli.parse(p)
+    o.spin_list = [s.strip() for s in o.spins.split(",") if s.strip()]
+    if not o.spin_list or any(s != "libgomp" and not s.isdigit() for s in o.spin_list):
+        cli.fail("--spins: counts (whole numbers) or libgomp, comma separated, not %r" % o.spins)
+    try:
+        o.busy_counts = [int(k) for k in o.busy.split(",")]
+    except ValueError:
+        cli.fail("--busy: whole numbers separated by commas, not %r" % o.busy)
+    if o.rounds < 1 or min(o.busy_counts) < 0:
+        cli.fail("--rounds must be >= 1 and --busy >= 0")
+    if not os.path.exists(o.specimen):
+        cli.fail("no specimen %s" % o.specimen)
+    return o
+
+
+def main():
+    o = options()
+    variants = [(1, "libgomp")] + [(2, s) for s in o.spin_list]
     rows = []
-    for busy in busy_counts:
+    for busy in o.busy_counts:
         loops = [subprocess.Popen([sys.executable, "-c", BUSY_LOOP], start_new_session=True) for _ in range(busy)]
         try:
             times = {v: [] for v in variants}
-            for _ in range(a.rounds):
+            for _ in range(o.rounds):
                 for v in variants:
-                    times[v].append(one_run(a.specimen, a.ids, v[0], v[1], a.timeout))
+                    times[v].append(one_run(o.specimen, o.ids, v[0], v[1], o.timeout))
         finally:
             for p in loops:
                 p.kill()
@@ -90,14 +97,14 @@ def main(argv=None):
     lines = ["Machine: %s; %s. State(s) %s of %s; the seconds the study stepped (its states and probes, its "
              "own timers), median and range of %d rounds, the variants alternating; busy: processes that "
              "spin beside the study, each in a session of its own." % (_bench.machine(), __import__("datetime").date.today().isoformat(),
-                                         a.ids, os.path.basename(a.specimen), a.rounds),
+                                         o.ids, os.path.basename(o.specimen), o.rounds),
              "",
              "| busy | threads | GOMP_SPINCOUNT | stepping (s) | x one thread |",
              "|---|---|---|---|---|"] + rows + [
              "",
              "Reproduce: `/usr/bin/python3 bench/bench_team_spin.py --specimen %s --ids %s --spins %s --busy %s "
-             "--rounds %d`" % (a.specimen, a.ids, a.spins, a.busy, a.rounds)]
-    _bench.publish(a.doc, a.block, lines)
+             "--rounds %d`" % (o.specimen, o.ids, o.spins, o.busy, o.rounds)]
+    _bench.publish(o.doc, o.block, lines)
 
 
 if __name__ == "__main__":
