@@ -52,6 +52,20 @@ class TimeStepper : public Engine {
   static Real stiffnessBound(const Scene& scene);
   // 1 / max over bodies of max(omega_t, omega_r) (header comment), without the safety factor.
   static Real perAxisBound(const Scene& scene);
+  // Both bounds from one walk over the bodies' contacts (apply's call): the same values as the two
+  // functions above. perAxis = false leaves .perAxis infinite.
+  struct Bounds {
+    Real stiffness, perAxis;
+  };
+  static Bounds bounds(const Scene& scene, bool perAxis);
+  // omega^2 = max(omega_t^2, omega_r^2) of body b (header comment); 0 without loaded contacts.
+  static Real stiffestMode(const Scene& scene, int b);
+  // An upper bound of stiffestMode(scene, b) from sums of scalars: lambda_max of a sum of positive
+  // semi-definite matrices is at most the sum of theirs. A contact's K_c has k_n (k_s <= k_n, else
+  // k_s), so K_t's is at most sum k_n; [l]^T K_c [l] has at most k l^2 with l <= |offset| + radius,
+  // and a sphere's k_s l^2 (1 - n n^T) has k_s l^2; the rolling spring adds at most k_r; and
+  // D^-1/2 K_r D^-1/2 has at most lambda_max(K_r) / I_min.
+  static Real stiffestModeBound(const Scene& scene, int b);
   // Largest step for which every single contact, alone between its two bodies, is stable: 2/omega
   // of the pair, omega^2 the largest eigenvalue of K_c^1/2 W K_c^1/2 with W the pair's mobility at
   // the contact point, W = sum over both bodies of (1/m + [l]^T I^-1 [l]) (I^-1 in the world

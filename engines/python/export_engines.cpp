@@ -113,6 +113,10 @@ void exportEngines() {
       .def_readwrite("per_axis", &TimeStepper::perAxis, "True: the per-axis bound (per_axis_bound), else stiffness_bound.")
       .def("stiffness_bound", &TimeStepper::stiffnessBound).staticmethod("stiffness_bound")
       .def("per_axis_bound", &TimeStepper::perAxisBound).staticmethod("per_axis_bound")
+      .def("stiffest_mode", &TimeStepper::stiffestMode, "omega^2 of one body's stiffest mode, its neighbours held.")
+      .staticmethod("stiffest_mode")
+      .def("stiffest_mode_bound", &TimeStepper::stiffestModeBound, "An upper bound of stiffest_mode from scalar sums.")
+      .staticmethod("stiffest_mode_bound")
       .def("critical_pair_step", &TimeStepper::criticalPairStep).staticmethod("critical_pair_step");
 
   bp::class_<Simulation, std::shared_ptr<Simulation>>("Simulation", bp::init<std::shared_ptr<Scene>>())

@@ -23,6 +23,21 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 REPO_ROOT = os.path.dirname(os.path.dirname(_HERE))
 
 
+# How long a thread of the engines' OpenMP team spins at a barrier before it sleeps, in libgomp's
+# turns (about 100 a microsecond). libgomp's own default, 300,000, is right for a team alone on its
+# cores; beside another busy process the waiting thread spins away the time slice its partner
+# needs: state 1 of 4000 spheres and its probes stepped 58 s on two threads against 2.0 s on one.
+# At 10,000 the same took 5.5 s, and alone on the cores the study stepped as fast as at libgomp's
+# count (docs/studies/benchmarks.md, "Two threads"). libgomp reads the setting when it loads, with
+# the engines; a user's GOMP_SPINCOUNT or OMP_WAIT_POLICY is kept.
+TEAM_SPIN_COUNT = "10000"
+
+
+def _shorten_team_spin():
+    if "GOMP_SPINCOUNT" not in os.environ and "OMP_WAIT_POLICY" not in os.environ:
+        os.environ["GOMP_SPINCOUNT"] = TEAM_SPIN_COUNT
+
+
 def _find_extension():
     """Locate the compiled module: $TRUEANISO_BUILD/python, else <repo>/build/python."""
     candidates = []
@@ -50,6 +65,7 @@ def _find_extension():
             sys.path.insert(0, chosen)
             found = importlib.util.find_spec("_trueaniso")
         buildarch.refuse_unsupported(os.path.dirname(found.origin))
+    _shorten_team_spin()
     try:
         import _trueaniso  # noqa: F401
     except ImportError as exc:  # pragma: no cover - message for users, tested by hand

@@ -243,12 +243,29 @@ def read(path):
     return data, meta
 
 
+# The clumps' members and volumes already checked in this process, by their bytes: a study reads
+# its specimen again at every state and probe, with the same members (4000 clumps: 27 ms a read).
+_VOLUMES_CHECKED = {}
+
+
 def volumes_problem(a):
     """A stored clump volume that disagrees with its members' union (CGAL, cached once per shape),
     or None. Checked when a file is read, so that a study refuses such a specimen before it writes
     anything, not when the scene is built, after the study has begun."""
     if "volumes" not in a:
         return None
+    digest = hashlib.sha256()
+    for name in ("member_begin", "member_offsets", "radii", "volumes"):
+        x = np.ascontiguousarray(a[name])
+        digest.update(repr((name, x.dtype.str, x.shape)).encode())
+        digest.update(x.tobytes())
+    key = digest.hexdigest()
+    if key not in _VOLUMES_CHECKED:
+        _VOLUMES_CHECKED[key] = _volumes_problem(a)
+    return _VOLUMES_CHECKED[key]
+
+
+def _volumes_problem(a):
     mb = a["member_begin"]
     for b in np.flatnonzero(np.diff(mb) > 1):
         k = slice(mb[b], mb[b + 1])
@@ -368,21 +385,31 @@ def contents_problem(a):
 def clump_members_problem(member_begin, offsets, radii):
     """A clump whose members are not one rigid body, or None. Each clump's member balls must
     overlap (strictly) into one connected union, as the engines' ClumpTemplate demands; checked
-    here too so that a file is refused as a whole, naming the body, before a scene is built."""
+    here too so that a file is refused as a whole, naming the body, before a scene is built. The
+    clumps of one member count are checked together, as arrays (a study reads its specimen
+    again at every state and probe: a loop over 4000 clumps took 0.2 s a read)."""
     mb = np.asarray(member_begin)
     count = np.diff(mb)
-    for b in np.flatnonzero(count > 1):
-        k = slice(mb[b], mb[b + 1])
-        o, r = offsets[k], radii[k]
-        touch = np.linalg.norm(o[:, None, :] - o[None, :, :], axis=2) < r[:, None] + r[None, :]
-        seen = np.zeros(len(r), bool)
-        seen[0] = True
-        for _ in range(len(r)):
-            seen = seen | touch[seen].any(axis=0)
-        if not seen.all():
-            return ("clump %d: its %d members do not overlap into one body (members %s touch no other)"
-                    % (b, len(r), np.flatnonzero(~seen).tolist()))
-    return None
+    offsets, radii = np.asarray(offsets), np.asarray(radii)
+    first = None
+    for k in np.unique(count[count > 1]):
+        bodies = np.flatnonzero(count == k)
+        members = mb[bodies][:, None] + np.arange(k)  # (clumps, k)
+        o, r = offsets[members], radii[members]
+        gap = np.linalg.norm(o[:, :, None, :] - o[:, None, :, :], axis=3)
+        touch = gap < r[:, :, None] + r[:, None, :]
+        seen = np.zeros(r.shape, bool)
+        seen[:, 0] = True
+        for _ in range(k):
+            seen = seen | np.any(touch & seen[:, :, None], axis=1)
+        apart = np.flatnonzero(~seen.all(axis=1))
+        if apart.size and (first is None or bodies[apart[0]] < first[0]):
+            first = (bodies[apart[0]], seen[apart[0]])
+    if first is None:
+        return None
+    b, seen = first
+    return ("clump %d: its %d members do not overlap into one body (members %s touch no other)"
+            % (b, len(seen), np.flatnonzero(~seen).tolist()))
 
 
 def contacts_problem(scene, a):

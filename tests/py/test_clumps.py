@@ -701,3 +701,41 @@ def test_clump1_old_new_table_and_its_claims_are_those_of_their_data(tmp_path):
         for (b, loaded), r in ends.items():
             assert (float(r["Zm"]) - zm1) * (1 if loaded else -1) < 0, (d, r["state"], r["q"], r["Zm"], zm1)
         assert min(float(r["Zm"]) for r in rows if float(r["q"]) < -1.0) >= zm1
+
+
+def _members_apart_by_hand(mb, offsets, radii):
+    """The first clump whose members do not overlap into one union, by a walk over its pairs."""
+    for b in range(len(mb) - 1):
+        o, r = offsets[mb[b]:mb[b + 1]], radii[mb[b]:mb[b + 1]]
+        reached, todo = {0}, [0]
+        while todo:
+            i = todo.pop()
+            for j in range(len(r)):
+                if j not in reached and np.linalg.norm(o[i] - o[j]) < r[i] + r[j]:
+                    reached.add(j)
+                    todo.append(j)
+        if len(reached) < len(r):
+            return b, sorted(set(range(len(r))) - reached)
+    return None
+
+
+def test_clump_members_check_agrees_with_a_walk_over_each_clumps_pairs():
+    """Clumps of 1 to 5 members, chains joined only through their middle members, some split in
+    two: the array check names the same first clump and members as a walk over the pairs."""
+    rng = np.random.default_rng(3)
+    for trial in range(40):
+        counts = rng.integers(1, 6, size=30)
+        mb = np.concatenate([[0], np.cumsum(counts)])
+        radii = rng.uniform(0.5, 1.0, mb[-1])
+        offsets = np.zeros((mb[-1], 3))
+        for b, k in enumerate(counts):
+            step = rng.uniform(0.6, 1.05, k) * (1.4 if rng.random() < 0.08 else 1.0)
+            offsets[mb[b]:mb[b + 1], 0] = np.cumsum(step) - step[0]  # a chain along x
+            offsets[mb[b]:mb[b + 1]] = offsets[mb[b]:mb[b + 1]][rng.permutation(k)]
+        expected = _members_apart_by_hand(mb, offsets, radii)
+        found = specimen_file.clump_members_problem(mb, offsets, radii)
+        if expected is None:
+            assert found is None, (trial, found)
+        else:
+            assert found == ("clump %d: its %d members do not overlap into one body (members %s touch no other)"
+                             % (expected[0], counts[expected[0]], expected[1])), trial
