@@ -152,7 +152,7 @@ Real TimeStepper::stiffestModeBound(const Scene& s, int b) {
 // One walk over each body's contacts gives the stiffness rule and each body's bound of its
 // stiffest mode; the 3x3 blocks and their eigenvalues are then built only for the bodies whose
 // bound reaches the largest mode found so far, starting from that of the body with the largest
-// bound (4 % of the bodies in a packing of 4000 spheres, 32 % of 4000 clump2 dimers, whose bound
+// bound (3 % of the bodies in a packing of 4000 spheres, 31 % of 4000 clump2 dimers, whose bound
 // is looser), and the maximum is exact: a body left out cannot exceed it. The loops run on the team whenever the step's contact loop does
 // (worthThreadsBeside); a minimum and a maximum are exact in any order, so the bits are the
 // serial loops'.
