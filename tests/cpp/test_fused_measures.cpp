@@ -57,21 +57,8 @@ std::shared_ptr<Scene> spheres() {
 // Asymmetric dimers at random orientations, spun likewise: the branch vectors join clump centres,
 // not the touching members.
 std::shared_ptr<Scene> clumps() {
-  const Real r = 1e-4;
-  const ClumpTemplate dimer = makeClumpTemplate({Vec3::Zero(), Vec3(1.1 * r, 0, 0)}, {r, 0.7 * r});
-  auto s = std::make_shared<Scene>();
-  s->material = paperMaterial();
-  const int n = 2000;
-  const Real side = std::cbrt(n * dimer.volume / 0.6);
-  s->cell.setBox(Vec3::Constant(side));
-  std::mt19937_64 gen(3);
-  std::uniform_real_distribution<Real> U(0, 1);
-  for (int k = 0; k < n; ++k) {
-    const Vec3 at = side * Vec3(U(gen), U(gen), U(gen));
-    const Vec3 axis = Vec3(U(gen) - 0.5, U(gen) - 0.5, U(gen) - 0.5).normalized();
-    const int b = s->addClump(at, Quat(Eigen::AngleAxisd(6.28 * U(gen), axis)), dimer);
-    if (k % 2 == 0) s->bodies.angVel[b] = Vec3(40, 20, -35);
-  }
+  auto s = randomDimers(2000, 0.6, 3);
+  for (int b = 0; b < s->bodies.size(); b += 2) s->bodies.angVel[b] = Vec3(40, 20, -35);
   stableStep(*s);
   return s;
 }

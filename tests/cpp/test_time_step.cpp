@@ -4,11 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 #include "Drivers.hpp"
 #include "RandomGas.hpp"
-#include "clump/ClumpTemplate.hpp"
 #include "contact/HertzMindlin.hpp"
 #include "dynamics/ContactDetection.hpp"
 #include "dynamics/ContactForces.hpp"
@@ -111,21 +109,7 @@ TEST(TimeStepper, SphereRotationAboutItsStiffestAxis) {
 // largest mode's, to the bit (a maximum is exact, and 1/sqrt is monotone in floating point).
 TEST(TimeStepper, PerAxisBoundIsTheStiffestBodysMode) {
   auto spheres = randomGasIn(Mat3::Identity(), 600, 0.6, 7);
-  auto dimers = std::make_shared<Scene>();
-  {
-    const Real r = 1e-4;
-    const ClumpTemplate dimer = makeClumpTemplate({Vec3::Zero(), Vec3(1.1 * r, 0, 0)}, {r, 0.7 * r});
-    dimers->material = paperMaterial();
-    const int n = 400;
-    const Real side = std::cbrt(n * dimer.volume / 0.6);
-    dimers->cell.setBox(Vec3::Constant(side));
-    std::mt19937_64 gen(5);
-    std::uniform_real_distribution<Real> U(0, 1);
-    for (int k = 0; k < n; ++k) {
-      const Vec3 axis = Vec3(U(gen) - 0.5, U(gen) - 0.5, U(gen) - 0.5).normalized();
-      dimers->addClump(side * Vec3(U(gen), U(gen), U(gen)), Quat(Eigen::AngleAxisd(6.28 * U(gen), axis)), dimer);
-    }
-  }
+  auto dimers = randomDimers(400, 0.6, 5);
   for (const auto& s : {spheres, dimers}) {
     s->dt = 1e-9;
     Driver(s).evaluate();
