@@ -233,4 +233,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from trueaniso import cli
+    cli.tool(main)  # Ctrl-C, a closed pipe: one line, no traceback
