@@ -22,13 +22,14 @@ set -- ${args[@]+"${args[@]}"}
 # Everything ./main.sh, ./test.sh, ./test.sh --long, the YADE plugin and ./docs/build.sh need on a
 # machine with only Debian's base packages (tests/fresh_machine.sh checks that on a debootstrap root):
 # libopenmpi-dev for the plugin's FindMPI (YADE's headers are built with MPI), bzip2 to unpack the
-# YADE source, python3-pyflakes for the layout test's unused-import check, libjs-mathjax for the
+# YADE source, python3-pyflakes for the layout test's unused-import check, python3-threadpoolctl to
+# hold numpy's BLAS to a run's --threads (resources.use_threads), libjs-mathjax for the
 # manual's formulas without a network, chromium for the test that no table of the built manual is
 # clipped (tests/py/test_manual.py).
 PACKAGES=(g++ cmake make ninja-build bzip2 yade libeigen3-dev libboost-python-dev libboost-numpy-dev
           libgtest-dev libsuitesparse-dev libcgal-dev libopenmpi-dev openmpi-bin
           python3-numpy python3-scipy python3-matplotlib python3-pytest python3-pytest-xdist
-          python3-jsonschema python3-mpi4py python3-pyflakes
+          python3-jsonschema python3-mpi4py python3-pyflakes python3-threadpoolctl
           python3-sphinx python3-myst-parser python3-sphinx-rtd-theme libjs-mathjax
           chromium)
 # LAMMPS is no dependency of trueaniso: only the speed benchmark compares with it.

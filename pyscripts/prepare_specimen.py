@@ -207,7 +207,7 @@ def main():
                 print("%s: --checkpoint-every not given: its unfinished preparation wrote %s, so this run does too"
                       % (o.out, prep_checkpoint.interval_said(o.checkpoint_every)), flush=True)
         if o.threads:
-            engines.set_threads(o.threads)
+            resources.use_threads(o.threads)
         prepare(o, dist)
 
 

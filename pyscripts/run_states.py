@@ -202,8 +202,8 @@ def main(argv=None):
                       complete=lambda: study_dir.has_rows(o.out, [i for i, _, _ in states], o.probe_axes))
     executor = mpi_executor(o)
     if o.threads:
-        from trueaniso import engines
-        engines.set_threads(o.threads)
+        from trueaniso import resources
+        resources.use_threads(o.threads)
     try:
         path, servo, probe = study_options.objects(o, o.path)
         study.run_states(o.specimen, states, o.out, path=path, servo=servo, probe=probe, wait=o.wait, host=o.host,

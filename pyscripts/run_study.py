@@ -286,7 +286,7 @@ def main(argv=None):
     cli.saves_work_in(lambda: study_dir.has_saved_work(o.out) or (
         not o.specimen and (os.path.exists(specimen_path) or os.path.exists(prep_checkpoint.path_for(specimen_path)))))
     if o.threads:
-        engines.set_threads(o.threads)
+        resources.use_threads(o.threads)
 
     log = progress.say
     t0 = time.time()

@@ -438,4 +438,5 @@ def prepare_clumps(assembly, n, seed=1, pressure=100e3, damping=0.4, inertial_nu
         log["hold_deviator"] = hold_deviator
     if checkpoints is not None:
         log["checkpoint_every"] = checkpoints.every
+    log.update(st.cost())  # CPU time, peak memory, load, runs (prep_checkpoint.Stages.cost)
     return scene, log

@@ -19,7 +19,7 @@ import json
 import os
 import time
 
-from . import buildarch, engines, provenance, specimen_file, study_dir, validate
+from . import buildarch, engines, provenance, run_cost, specimen_file, study_dir, validate
 from .refusal import Refusal
 
 EVERY = 50_000  # steps: 3 min of a 4000-sphere preparation, 11 min of clump1-4000, 30 min at 53,004
@@ -228,6 +228,9 @@ class Stages:
         self.build, self.fold = build, fold
         self.chain = self.controller = None
         self.t0 = time.time()
+        # CPU time, peak memory and load over every run of the preparation (run_cost), carried in
+        # the place like the elapsed time (a checkpoint without it: counted from this run on).
+        self.meter = run_cost.Meter(place.get("cost"))
 
     def at(self, stage):
         return self.place["stage"] == stage
@@ -237,6 +240,13 @@ class Stages:
 
     def elapsed(self):
         return self.place.get("elapsed", 0.0) + time.time() - self.t0
+
+    def cost(self):
+        """What the preparation has cost so far, every run up to its last checkpoint and this one:
+        the specimen's log keys cpu_time, peak_memory_mb, load_min, load_max and runs."""
+        c = self.meter.totals()
+        del c["wall_time"]  # the log's wall_time is elapsed(), as before
+        return c
 
     def run(self, stage, chunk, finished, max_steps, progress=None, label=None, check_first=False):
         """Runs the current stage `stage` in chunks until finished(), checked after each chunk and,
@@ -260,6 +270,7 @@ class Stages:
             n = self.chain.run(min(chunk, max_steps - steps[stage]))
             fresh = False
             steps[stage] += n
+            self.meter.sample()
             if progress:
                 progress(label or stage, self.scene, self.controller, steps[stage])
             if finished():
@@ -273,6 +284,7 @@ class Stages:
         if self.fold:
             self.fold(self)  # e.g. the radius scale the controller grew, before it is replaced
         self.place["elapsed"] = self.elapsed()
+        self.place["cost"] = self.meter.totals()
         self.t0 = time.time()
         self.scene = self.checkpoints.write(self.scene, self.place)
         self.chain = self.controller = None

@@ -302,6 +302,7 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
         log["steps_unloading"] = st.steps("unloading")
     if checkpoints is not None:
         log["checkpoint_every"] = checkpoints.every
+    log.update(st.cost())  # CPU time, peak memory, load, runs (prep_checkpoint.Stages.cost)
     return scene, log
 
 

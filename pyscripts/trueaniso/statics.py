@@ -194,7 +194,7 @@ def cached_record(out, state=None, scene=None, log=print, meta=None):
     """The record of `state` (None: the specimen, given as `scene` with its file's metadata `meta`)
     from its file in `out`, or solved from the scene (for a state: its checkpoint states/ID.npz)
     and written atomically, with its identity."""
-    from . import atomic, specimen_file, study_dir
+    from . import atomic, run_cost, specimen_file, study_dir
     path = state_file(out, state)
     if not os.path.exists(path):
         if scene is None:
@@ -205,6 +205,9 @@ def cached_record(out, state=None, scene=None, log=print, meta=None):
                 raise specimen_file.SpecimenFileError(study_dir.checkpoint_problem(exc, state)) from None
         log("statics (%s): solving the contact network's stiffness, rotations free and blocked ..."
             % ("isotropic state" if state is None else "state %s" % state))
-        atomic.write_json(path, state_record(scene, None if meta is None else identity(meta, scene.num_bodies, state)))
+        meter = run_cost.Meter()
+        record = state_record(scene, None if meta is None else identity(meta, scene.num_bodies, state))
+        record["cost"] = meter.spent()  # the solves' peak memory is a paper-size study's largest
+        atomic.write_json(path, record)
     from . import validate
     return validate.load_json(path, "statics_record")

@@ -22,8 +22,8 @@ import time
 
 import numpy as np
 
-from . import (dem, engines, fabric, lock, provenance, results_csv, specimen, specimen_file, study_checks, study_dir,
-               triaxial, validate)
+from . import (cli, dem, engines, fabric, lock, provenance, resources, results_csv, run_cost, specimen, specimen_file,
+               study_checks, study_dir, triaxial, validate)
 from .options import UNRECORDED_TIME_STEP, PathOptions, ProbeOptions, ServoOptions, flag
 from .progress import EVERY, Progress, chunk_for, say
 from .refusal import InputError
@@ -491,24 +491,56 @@ def run_states(specimen_path, states, out, path=None, servo=None, probe=None, lo
                 log("%s: continuing the study; %d of the %d states asked for already %s (%s)"
                     % (out, len(done), len(states), "has its rows" if len(done) == 1 else "have their rows",
                        _listed(done)))
-            study_dir.write_metadata(out, fp, states, axes, record, previous)
+            run.metadata = study_dir.write_metadata(out, fp, states, axes, record, previous)
             os.makedirs(os.path.join(out, "states"), exist_ok=True)
+            run.meter = run_cost.Meter()
         # A state the specimen cannot reach (near its strength, the servo holds it without settling)
         # ends its own path only: the other paths go on, and the run fails at the end naming every
         # such state, rather than stopping the whole study at the first.
         failed = []
-        if executor is None:
-            for path in ordered:
-                try:
-                    run.path(path)
-                except triaxial.StateNotReached as exc:
-                    failed.append(run.path_failed(path, exc))
-        else:
-            failed = _run_paths_on(executor, run, ordered)
+        with _cost_recorded(run, out, executor is not None, lambda: failed):
+            if executor is None:
+                for path in ordered:
+                    try:
+                        run.path(path)
+                    except triaxial.StateNotReached as exc:
+                        failed.append(run.path_failed(path, exc))
+            else:
+                failed = _run_paths_on(executor, run, ordered)
         if failed:
             raise triaxial.StateNotReached("%d loading path%s stopped (the rows of every other state are written): %s"
                                            % (len(failed), "" if len(failed) == 1 else "s", "; ".join(failed)))
         return results_csv.read(csv_path).rows
+
+
+@contextlib.contextmanager
+def _cost_recorded(run, out, workers_elsewhere, failed):
+    """The run's cost (run_cost) added to its entry in metadata.json however the walk ends:
+    'complete', 'failed' (a state not reached: `failed()` lists the paths), 'interrupted' (SIGINT,
+    SIGTERM) or 'error'. A run with no work wrote no entry, and records nothing."""
+    if run.meter is None:
+        yield
+        return
+    ended = "error"
+
+    def record():
+        try:
+            study_dir.record_cost(out, run.metadata, cost)
+        except Exception as exc:  # the results are written; a cost unrecorded must not hide why the run ended
+            run.log("note: this run's cost was not recorded in %s (%s)" % (os.path.join(out, study_dir.METADATA), exc))
+    try:
+        yield
+        ended = "failed" if failed() else "complete"
+    except BaseException as exc:
+        if isinstance(exc, (KeyboardInterrupt, cli.Terminated)):
+            ended = "interrupted"
+        raise
+    finally:
+        cost = run.meter.record(ended, workers_elsewhere)
+        if ended == "interrupted":
+            cli.after_exit_line(record)  # the line that says the run resumes comes first
+        else:
+            record()
 
 
 def held_states(previous, asked):
@@ -565,7 +597,7 @@ def _state_worker(job):
     """One state of a loading path in a worker process: reached if its checkpoint is missing and
     it or a later state of the path has work, then probed; its rows and a failure (the message
     of a state not reached, else None) are returned."""
-    engines.set_threads(job["fp"]["threads"])  # the study's thread count: the same bits as serial
+    resources.use_threads(job["fp"]["threads"])  # the study's thread count: the same bits as serial
     rows = []
     run = _Run(job["specimen_path"], job["spec_meta"], job["out"], job["fp"], job["axes"], None,
                results_csv.Table(None, job["columns"], [], None), say, job["every"],
@@ -597,6 +629,7 @@ class _Run:
         self.keep = {str(k) for k in keep}
         # The states this run probes (None: every state on its paths); the others are where it starts.
         self.asked = None if asked is None else {str(k) for k in asked}
+        self.meter = self.metadata = None  # the run's cost (run_cost.Meter) and its metadata.json, once it has work
 
     def job(self, path, k):
         """What a worker needs to do state k of `path` as this run would (picklable)."""
@@ -615,6 +648,8 @@ class _Run:
                                              % os.path.join(self.out, study_dir.SUPERSEDED)))
         results_csv.append(self.csv_path, row, self.columns)
         self.done.add((str(row["state"]), row["probe"]))
+        if self.meter is not None:
+            self.meter.sample()  # the machine's load while the study ran, at each row
 
     def checkpoint(self, sid):
         return study_dir.checkpoint_path(self.out, sid)

@@ -31,3 +31,14 @@ def test_what_the_readings_say_of_clump2_holds():
     rmse = [x["nu_rmse"] for x in h]
     assert rmse[3] == min(rmse) and rmse[3] < 0.008 < min(rmse[:3])
     assert all(0.45 < x["Zm_drop"] < 0.6 for x in h)
+
+
+def test_the_cost_table_is_that_of_its_data(tmp_path):
+    from trueaniso.analysis import cost
+    studies = [os.path.join(REPO, "docs", "data", d) for d in ("spheres-16000/s1", "spheres-53004-s1", "clump2-16000/s1")]
+    assert_page_is_its_data(tmp_path, "studies/paper-size.md",
+                            lambda doc: cost.main(studies + ["--doc", doc, "--block", "paper-size-cost"]))
+    # What the reading says: the longest path and the static solves' growth.
+    c = {cost.name(s): cost.study_cost(s) for s in studies}
+    assert round(c["spheres-53004-s1"]["paths"][0] / 60) == 46
+    assert round(c["spheres-53004-s1"]["statics"][0] / c["spheres-16000/s1"]["statics"][0]) == 77
