@@ -34,7 +34,14 @@ if [ -f "$dest/.trueaniso-sha256" ] && [ "$(cat "$dest/.trueaniso-sha256")" = "$
   echo "$PWD/$dest"; exit 0
 fi
 
+# An unpacked tree is used where it lies, not copied: its path is remembered, so that a later setup
+# without TRUEANISO_YADE_SOURCE finds it as it finds an unpacked tarball (without this, such a setup
+# found no source and removed the plugin built from that tree).
+remembered=build/yade-source.dir
 src="${TRUEANISO_YADE_SOURCE:-}"
+if [ -z "$src" ] && [ -f "$remembered" ] && [ -f "$(cat "$remembered")/core/Scene.hpp" ]; then
+  src=$(cat "$remembered")
+fi
 if [ -n "$src" ]; then
   if [ -d "$src" ] && [ ! -f "$src/core/Scene.hpp" ] && [ -f "$src/$TARBALL" ]; then
     src="$src/$TARBALL"  # the directory the tarball lies in (../shared/deps), as the docs name it
@@ -45,7 +52,9 @@ if [ -n "$src" ]; then
       echo "TRUEANISO_YADE_SOURCE=$src is not a YADE 2023.02a source tree (no core/Scene.hpp, or RELEASE is not 2023.02a) and holds no $TARBALL" >&2
       exit 1
     fi
-    (cd "$src" && echo "$PWD")
+    tree=$(cd "$src" && pwd)
+    echo "$tree" >"$remembered"
+    echo "$tree"
     exit 0
   fi
   if [ ! -f "$src" ]; then

@@ -12,9 +12,11 @@ TARBALL = "yade_2023.02a.orig.tar.bz2"
 
 
 def _run(tmp_path, source):
-    (tmp_path / "repo" / "cmake").mkdir(parents=True)
+    (tmp_path / "repo" / "cmake").mkdir(parents=True, exist_ok=True)
     shutil.copy(os.path.join(REPO, "cmake", "yade_source.sh"), tmp_path / "repo" / "cmake")
-    env = dict(os.environ, TRUEANISO_YADE_SOURCE=str(source))
+    env = {k: v for k, v in os.environ.items() if k != "TRUEANISO_YADE_SOURCE"}
+    if source is not None:
+        env["TRUEANISO_YADE_SOURCE"] = str(source)
     return subprocess.run(["bash", str(tmp_path / "repo" / "cmake" / "yade_source.sh")], capture_output=True,
                           text=True, env=env, timeout=60)
 
@@ -35,3 +37,16 @@ def test_a_directory_with_neither_is_refused_naming_both(tmp_path):
     proc = _run(tmp_path, empty)
     assert proc.returncode == 1
     assert "is not a YADE 2023.02a source tree" in proc.stderr and "holds no %s" % TARBALL in proc.stderr
+
+
+def test_an_unpacked_tree_is_remembered_for_a_setup_without_the_variable(tmp_path):
+    """A setup without TRUEANISO_YADE_SOURCE after one that named an unpacked tree found no source
+    and removed the plugin built from it (cmake/yade_plugin.sh); the tree's path is remembered."""
+    tree = tmp_path / "yade-2023.02a"
+    (tree / "core").mkdir(parents=True)
+    (tree / "core" / "Scene.hpp").write_text("")
+    (tree / "RELEASE").write_text("2023.02a\n")
+    first = _run(tmp_path, tree)
+    assert first.returncode == 0 and first.stdout.strip() == str(tree), first.stderr
+    again = _run(tmp_path, None)
+    assert again.returncode == 0 and again.stdout.strip() == str(tree), again.stderr
