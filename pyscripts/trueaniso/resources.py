@@ -63,11 +63,12 @@ def use_threads(threads):
     """The run's thread count for the engines (OpenMP) and for numpy's BLAS alike: --threads N
     holds a run to N cores. Left to itself, OpenBLAS starts a thread per core at its first call and
     keeps it spinning between calls: a study on one engine thread then took 1.4-2 times its wall
-    time in CPU (150 and 1000 spheres), a second core taken from whatever ran beside it. The static
-    solves' last bits follow BLAS's thread count (300 spheres: nu_free 1 unit in the last place, the
-    residual 0.1 %; the same on every repeat of a count: tests/py/test_run_cost.py), so holding it to
-    --threads, which a study's fingerprint records, also makes them repeat wherever the study does.
-    0 leaves both to their own counts (all cores)."""
+    time in CPU (150 and 1000 spheres; 0.99 at 4000, whose steps outlast the spin), a second core
+    taken from whatever ran beside it. The static solves' last bits follow BLAS's thread count (300
+    spheres: nu_free 1 unit in the last place, the residual 0.1 %; the same on every repeat of a
+    count: tests/py/test_run_cost.py), so holding it to --threads, which a study's fingerprint
+    records, also makes them repeat wherever the study does. 0 leaves both to their own counts (all
+    cores)."""
     from . import engines
     engines.set_threads(threads)
     if threads:
