@@ -29,8 +29,8 @@ _after_line = []  # work for fail() to do once its line is out (after_exit_line)
 def after_exit_line(work):
     """`work()` after the exit line of a script that ends in fail(), or at once outside one (the
     library called from Python): bookkeeping a kill may cut short must not delay the line. mpiexec
-    ends its ranks with SIGTERM and soon after SIGKILL: an 8 ms write before the line lost it in
-    3 of 4 runs (test_mpi.py)."""
+    ends its ranks with SIGTERM and soon after SIGKILL, within the milliseconds of a file written
+    and synced (test_mpi.py's Ctrl-C test)."""
     if _guarding:
         _after_line.append(work)
     else:

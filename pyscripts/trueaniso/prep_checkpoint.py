@@ -17,7 +17,6 @@ prepared; docs/specimens.md).
 """
 import json
 import os
-import time
 
 from . import buildarch, engines, provenance, run_cost, specimen_file, study_dir, validate
 from .refusal import Refusal
@@ -227,10 +226,13 @@ class Stages:
         self.scene, self.place, self.checkpoints = scene, place, checkpoints
         self.build, self.fold = build, fold
         self.chain = self.controller = None
-        self.t0 = time.time()
-        # CPU time, peak memory and load over every run of the preparation (run_cost), carried in
-        # the place like the elapsed time (a checkpoint without it: counted from this run on).
-        self.meter = run_cost.Meter(place.get("cost"))
+        # Wall and CPU time, peak memory and load over every run of the preparation (run_cost), carried
+        # in the place: the wall time as "elapsed" (the placement's included), the rest as "cost". A
+        # run without a carried cost (a new preparation, or a checkpoint made before it) counts its
+        # CPU from its process's start.
+        cost = place.get("cost")
+        self.meter = run_cost.Meter(dict(cost or {}, wall_time=place.get("elapsed", 0.0)),
+                                    cpu_from_process_start=cost is None)
 
     def at(self, stage):
         return self.place["stage"] == stage
@@ -239,13 +241,14 @@ class Stages:
         return self.place["steps"].get(stage, 0)
 
     def elapsed(self):
-        return self.place.get("elapsed", 0.0) + time.time() - self.t0
+        """Wall seconds of the preparation so far, every run up to its last checkpoint and this one."""
+        return self.meter.spent()["wall_time"]
 
     def cost(self):
-        """What the preparation has cost so far, every run up to its last checkpoint and this one:
-        the specimen's log keys cpu_time, peak_memory_mb, load_min, load_max and runs."""
+        """The rest of its cost so far: the specimen's log keys cpu_time, peak_memory_mb, load_min,
+        load_max and runs (the wall time is elapsed())."""
         c = self.meter.totals()
-        del c["wall_time"]  # the log's wall_time is elapsed(), as before
+        del c["wall_time"]
         return c
 
     def run(self, stage, chunk, finished, max_steps, progress=None, label=None, check_first=False):
@@ -284,8 +287,7 @@ class Stages:
         if self.fold:
             self.fold(self)  # e.g. the radius scale the controller grew, before it is replaced
         self.place["elapsed"] = self.elapsed()
-        self.place["cost"] = self.meter.totals()
-        self.t0 = time.time()
+        self.place["cost"] = self.cost()
         self.scene = self.checkpoints.write(self.scene, self.place)
         self.chain = self.controller = None
         self.build(self)

@@ -35,12 +35,14 @@ def load_average():
 
 
 class Meter:
-    """The cost of a run from its start, or of a piece of work that earlier runs began: `carried`
-    is what those runs recorded (totals(), as a checkpoint holds them)."""
+    """The cost of a run from now, or of a piece of work that earlier runs began: `carried` is
+    what those runs recorded (totals(), as a checkpoint holds them). With `cpu_from_process_start`
+    the CPU time counts from the process's start, the work done before the meter (a preparation's
+    random placement) included."""
 
-    def __init__(self, carried=None):
+    def __init__(self, carried=None, cpu_from_process_start=False):
         carried = dict(carried or {})
-        self.wall0, self.cpu0 = time.monotonic(), cpu_seconds()
+        self.wall0, self.cpu0 = time.monotonic(), 0.0 if cpu_from_process_start else cpu_seconds()
         self.wall_before = float(carried.get("wall_time", 0.0))
         self.cpu_before = float(carried.get("cpu_time", 0.0))
         self.peak_before = float(carried.get("peak_memory_mb", 0.0))

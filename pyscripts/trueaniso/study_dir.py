@@ -373,9 +373,8 @@ def write_metadata(out, fingerprint, states, probes, record, previous=None):
 
 def record_cost(out, meta, cost):
     """This run's cost (run_cost.Meter.record) into its entry, the last of the runs of `meta`, the
-    metadata.json write_metadata wrote for it, written again (atomic; the caller holds the lock).
-    Not read back: a run ended by mpiexec's SIGTERM has about a second before its SIGKILL, and
-    validating the file took part of it."""
+    metadata.json write_metadata wrote for it, written again (atomic; the caller holds the lock):
+    not read back and validated again, since this run wrote it."""
     meta["runs"][-1]["cost"] = _normal(cost)
     atomic.write_json(os.path.join(out, METADATA), meta)
 

@@ -19,16 +19,16 @@ first, longest paths first, for 2 workers and for one a path; it assumes the wor
 this run and leaves out the master's start and the statics. Wall times measured beside other jobs
 (the load says how many) make every figure an upper bound of a quiet machine's.
 """
-import csv
 import json
 import os
 import re
 import sys
 
 from .. import triaxial
-from .results import ResultsError, read_metadata
+from .results import ResultsError, number, read_metadata, read_probes
+from .seeds import preparation_steps
 
-WORKERS = (2, None)  # the estimate's columns: two workers, and one a path (None)
+TIME_COLUMNS = ["state", "probe", "state_steps", "probe_steps", "state_wall_time", "probe_wall_time"]
 
 
 def _specimen_json(study, meta):
@@ -56,41 +56,27 @@ def preparation(spec):
     if spec is None:
         return None
     p = spec.get("parameters") or {}
-    steps = sum(int(v) for k, v in p.items() if k.startswith("steps_") and isinstance(v, (int, float)))
-    return dict(steps=steps or None, wall=_number(p.get("wall_time")), cpu=_number(p.get("cpu_time")),
+    return dict(steps=preparation_steps(p), wall=_number(p.get("wall_time")), cpu=_number(p.get("cpu_time")),
                 peak=_number(p.get("peak_memory_mb")), load=(p.get("load_min"), p.get("load_max")),
                 runs=p.get("runs"))
 
 
-def state_times(rows):
-    """{state: (steps, wall seconds)} of reaching and probing each state: its state_steps and
-    state_wall_time once (every probe row repeats them), plus each probe row's own."""
+def state_times(rows, path="probe table"):
+    """{state: (steps to reach it, steps of its probes, wall seconds of both)}: its state_steps and
+    state_wall_time once (every probe row of a state repeats them), each probe row's own added."""
     out = {}
     for r in rows:
-        sid = r["state"]
-        steps, wall = out.get(sid, (None, None))
-        if steps is None:
-            steps, wall = int(float(r.get("state_steps") or 0)), float(r.get("state_wall_time") or 0)
-        out[sid] = (steps + int(float(r.get("probe_steps") or 0)), wall + float(r.get("probe_wall_time") or 0))
+        reach, probes, wall = out.get(r["state"]) or (number(r, "state_steps", path), 0.0,
+                                                      number(r, "state_wall_time", path))
+        out[r["state"]] = (reach, probes + number(r, "probe_steps", path), wall + number(r, "probe_wall_time", path))
     return out
-
-
-def state_steps(rows):
-    """(steps to reach the states, steps of the probes) over the study."""
-    reach, seen, probes = 0, set(), 0
-    for r in rows:
-        if r["state"] not in seen:
-            seen.add(r["state"])
-            reach += int(float(r.get("state_steps") or 0))
-        probes += int(float(r.get("probe_steps") or 0))
-    return reach, probes
 
 
 def path_times(meta, per_state):
     """The wall time of each loading path: the sum of its states' (state_times) over the states
     the study defines (metadata.json), grouped as the runs walk them (triaxial.paths)."""
     states = [(int(k) if k.isdigit() else k, float(d["b"]), float(d["sigma_z"])) for k, d in meta["states"].items()]
-    return sorted((sum(per_state.get(str(sid), (0, 0.0))[1] for sid, _, _ in path)
+    return sorted((sum(per_state.get(str(sid), (0, 0, 0.0))[2] for sid, _, _ in path)
                    for path in triaxial.paths(states).values()), reverse=True)
 
 
@@ -138,17 +124,13 @@ def study_cost(study):
     """Everything the tables say of one study directory."""
     meta = read_metadata(study, required=True)
     csv_path = os.path.join(study, "probes.csv")
-    if not os.path.exists(csv_path):
-        raise ResultsError("%s has no probes.csv: not a study's directory" % study)
-    with open(csv_path) as f:
-        rows = list(csv.DictReader(f))
-    per_state = state_times(rows)
-    reach, probes = state_steps(rows)
+    per_state = state_times(read_probes(csv_path, need=TIME_COLUMNS), csv_path)
     spec = _specimen_json(study, meta)
     summary = (meta.get("specimen") or {}).get("summary") or {}
     return dict(study=study, assembly=(meta.get("fingerprint") or {}).get("assembly"), n=summary.get("n"),
-                preparation=preparation(spec), reach_steps=reach, probe_steps=probes,
-                rows_wall=sum(w for _, w in per_state.values()), states=len(per_state), runs=runs_cost(meta),
+                preparation=preparation(spec), reach_steps=int(sum(t[0] for t in per_state.values())),
+                probe_steps=int(sum(t[1] for t in per_state.values())),
+                rows_wall=sum(t[2] for t in per_state.values()), states=len(per_state), runs=runs_cost(meta),
                 statics=statics_cost(study), paths=path_times(meta, per_state))
 
 
