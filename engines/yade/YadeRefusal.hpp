@@ -76,22 +76,27 @@ template <class F> void refusingInLoop(F&& f) {
 
 // An error found inside YADE's interaction loop (any thread): the loop stops after this step and
 // the message is raised in Python by O.run(n, True) / O.wait() (an O.step() only prints it: YADE
-// checks for an exception only when a run ends). The first error of a step is kept.
+// checks for an exception only when a run ends). The first error of a run is kept, and that one
+// pauses (letPythonWait), whether or not its message was seen before: the same refusal comes back
+// at every run until the scene is corrected (a refused contact is made again each step), and
+// utils.createInteraction meets it outside any run, where no pause is needed. The message is
+// printed once, not once per contact.
 inline void stopLoopWith(Scene* scene, const std::string& what) {
   static std::mutex guard;
   static std::string last;
   std::lock_guard<std::mutex> lock(guard);
   const shared_ptr<ThreadRunner>& loop = Omega::instance().*member(OmegaLoop());
-  if (loop && !loop->workerThrew) {
+  const bool firstOfRun = loop && !loop->workerThrew;  // YADE's loop clears workerThrew when a run starts
+  if (firstOfRun) {
     loop->workerException = std::runtime_error(what);
     loop->workerThrew = true;
   }
   if (scene) scene->stopAtIter = scene->iter + 1;
-  if (what != last) {  // once, not once per contact
+  if (what != last) {
     std::cerr << "trueaniso: " << what << std::endl;
     last = what;
-    letPythonWait();
   }
+  if (firstOfRun) letPythonWait();
 }
 
 }  // namespace trueanisoPlugin

@@ -471,6 +471,20 @@ def test_the_law_takes_a_sphere_on_a_wall_and_refuses_other_shapes(refusals):
         and "GridNode" in r["error"] and r["refused"] and r["N"] == 0.0, r
 
 
+def test_a_refusal_met_before_pauses_its_run_for_python_s_wait(refusals):
+    """YADE's O.run(n, True) raises a refusal only if its wait() finds the run still going; the
+    first refusal of each run pauses 200 ms (YadeRefusal.hpp: letPythonWait) so that it does. The
+    grid node's refusal was met first outside any run (utils.createInteraction), and it comes
+    back unchanged when the scene is run again: each of those runs pauses, not only the run of a
+    message not seen before. Without the pause a 3-step run of two bodies takes milliseconds, and
+    on a loaded machine its wait() missed the refusal (error None)."""
+    for case in ("grid_node", "grid_node_again"):
+        r = refusals[case]
+        assert r["error"] is not None and "GridNode" in r["error"], (case, r)
+        assert r["seconds"] >= 0.2, (case, r)  # the pause's 200 ms, a lower bound, never an upper one
+    assert refusals["grid_node_again"]["iter"] == refusals["grid_node"]["iter"] + 1  # stopped after the step
+
+
 # ---------------------------------------------------------------------------------------------
 # Clumps: a clump is one particle to the servo, the probe and the recorder.
 
