@@ -29,10 +29,14 @@ Real bodyForceSum(const Scene& s) {
 // another and with the force loop's.
 CellSums contactSums(const Scene& s) {
   const Contacts& C = s.contacts;
+  if (!C.evaluated(s.bodies.size()))
+    for (int c = 0; c < C.size(); ++c)
+      require(!C.active(c), "stress: contacts carry forces but have no branch vectors; the contact history was "
+                            "imported and no force evaluation has run yet (run ContactForces first)");
   const Real ratio = HertzMindlin(s.material).shearToNormal();
   return blockSum<CellSums>(C.size(), CellSums{}, [&](int c, CellSums& acc) {
     if (C.normalForce[c] > 0)
-      acc.addContact(C.force(c), C.branch[c], C.normal[c], HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]),
+      acc.addContact(C.force(c), C.branch(c), C.normal[c], HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]),
                      ratio);
   });
 }
