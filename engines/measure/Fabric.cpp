@@ -31,8 +31,9 @@ Fabric fabric(const Scene& s) {
 
   if (!C.evaluated(nb))
     for (int c = 0; c < nc; ++c)
-      require(!C.active(c), "fabric: active contacts without a branch vector; the contact list was imported but no "
-                            "force evaluation has run yet (run ContactForces first)");
+      require(!C.active(c), "fabric: the contacts carry forces but no force evaluation has run at these positions "
+                            "(a contact history just set, e.g. a scene imported from YADE): evaluate the forces first "
+                            "(trueaniso.dem.refresh(scene), or a step)");
   FabricSums sum = blockSum<FabricSums>(nc, FabricSums{}, [&](int c, FabricSums& acc) {
     const Real N = C.normalForce[c];
     if (!(N > 0)) return;
