@@ -18,13 +18,34 @@ struct Contacts {
 
   // State of the last force evaluation.
   std::vector<Vec3> normal;      // unit n from sphere 1 to sphere 2
-  std::vector<Vec3> branch;      // L between the two body centres (periodic image aware)
   std::vector<Real> overlap;     // delta, <= 0 when not touching
   std::vector<Real> normalForce; // N >= 0
   std::vector<Vec3> shearForce;  // tangential force on sphere 2 (history variable)
   // Rolling moment on sphere 2 (history variable of the rolling sub-model, in the tangent plane);
   // stays zero unless the material has rolling resistance (Material::rolling).
   std::vector<Vec3> rollingMoment;
+
+  // The configuration the forces were last evaluated in (ContactForces): the body centres and the
+  // cell's hSize. A contact's branch vector L, between the two body centres, is computed from
+  // them by branch(c), the force loop's own expression, instead of being stored per pair: the
+  // loop needs it only for its touching pairs' affine velocity and measures, and 24 bytes a
+  // touching pair written every step cost more than one copy of the centres (docs/benchmarks.md).
+  // Empty until a force evaluation: a contact history set from a file or from YADE has no branch.
+  struct Evaluation {
+    std::vector<Vec3> pos;
+    Mat3 hSize = Mat3::Zero();
+    bool sheared = false;  // images by the full hSize (a sheared cell), else by its diagonal
+  } evaluation;
+
+  // Whether the branch vectors are those of the nb bodies' last force evaluation.
+  bool evaluated(int nb) const { return static_cast<int>(evaluation.pos.size()) == nb && nb > 0; }
+  // L of pair c, from body 1's centre to the image of body 2's (evaluated() must hold). The
+  // arithmetic is the force loop's, so the bits are those the loop used.
+  Vec3 branch(int c) const {
+    const Vec3 k = shift[c].cast<Real>();
+    const Vec3 image = evaluation.sheared ? Vec3(evaluation.hSize * k) : Vec3(k.cwiseProduct(evaluation.hSize.diagonal()));
+    return evaluation.pos[b2[c]] + image - evaluation.pos[b1[c]];
+  }
 
   // Incidence lists (pairs of each body) for per-body measures and the time step:
   // pairs of body b are incidence[incBegin[b] .. incBegin[b+1]), an entry c >= 0 means b is
@@ -51,7 +72,7 @@ struct Contacts {
 
   void resize(int n) {
     m1.resize(n); m2.resize(n); b1.resize(n); b2.resize(n); shift.resize(n); rbar.resize(n);
-    normal.resize(n, Vec3::Zero()); branch.resize(n, Vec3::Zero()); overlap.resize(n, 0.0);
+    normal.resize(n, Vec3::Zero()); overlap.resize(n, 0.0);
     normalForce.resize(n, 0.0); shearForce.resize(n, Vec3::Zero());
     rollingMoment.resize(n, Vec3::Zero());
   }

@@ -124,10 +124,12 @@ void Scene::rescale(Real f) {
       setSphereRadius(b, members.radius[bodies.memberBegin[b]]);
   Contacts& C = contacts;
   for (int c = 0; c < C.size(); ++c) {
-    C.rbar[c] *= f; C.branch[c] *= f; C.overlap[c] *= f;
+    C.rbar[c] *= f; C.overlap[c] *= f;
     C.normalForce[c] *= f2; C.shearForce[c] *= f2;
     C.rollingMoment[c] *= f2 * f;  // a force times a length (k_r ~ f^3, its cap eta_r rbar N too)
   }
+  for (Vec3& x : C.evaluation.pos) x *= f;  // the branch vectors scale with them
+  C.evaluation.hSize *= f;
   detectionInvalid = true;
 }
 

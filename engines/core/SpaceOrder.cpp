@@ -74,6 +74,7 @@ void reorderBodies(Scene& s, const std::vector<int>& order) {
 
   s.measured.clear();  // per block of bodies and contacts: another numbering, other blocks
   permute(B.pos, order); permute(B.vel, order); permute(B.angVel, order);
+  permute(s.contacts.evaluation.pos, order);  // the branch vectors follow their bodies (Contacts::branch)
   permute(B.force, order); permute(B.torque, order); permute(B.mass, order);
   permute(B.inertia, order); permute(B.volume, order); permute(B.orientation, order);
   B.memberBegin = begin;
@@ -91,7 +92,6 @@ void reorderBodies(Scene& s, const std::vector<int>& order) {
       std::swap(C.b1[c], C.b2[c]);
       C.shift[c] = -C.shift[c];
       C.normal[c] = -C.normal[c];
-      C.branch[c] = -C.branch[c];
       C.shearForce[c] = -C.shearForce[c];
       C.rollingMoment[c] = -C.rollingMoment[c];  // the moment on side 2; side 1 bears its opposite
     }
@@ -103,7 +103,7 @@ void reorderBodies(Scene& s, const std::vector<int>& order) {
            std::tie(C.m1[b], C.m2[b], C.shift[b][0], C.shift[b][1], C.shift[b][2]);
   });
   permute(C.m1, pairs); permute(C.m2, pairs); permute(C.b1, pairs); permute(C.b2, pairs);
-  permute(C.shift, pairs); permute(C.rbar, pairs); permute(C.normal, pairs); permute(C.branch, pairs);
+  permute(C.shift, pairs); permute(C.rbar, pairs); permute(C.normal, pairs);
   permute(C.overlap, pairs); permute(C.normalForce, pairs); permute(C.shearForce, pairs);
   permute(C.rollingMoment, pairs);
   C.buildIncidence(nb);

@@ -6,6 +6,10 @@ void flipCell(Scene& s, const Mat3i& M) {
   const Mat3i inverse = unimodularInverse(M);
   s.cell.flip(M);
   for (Vec3i& k : s.contacts.shift) k = inverse * k;
+  // The branch vectors' images the same vectors, in the flipped cell's terms, until the next forces.
+  Contacts::Evaluation& e = s.contacts.evaluation;
+  e.hSize = e.hSize * M.cast<Real>();
+  e.sheared = true;
   s.detectionInvalid = true;
 }
 

@@ -111,6 +111,11 @@ void ContactDetection::rebuild(Scene& s) {
     B.pos[b] -= frame.offset(wrap[b]);
   }
   for (int c = 0; c < C.size(); ++c) C.shift[c] += wrap[C.b2[c]] - wrap[C.b1[c]];
+  if (C.evaluated(nb)) {  // the last evaluation's centres the same way, so each branch stays its vector
+    const Frame evaluated(C.evaluation.hSize);
+    for (int b = 0; b < nb; ++b)
+      if (wrap[b] != Vec3i::Zero()) C.evaluation.pos[b] -= evaluated.offset(wrap[b]);
+  }
   s.refreshMembers();
 
   // 2. Cell grid in reduced coordinates, with bins no thinner than the interaction range: two
@@ -205,7 +210,7 @@ void ContactDetection::rebuild(Scene& s) {
       N.shift[c] = p.shift;
       N.rbar[c] = 2.0 * M.radius[p.m1] * M.radius[p.m2] / (M.radius[p.m1] + M.radius[p.m2]);
       if (old < nold && C.m1[old] == p.m1 && C.m2[old] == p.m2 && C.shift[old] == p.shift) {
-        N.normal[c] = C.normal[old]; N.branch[c] = C.branch[old]; N.overlap[c] = C.overlap[old];
+        N.normal[c] = C.normal[old]; N.overlap[c] = C.overlap[old];
         N.normalForce[c] = C.normalForce[old]; N.shearForce[c] = C.shearForce[old];
         N.rollingMoment[c] = C.rollingMoment[old];
         ++old;
@@ -221,6 +226,7 @@ void ContactDetection::rebuild(Scene& s) {
 
   // 5. Incidence lists (body -> its pairs) so forces are gathered per body, conflict-free.
   N.buildIncidence(nb);
+  N.evaluation = std::move(C.evaluation);  // the branch vectors of the pairs kept, until the forces
   C = std::move(N);
 
   refPos_ = M.pos;

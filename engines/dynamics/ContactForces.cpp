@@ -48,6 +48,13 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   static_assert(!Rolling || (Rotations && !Clumps), "rolling resistance acts on free single spheres only");
   long sliding = 0, rollingAtCap = 0;  // the second is only counted with Rolling
 
+  // The configuration of this evaluation, from which the branch vectors are read after it
+  // (Contacts::branch): the cell here, the centres by the team below.
+  C.evaluation.hSize = hSize;
+  C.evaluation.sheared = Sheared;
+  C.evaluation.pos.resize(nb);
+  Vec3* const evaluatedPos = C.evaluation.pos.data();
+
 #pragma omp parallel reduction(+ : sliding) if (worthThreads(nc))
   {
     int t = 0;
@@ -67,6 +74,11 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     }
     std::fill(F, F + nb, Vec3::Zero());
     if (Rotations) std::fill(T, T + nb, Vec3::Zero());
+    {
+      const Vec3* const centres = B.pos.data();
+#pragma omp for schedule(static) nowait
+      for (int b = 0; b < nb; ++b) evaluatedPos[b] = centres[b];
+    }
     long rollingCappedHere = 0;
     // The arrays as local pointers: read through C, B and M (the team's shared references), the
     // compiler must load each array's address again after every store to a force or a contact,
@@ -78,7 +90,6 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     const Vec3i* const shift = C.shift.data();
     const Real* const rbar = C.rbar.data();
     Vec3* const normal = C.normal.data();
-    Vec3* const pairBranch = C.branch.data();
     Real* const overlap = C.overlap.data();
     Real* const normalForce = C.normalForce.data();
     Vec3* const shearForce = C.shearForce.data();
@@ -289,7 +300,6 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         }
 
         normal[c] = n;
-        pairBranch[c] = branches[k];
         overlap[c] = delta;
         normalForce[c] = N;
         shearForce[c] = Vec3(q.fx[k], q.fy[k], q.fz[k]);

@@ -29,16 +29,16 @@ Fabric fabric(const Scene& s) {
   const Bodies& Bd = s.bodies;
   const int nc = C.size(), nb = Bd.size();
 
+  if (!C.evaluated(nb))
+    for (int c = 0; c < nc; ++c)
+      require(!C.active(c), "fabric: the contacts carry forces but no force evaluation has run at these positions "
+                            "(a contact history just set, e.g. a scene imported from YADE): evaluate the forces first "
+                            "(trueaniso.dem.refresh(scene), or a step)");
   FabricSums sum = blockSum<FabricSums>(nc, FabricSums{}, [&](int c, FabricSums& acc) {
     const Real N = C.normalForce[c];
     if (!(N > 0)) return;
-    const Vec3& L = C.branch[c];
-    if (L.squaredNorm() == 0) { ++acc.withoutBranch; return; }
-    acc.add(N, C.rbar[c], C.normal[c], L);
+    acc.add(N, C.rbar[c], C.normal[c], C.branch(c));
   });
-  require(sum.withoutBranch == 0,
-          "fabric: active contacts without a branch vector; the contact list was imported but no "
-          "force evaluation has run yet (run ContactForces first)");
 
   // Contacts per particle for Eq. (14). A serial pass over the pairs: it scatters into bodies, and
   // unlike contactsPerBody it does not need the incidence lists (absent on an imported list).

@@ -21,11 +21,10 @@ struct FabricSums {
   Real Mupper[45] = {};
   Real normalForce = 0;
   long contacts = 0;
-  long withoutBranch = 0;  // active contacts whose branch was never evaluated
   FabricSums& operator+=(const FabricSums& o) {
     R += o.R; H += o.H; B += o.B;
     for (int k = 0; k < 45; ++k) Mupper[k] += o.Mupper[k];
-    normalForce += o.normalForce; contacts += o.contacts; withoutBranch += o.withoutBranch;
+    normalForce += o.normalForce; contacts += o.contacts;
     return *this;
   }
 

@@ -29,10 +29,15 @@ Real bodyForceSum(const Scene& s) {
 // another and with the force loop's.
 CellSums contactSums(const Scene& s) {
   const Contacts& C = s.contacts;
+  if (!C.evaluated(s.bodies.size()))
+    for (int c = 0; c < C.size(); ++c)
+      require(!C.active(c), "stress: the contacts carry forces but no force evaluation has run at these positions "
+                            "(a contact history just set, e.g. a scene imported from YADE): evaluate the forces first "
+                            "(trueaniso.dem.refresh(scene), or a step)");
   const Real ratio = HertzMindlin(s.material).shearToNormal();
   return blockSum<CellSums>(C.size(), CellSums{}, [&](int c, CellSums& acc) {
     if (C.normalForce[c] > 0)
-      acc.addContact(C.force(c), C.branch[c], C.normal[c], HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]),
+      acc.addContact(C.force(c), C.branch(c), C.normal[c], HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]),
                      ratio);
   });
 }

@@ -155,7 +155,11 @@ bp::dict contactArrays(const Scene& s) {
   d["member1"] = toNumpy(C.m1); d["member2"] = toNumpy(C.m2);
   d["body1"] = toNumpy(C.b1); d["body2"] = toNumpy(C.b2);
   d["shift"] = toNumpy(C.shift); d["rbar"] = toNumpy(C.rbar);
-  d["normal"] = toNumpy(C.normal); d["branch"] = toNumpy(C.branch);
+  // Branch vectors of the last force evaluation; zeros before any (an imported history).
+  std::vector<Vec3> branch(C.size(), Vec3::Zero());
+  if (C.evaluated(s.bodies.size()))
+    for (int c = 0; c < C.size(); ++c) branch[c] = C.branch(c);
+  d["normal"] = toNumpy(C.normal); d["branch"] = toNumpy(branch);
   d["overlap"] = toNumpy(C.overlap); d["normal_force"] = toNumpy(C.normalForce);
   std::vector<Real> kn(C.size());
   std::vector<Vec3> force(C.size());

@@ -51,7 +51,7 @@ HeldContact heldContact(const Scene& held, int c) {
   HeldContact h;
   h.normal = C.normal[c];
   h.shearForce = C.shearForce[c];
-  h.branch = C.branch[c];
+  h.branch = C.branch(c);
   h.offset1 = M.pos[i] - B.pos[C.b1[c]];
   h.offset2 = M.pos[j] - B.pos[C.b2[c]];
   h.normalForce = C.normalForce[c];

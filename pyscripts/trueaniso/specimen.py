@@ -306,15 +306,6 @@ def prepare_spheres(n, seed=1, size_distribution=_psd.PAPER_SPHERES, pressure=10
     return scene, log
 
 
-def _require_force_evaluation(sig, coordination):
-    """A scene whose contacts were set without a force evaluation (a YADE scene just imported:
-    forces and normals, no branch vectors yet) has loaded contacts and a stress of exactly zero
-    (every branch vector is); it would read p = 0 with Zm > 0, so it is refused instead."""
-    if coordination["Nc"] > 0 and not np.any(sig):
-        raise ValueError("the scene's contacts carry forces but no force evaluation at these positions (a scene "
-                         "just imported, e.g. from YADE): call trueaniso.dem.refresh(scene) first")
-
-
 def d50_cu(scene):
     """D50 and Cu of the scene's particles by mass, as the paper gives them for its assemblies (section 2.1).
 
@@ -358,7 +349,6 @@ def state(scene):
     from .triaxial import stress_record
     sig = engines.stress(scene)
     z = engines.coordination(scene)
-    _require_force_evaluation(sig, z)
     out = dict(n=scene.num_bodies, void_ratio=engines.void_ratio(scene), Zm=z["Zm"], Z=z["Z"],
                Nc=z["Nc"], Np0=z["Np0"], Np1=z["Np1"],
                sigma_x=sig[0, 0], sigma_y=sig[1, 1], sigma_z=sig[2, 2],

@@ -210,10 +210,10 @@ TEST(ShearedCell, FlipKeepsEveryContactAndItsHistory) {
   for (int c = 0; c < before.contacts.size(); ++c) {
     if (!before.contacts.active(c)) continue;
     ++active;
-    const Vec3& L = before.contacts.branch[c];
+    const Vec3& L = before.contacts.branch(c);
     bool found = false;
     for (int d : byPair[{before.contacts.m1[c], before.contacts.m2[c]}]) {
-      if ((s->contacts.branch[d] - L).norm() > 1e-9 * L.norm()) continue;  // another image of the pair
+      if ((s->contacts.branch(d) - L).norm() > 1e-9 * L.norm()) continue;  // another image of the pair
       found = true;
       const Real N = before.contacts.normalForce[c];
       EXPECT_NEAR(s->contacts.normalForce[d], N, 1e-6 * N);  // delta ~ 1e-3 L: 1e-16 of L is 1e-13 of delta

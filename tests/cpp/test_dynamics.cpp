@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -65,6 +66,39 @@ TEST(ContactDetection, FindsExactlyTheOverlappingPairs) {
   ASSERT_GT(brute, 100);
   EXPECT_EQ(active, brute);
   EXPECT_EQ(coordination(*s).contacts, brute);
+}
+
+// A detection wraps the bodies that left the cell back into it and changes their pairs' image
+// shifts; the branch vectors, read from the last force evaluation's centres (Contacts::branch),
+// stay the vectors the forces were evaluated with. Half the bodies moved one cell vector out
+// (their pairs' shifts changed to match: the same medium) and the forces evaluated there; the
+// next detection wraps them back. Every active contact's L as before, to the rounding of centres
+// ~1e-3 m against a branch of ~2e-4 m (1e-14).
+TEST(ContactDetection, WrappingKeepsTheBranchVectors) {
+  auto s = randomGas(400, 0.55, 7);
+  Driver drv(s);
+  drv.evaluate();
+  Contacts& C = s->contacts;
+  const Vec3 a1 = s->cell.hSize.col(0);
+  for (int b = 0; b < s->bodies.size(); b += 2) s->bodies.pos[b] += a1;
+  for (int c = 0; c < C.size(); ++c) C.shift[c].x() += (C.b1[c] % 2 == 0) - (C.b2[c] % 2 == 0);
+  s->refreshMembers();
+  ContactForces().apply(*s);
+  std::map<std::pair<int, int>, Vec3> before;  // active contacts by their spheres (one image each here)
+  for (int c = 0; c < C.size(); ++c)
+    if (C.active(c)) before[{C.m1[c], C.m2[c]}] = C.branch(c);
+  s->detectionInvalid = true;
+  ContactDetection().apply(*s);
+  int active = 0, crossing = 0;
+  for (int c = 0; c < C.size(); ++c) {
+    if (!C.active(c)) continue;
+    ++active;
+    crossing += (C.b1[c] % 2) != (C.b2[c] % 2);
+    const Vec3& L = before.at({C.m1[c], C.m2[c]});
+    EXPECT_LE((C.branch(c) - L).norm(), 1e-14 * L.norm()) << "contact " << c;
+  }
+  EXPECT_EQ(active, static_cast<int>(before.size()));  // every contact kept, with its history
+  EXPECT_GT(crossing, 100);  // pairs whose shift the wrap changed
 }
 
 // Closed periodic box, no damping: contact forces are pairwise opposite, so the total momentum
@@ -164,9 +198,9 @@ TEST(Stress, MeasuresAreTheirContactSumsAndIndependentOfThreads) {
     if (!C.active(c)) continue;
     ++loaded;
     sliding += C.shearForce[c].norm() >= 0.5 * (1 - 1e-12) * C.normalForce[c];
-    addStressTerm(C.force(c), C.branch[c], stress);
+    addStressTerm(C.force(c), C.branch(c), stress);
     addAffineStiffnessTerm(HertzMindlin::normalStiffness(C.normalForce[c], C.overlap[c]), ratio, C.normal[c],
-                           C.branch[c], stiffness);
+                           C.branch(c), stiffness);
     contactForce += C.force(c).norm();
   }
   for (int b = 0; b < s->bodies.size(); ++b) bodyForce += s->bodies.force[b].norm();

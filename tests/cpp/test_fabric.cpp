@@ -10,6 +10,7 @@
 #include "dynamics/Simulation.hpp"
 #include "measure/Coordination.hpp"
 #include "measure/Fabric.hpp"
+#include "measure/Stress.hpp"
 #include "measure/FabricRecorder.hpp"
 
 using namespace trueaniso;
@@ -215,9 +216,12 @@ TEST(Fabric, RefusesContactsNotEvaluatedHere) {
   s->detectionInvalid = true;            // bodies moved since
   EXPECT_THROW(fabric(*s), InputError);
   s->detectionInvalid = false;
-  s->contacts.branch[0].setZero();       // an imported history without a force evaluation
+  s->contacts.evaluation.pos.clear();    // an imported history without a force evaluation
   s->contacts.normalForce[0] = 1.0;
   EXPECT_THROW(fabric(*s), InputError);
+  EXPECT_THROW(loveWeberStress(*s), InputError);  // no branch vectors: not a stress of zeros
+  s->contacts.normalForce.assign(s->contacts.size(), 0.0);
+  EXPECT_EQ(loveWeberStress(*s), Mat3::Zero());  // nothing loaded: nothing to refuse
 }
 
 TEST(Fabric, NoContactsGiveNaNNotACrash) {

@@ -28,7 +28,7 @@ Mat9 kinematicSum(const Scene& s, Real zeta) {
   for (int c = 0; c < C.size(); ++c) {
     if (!C.active(c)) continue;
     const Vec3& n = C.normal[c];
-    const Vec3& L = C.branch[c];
+    const Vec3& L = C.branch(c);
     const Real kn = law.knFromForce(C.normalForce[c], C.rbar[c]);
     const Real ks = zeta * law.ksFromForce(C.normalForce[c], C.rbar[c]);
     const Mat3 K = kn * n * n.transpose() + ks * (Mat3::Identity() - n * n.transpose());

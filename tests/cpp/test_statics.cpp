@@ -345,7 +345,7 @@ TEST(StaticStiffness, AffinePartIsEquation32) {
   Eigen::Matrix<Real, 81, 1> c = Eigen::Matrix<Real, 81, 1>::Zero();
   for (int q = 0; q < held.contacts.size(); ++q) {
     if (!held.contacts.active(q)) continue;
-    const Vec3 n = held.contacts.normal[q], L = held.contacts.branch[q];
+    const Vec3 n = held.contacts.normal[q], L = held.contacts.branch(q);
     const Real kn = held.material.Cn() * std::cbrt(held.contacts.rbar[q] * held.contacts.normalForce[q]);
     const Mat3 K = kn * n * n.transpose() + ratio * kn * (Mat3::Identity() - n * n.transpose());
     for (int i = 0; i < 3; ++i)

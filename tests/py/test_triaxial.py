@@ -239,10 +239,11 @@ def test_shear_goal_on_a_path_that_fixes_the_shear_is_refused(specimen300):
 
 
 def test_measures_of_an_imported_scene_need_a_force_evaluation(specimen_100):
-    """A scene whose contacts came in with forces only (yade_bridge.scene_from_yade's way) is refused
-    until dem.refresh (its state would read p = 0 with Zm 4.8), after which the state is the
-    specimen's own (1e-9: refresh recomputes the same forces)."""
-    from trueaniso import dem, specimen, specimen_file
+    """A scene whose contacts came in with forces only (yade_bridge.scene_from_yade's way) has no
+    force evaluation to take branch vectors from: its stress and fabric are refused until
+    dem.refresh (not a stress of zeros, p = 0 with Zm 4.8), after which the state is the specimen's
+    own (1e-9: refresh recomputes the same forces)."""
+    from trueaniso import dem, engines, specimen, specimen_file
     scene, _ = specimen_file.load(str(specimen_100))
     want = specimen.state(scene)
     d = scene.contact_arrays()
@@ -250,6 +251,10 @@ def test_measures_of_an_imported_scene_need_a_force_evaluation(specimen_100):
                               d["shear_force"])
     with pytest.raises(ValueError, match="dem.refresh"):
         specimen.state(scene)
+    with pytest.raises(ValueError, match="no force evaluation has run at these positions"):
+        engines.stress(scene)
+    with pytest.raises(ValueError, match="force evaluation"):  # its list is not yet detected, either
+        engines.fabric(scene)
     dem.refresh(scene)
     assert specimen.state(scene)["p"] == pytest.approx(want["p"], rel=1e-9)
 
