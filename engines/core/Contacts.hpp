@@ -3,6 +3,7 @@
 // order by the force loop. A pair is a contact while its normal force is > 0. Pairs persist
 // between detections so the tangential force keeps its history.
 #include <numeric>
+#include <string>
 #include <vector>
 
 #include "core/Types.hpp"
@@ -29,7 +30,8 @@ struct Contacts {
   // cell's hSize. A contact's branch vector L, between the two body centres, is computed from
   // them by branch(c), the force loop's own expression, instead of being stored per pair: the
   // loop needs it only for its touching pairs' affine velocity and measures, and 24 bytes a
-  // touching pair written every step cost more than one copy of the centres (docs/benchmarks.md).
+  // touching pair written every step cost more than one copy of the centres
+  // (docs/studies/benchmarks.md, "The branch vector on demand").
   // Empty until a force evaluation: a contact history set from a file or from YADE has no branch.
   struct Evaluation {
     std::vector<Vec3> pos;
@@ -39,8 +41,18 @@ struct Contacts {
 
   // Whether the branch vectors are those of the nb bodies' last force evaluation.
   bool evaluated(int nb) const { return static_cast<int>(evaluation.pos.size()) == nb && nb > 0; }
+  // A measure (named by `who`) of contacts that carry forces needs their branch vectors: refused
+  // (InputError) when no force evaluation of these nb bodies has run, not summed with none.
+  void requireEvaluated(int nb, const std::string& who) const {
+    if (evaluated(nb)) return;
+    for (int c = 0; c < size(); ++c)
+      require(!active(c), who + ": the contacts carry forces but no force evaluation has run at these positions "
+                                "(a contact history just set, e.g. a scene imported from YADE): evaluate the "
+                                "forces first (trueaniso.dem.refresh(scene), or a step)");
+  }
   // L of pair c, from body 1's centre to the image of body 2's (evaluated() must hold). The
-  // arithmetic is the force loop's, so the bits are those the loop used.
+  // arithmetic is the force loop's: the bits the loop used, on the baseline build; at x86-64-v3
+  // the compiler may fuse it into the caller's multiply-adds otherwise than in the loop (1 ulp).
   Vec3 branch(int c) const {
     const Vec3 k = shift[c].cast<Real>();
     const Vec3 image = evaluation.sheared ? Vec3(evaluation.hSize * k) : Vec3(k.cwiseProduct(evaluation.hSize.diagonal()));

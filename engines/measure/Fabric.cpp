@@ -29,11 +29,7 @@ Fabric fabric(const Scene& s) {
   const Bodies& Bd = s.bodies;
   const int nc = C.size(), nb = Bd.size();
 
-  if (!C.evaluated(nb))
-    for (int c = 0; c < nc; ++c)
-      require(!C.active(c), "fabric: the contacts carry forces but no force evaluation has run at these positions "
-                            "(a contact history just set, e.g. a scene imported from YADE): evaluate the forces first "
-                            "(trueaniso.dem.refresh(scene), or a step)");
+  C.requireEvaluated(nb, "fabric");
   FabricSums sum = blockSum<FabricSums>(nc, FabricSums{}, [&](int c, FabricSums& acc) {
     const Real N = C.normalForce[c];
     if (!(N > 0)) return;

@@ -29,11 +29,7 @@ Real bodyForceSum(const Scene& s) {
 // another and with the force loop's.
 CellSums contactSums(const Scene& s) {
   const Contacts& C = s.contacts;
-  if (!C.evaluated(s.bodies.size()))
-    for (int c = 0; c < C.size(); ++c)
-      require(!C.active(c), "stress: the contacts carry forces but no force evaluation has run at these positions "
-                            "(a contact history just set, e.g. a scene imported from YADE): evaluate the forces first "
-                            "(trueaniso.dem.refresh(scene), or a step)");
+  C.requireEvaluated(s.bodies.size(), "stress");
   const Real ratio = HertzMindlin(s.material).shearToNormal();
   return blockSum<CellSums>(C.size(), CellSums{}, [&](int c, CellSums& acc) {
     if (C.normalForce[c] > 0)
