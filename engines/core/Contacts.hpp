@@ -37,6 +37,11 @@ struct Contacts {
     std::vector<Vec3> pos;
     Mat3 hSize = Mat3::Zero();
     bool sheared = false;  // images by the full hSize (a sheared cell), else by its diagonal
+    // The offset of periodic image k in that cell, with the force loop's arithmetic.
+    Vec3 image(const Vec3i& k) const {
+      const Vec3 x = k.cast<Real>();
+      return sheared ? Vec3(hSize * x) : Vec3(x.cwiseProduct(hSize.diagonal()));
+    }
   } evaluation;
 
   // Whether the branch vectors are those of the nb bodies' last force evaluation.
@@ -54,9 +59,7 @@ struct Contacts {
   // arithmetic is the force loop's: the bits the loop used, on the baseline build; at x86-64-v3
   // the compiler may fuse it into the caller's multiply-adds otherwise than in the loop (1 ulp).
   Vec3 branch(int c) const {
-    const Vec3 k = shift[c].cast<Real>();
-    const Vec3 image = evaluation.sheared ? Vec3(evaluation.hSize * k) : Vec3(k.cwiseProduct(evaluation.hSize.diagonal()));
-    return evaluation.pos[b2[c]] + image - evaluation.pos[b1[c]];
+    return evaluation.pos[b2[c]] + evaluation.image(shift[c]) - evaluation.pos[b1[c]];
   }
 
   // Incidence lists (pairs of each body) for per-body measures and the time step:

@@ -111,11 +111,9 @@ void ContactDetection::rebuild(Scene& s) {
     B.pos[b] -= frame.offset(wrap[b]);
   }
   for (int c = 0; c < C.size(); ++c) C.shift[c] += wrap[C.b2[c]] - wrap[C.b1[c]];
-  if (C.evaluated(nb)) {  // the last evaluation's centres the same way, so each branch stays its vector
-    const Frame evaluated(C.evaluation.hSize);
+  if (C.evaluated(nb))  // the last evaluation's centres the same way, so each branch stays its vector
     for (int b = 0; b < nb; ++b)
-      if (wrap[b] != Vec3i::Zero()) C.evaluation.pos[b] -= evaluated.offset(wrap[b]);
-  }
+      if (wrap[b] != Vec3i::Zero()) C.evaluation.pos[b] -= C.evaluation.image(wrap[b]);
   s.refreshMembers();
 
   // 2. Cell grid in reduced coordinates, with bins no thinner than the interaction range: two

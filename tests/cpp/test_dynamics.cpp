@@ -72,8 +72,8 @@ TEST(ContactDetection, FindsExactlyTheOverlappingPairs) {
 // shifts; the branch vectors, read from the last force evaluation's centres (Contacts::branch),
 // stay the vectors the forces were evaluated with. Half the bodies moved one cell vector out
 // (their pairs' shifts changed to match: the same medium) and the forces evaluated there; the
-// next detection wraps them back. Every active contact's L as before, to the rounding of centres
-// ~1e-3 m against a branch of ~2e-4 m (1e-14).
+// next detection wraps them back. Every active contact's L after the detection is its L before
+// it, to the rounding of centres ~1e-3 m against a branch of ~2e-4 m (1e-14).
 TEST(ContactDetection, WrappingKeepsTheBranchVectors) {
   auto s = randomGas(400, 0.55, 7);
   Driver drv(s);
