@@ -2,6 +2,7 @@
 // Candidate pairs from the Verlet list and the contacts among them, as flat arrays walked in
 // order by the force loop. A pair is a contact while its normal force is > 0. Pairs persist
 // between detections so the tangential force keeps its history.
+#include <cstdint>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -15,6 +16,11 @@ struct Contacts {
   // (member positions are unwrapped, so this stays valid as the bodies move).
   std::vector<int> m1, m2, b1, b2;
   std::vector<Vec3i> shift;
+  // The same image as one byte, the index of the force loop's table of image offsets
+  // (imageIndex): the loop reads a byte a pair instead of 12 and looks its offset up instead of
+  // multiplying the cell by it. Written by the detection with the list; whatever else changes a
+  // shift (a flip, a renumbering, an import) invalidates the detection, which writes them anew.
+  std::vector<std::uint8_t> image;
   std::vector<Real> rbar;        // Eq. (7): 2 r1 r2 / (r1 + r2)
 
   // State of the last force evaluation.
@@ -67,6 +73,20 @@ struct Contacts {
   // side 2 of pair c, an entry ~c (< 0) means side 1.
   std::vector<int> incBegin, incidence;
 
+  // The images the table holds: up to kImageReach cells away on each axis. The detection's pairs
+  // are within one cell of each other's wrapped centre (two for members of clumps that stick out
+  // of the cell); an image farther away means a cell not much wider than a particle, refused.
+  static constexpr int kImageReach = 2, kImageSide = 2 * kImageReach + 1, kImages = kImageSide * kImageSide * kImageSide;
+  static_assert(kImages <= 256, "an image index is one byte");
+  static bool imageInReach(const Vec3i& k) { return k.cwiseAbs().maxCoeff() <= kImageReach; }
+  static std::uint8_t imageIndex(const Vec3i& k) {
+    return static_cast<std::uint8_t>((k.x() + kImageReach) + kImageSide * ((k.y() + kImageReach) + kImageSide * (k.z() + kImageReach)));
+  }
+  static Vec3i imageOf(int index) {
+    return Vec3i(index % kImageSide, (index / kImageSide) % kImageSide, index / (kImageSide * kImageSide)) -
+           Vec3i::Constant(kImageReach);
+  }
+
   int size() const { return static_cast<int>(m1.size()); }
   bool active(int c) const { return normalForce[c] > 0; }
   Vec3 force(int c) const { return normalForce[c] * normal[c] + shearForce[c]; }  // on body 2
@@ -86,7 +106,7 @@ struct Contacts {
   }
 
   void resize(int n) {
-    m1.resize(n); m2.resize(n); b1.resize(n); b2.resize(n); shift.resize(n); rbar.resize(n);
+    m1.resize(n); m2.resize(n); b1.resize(n); b2.resize(n); shift.resize(n); image.resize(n); rbar.resize(n);
     normal.resize(n, Vec3::Zero()); overlap.resize(n, 0.0);
     normalForce.resize(n, 0.0); shearForce.resize(n, Vec3::Zero());
     rollingMoment.resize(n, Vec3::Zero());

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
 #include <tuple>
 
 #include "core/Parallel.hpp"
@@ -205,7 +206,11 @@ void ContactDetection::rebuild(Scene& s) {
         ++old;
       }
       N.m1[c] = p.m1; N.m2[c] = p.m2; N.b1[c] = M.body[p.m1]; N.b2[c] = M.body[p.m2];
+      require(Contacts::imageInReach(p.shift),
+              "ContactDetection: a pair across more than " + std::to_string(Contacts::kImageReach) +
+                  " periodic cells: the cell is too small for these particles (make it wider than a few particle diameters)");
       N.shift[c] = p.shift;
+      N.image[c] = Contacts::imageIndex(p.shift);
       N.rbar[c] = 2.0 * M.radius[p.m1] * M.radius[p.m2] / (M.radius[p.m1] + M.radius[p.m2]);
       if (old < nold && C.m1[old] == p.m1 && C.m2[old] == p.m2 && C.shift[old] == p.shift) {
         N.normal[c] = C.normal[old]; N.overlap[c] = C.overlap[old];

@@ -22,10 +22,18 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   Contacts& C = s.contacts;
   Bodies& B = s.bodies;
   const Members& M = s.members;
-  // Orthorhombic cells act axis by axis (3 products where a sheared cell needs 9): image
-  // offsets hSize k and the affine relative velocity L branch.
+  // Orthorhombic cells act axis by axis (3 products where a sheared cell needs 9): the affine
+  // relative velocity L branch.
   const Mat3 hSize = s.cell.hSize, L = s.cell.velGrad;
   const Vec3 h = hSize.diagonal(), rate = L.diagonal();
+  // The offset hSize k of every image a pair may have (Contacts::image indexes it), once a step
+  // instead of once a pair. Each is the product the pair would have made: k's entries are
+  // integers of at most 2, so each term is exact, and the sum is the same with or without FMA.
+  Vec3 offsets[Contacts::kImages];
+  for (int i = 0; i < Contacts::kImages; ++i) {
+    const Vec3 k = Contacts::imageOf(i).cast<Real>();
+    offsets[i] = Sheared ? Vec3(hSize * k) : Vec3(k.cwiseProduct(h));
+  }
   const Real dt = s.dt;
   const int nc = C.size(), nb = B.size();
   int nthreads = 1;
@@ -87,7 +95,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
     const int* const m2 = C.m2.data();
     const int* const b1 = C.b1.data();
     const int* const b2 = C.b2.data();
-    const Vec3i* const shift = C.shift.data();
+    const std::uint8_t* const image = C.image.data();
     const Real* const rbar = C.rbar.data();
     Vec3* const normal = C.normal.data();
     Real* const overlap = C.overlap.data();
@@ -164,7 +172,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         const int c = c0 + k;
         const int i = m1[c], j = m2[c];
         const int a = Clumps ? b1[c] : i, b = Clumps ? b2[c] : j;
-        const Vec3 sh = Sheared ? Vec3(hSize * shift[c].cast<Real>()) : Vec3(shift[c].cast<Real>().cwiseProduct(h));
+        const Vec3& sh = offsets[image[c]];
         const Vec3& pi = Clumps ? memberPos[i] : pos[a];
         const Vec3 pj = (Clumps ? memberPos[j] : pos[b]) + sh;
         const Vec3 d = pj - pi;
@@ -215,7 +223,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
         const Real delta = q.delta[k];
         const int i = m1[c], j = m2[c];
         const int a = Clumps ? b1[c] : i, b = Clumps ? b2[c] : j;
-        const Vec3 sh = Sheared ? Vec3(hSize * shift[c].cast<Real>()) : Vec3(shift[c].cast<Real>().cwiseProduct(h));
+        const Vec3& sh = offsets[image[c]];
         const Real ri = radius[i], rj = radius[j];
         if (Clumps) branches[k] = pos[b] + sh - pos[a];
         const Vec3& branch = branches[k];
@@ -389,6 +397,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
 
 void ContactForces::apply(Scene& s) {
   require(!s.detectionInvalid, "contact forces need an up-to-date contact list: run ContactDetection first");
+  require(s.contacts.image.size() == s.contacts.shift.size(), "contact forces need the detection's image index of each pair");
   const HertzMindlin law(s.material);
   const bool clumps = s.hasClumps(), rot = !s.blockRotations;
   if (s.material.rolling()) {  // beta and eta_r were validated with the scene at the detection

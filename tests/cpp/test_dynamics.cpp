@@ -74,6 +74,38 @@ TEST(ContactDetection, FindsExactlyTheOverlappingPairs) {
 // (their pairs' shifts changed to match: the same medium) and the forces evaluated there; the
 // next detection wraps them back. Every active contact's L after the detection is its L before
 // it, to the rounding of centres ~1e-3 m against a branch of ~2e-4 m (1e-14).
+// Each pair's image is indexed into the force loop's table of offsets (Contacts::image), in a
+// sheared cell where an offset mixes the cell's columns, for spheres and for the dimers whose
+// members stick out of the cell. The index names the pair's shift, and every contact's overlap is
+// the one its shift gives through the cell's own product, hSize k (Cell::shiftVector), to 1e-12 of
+// a radius: the same arithmetic but for the compiler's choice of fused multiply-adds (~1e-15 of
+// the radius), where an offset with a column wrong would be off by a tenth of the cell.
+TEST(ContactDetection, IndexesEachPairsImageForTheForceLoop) {
+  for (int k = 0; k < Contacts::kImages; ++k) EXPECT_EQ(Contacts::imageIndex(Contacts::imageOf(k)), k);
+  Mat3 shape;
+  shape << 1, 0.3, -0.2, 0, 1.1, 0.25, 0, 0, 0.9;
+  auto spheres = randomGasIn(shape, 400, 0.6, 3);
+  auto dimers = randomDimers(300, 0.6, 9);
+  dimers->cell.hSize = dimers->cell.hSize * shape;  // sheared, its reference kept
+  for (auto& s : {spheres, dimers}) {
+    refreshContacts(*s);
+    const Contacts& C = s->contacts;
+    const Members& M = s->members;
+    int active = 0, mixed = 0;
+    for (int c = 0; c < C.size(); ++c) {
+      ASSERT_EQ(C.image[c], Contacts::imageIndex(C.shift[c])) << "pair " << c;
+      if (!C.active(c)) continue;
+      ++active;
+      mixed += (C.shift[c].array() != 0).count() >= 2;
+      const Vec3 d = M.pos[C.m2[c]] + s->cell.shiftVector(C.shift[c]) - M.pos[C.m1[c]];
+      EXPECT_NEAR(C.overlap[c], M.radius[C.m1[c]] + M.radius[C.m2[c]] - d.norm(), 1e-12 * M.radius[C.m1[c]])
+          << "contact " << c;
+    }
+    EXPECT_GT(active, 200);
+    EXPECT_GT(mixed, 5);  // images across an edge of the cell, whose offsets mix two columns
+  }
+}
+
 TEST(ContactDetection, WrappingKeepsTheBranchVectors) {
   auto s = randomGas(400, 0.55, 7);
   Driver drv(s);
@@ -81,7 +113,10 @@ TEST(ContactDetection, WrappingKeepsTheBranchVectors) {
   Contacts& C = s->contacts;
   const Vec3 a1 = s->cell.hSize.col(0);
   for (int b = 0; b < s->bodies.size(); b += 2) s->bodies.pos[b] += a1;
-  for (int c = 0; c < C.size(); ++c) C.shift[c].x() += (C.b1[c] % 2 == 0) - (C.b2[c] % 2 == 0);
+  for (int c = 0; c < C.size(); ++c) {
+    C.shift[c].x() += (C.b1[c] % 2 == 0) - (C.b2[c] % 2 == 0);
+    C.image[c] = Contacts::imageIndex(C.shift[c]);  // what the detection would write with it
+  }
   s->refreshMembers();
   ContactForces().apply(*s);
   std::map<std::pair<int, int>, Vec3> before;  // active contacts by their spheres (one image each here)
@@ -509,4 +544,25 @@ TEST(ContactRefresh, IsExactAtTheSamePositions) {
     EXPECT_EQ(s->contacts.normalForce[c], first.contacts.normalForce[c]);
   }
   EXPECT_EQ(s->dt, 1e-8);  // the zero-time evaluation leaves the scene's step alone
+}
+
+// A pair whose image lies farther than the force loop's table reaches (Contacts::kImageReach
+// cells on an axis) is refused with what to change: here rods of seven balls, 10 radii long, in a
+// cell 2.5 radii wide along them, whose members stick out of it by up to four cell widths.
+TEST(ContactDetection, RefusesAPairFartherThanTheImageTableReaches) {
+  const Real r = 1e-4;
+  std::vector<Vec3> at;
+  for (int k = 0; k < 7; ++k) at.push_back(Vec3(1.5 * k * r, 0, 0));
+  const ClumpTemplate rod = makeClumpTemplate(at, std::vector<Real>(7, r));
+  auto s = std::make_shared<Scene>();
+  s->material = paperMaterial();
+  s->cell.setBox(Vec3(2.5 * r, 20 * r, 20 * r));
+  s->addClump(Vec3(0.1 * r, 0.2 * r, 0.3 * r), Quat::Identity(), rod);
+  s->addClump(Vec3(1.3 * r, 1.2 * r, 1.1 * r), Quat::Identity(), rod);
+  try {
+    refreshContacts(*s);
+    FAIL() << "a pair across more than two cells was not refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the cell is too small for these particles"), std::string::npos) << e.what();
+  }
 }
