@@ -68,12 +68,6 @@ TEST(ContactDetection, FindsExactlyTheOverlappingPairs) {
   EXPECT_EQ(coordination(*s).contacts, brute);
 }
 
-// A detection wraps the bodies that left the cell back into it and changes their pairs' image
-// shifts; the branch vectors, read from the last force evaluation's centres (Contacts::branch),
-// stay the vectors the forces were evaluated with. Half the bodies moved one cell vector out
-// (their pairs' shifts changed to match: the same medium) and the forces evaluated there; the
-// next detection wraps them back. Every active contact's L after the detection is its L before
-// it, to the rounding of centres ~1e-3 m against a branch of ~2e-4 m (1e-14).
 // Each pair's image is indexed into the force loop's table of offsets (Contacts::image), in a
 // sheared cell where an offset mixes the cell's columns, for spheres and for the dimers whose
 // members stick out of the cell. The index names the pair's shift, and every contact's overlap is
@@ -106,6 +100,12 @@ TEST(ContactDetection, IndexesEachPairsImageForTheForceLoop) {
   }
 }
 
+// A detection wraps the bodies that left the cell back into it and changes their pairs' image
+// shifts; the branch vectors, read from the last force evaluation's centres (Contacts::branch),
+// stay the vectors the forces were evaluated with. Half the bodies moved one cell vector out
+// (their pairs' shifts changed to match: the same medium) and the forces evaluated there; the
+// next detection wraps them back. Every active contact's L after the detection is its L before
+// it, to the rounding of centres ~1e-3 m against a branch of ~2e-4 m (1e-14).
 TEST(ContactDetection, WrappingKeepsTheBranchVectors) {
   auto s = randomGas(400, 0.55, 7);
   Driver drv(s);
