@@ -25,15 +25,7 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   // Orthorhombic cells act axis by axis (3 products where a sheared cell needs 9): the affine
   // relative velocity L branch.
   const Mat3 hSize = s.cell.hSize, L = s.cell.velGrad;
-  const Vec3 h = hSize.diagonal(), rate = L.diagonal();
-  // The offset hSize k of every image a pair may have (Contacts::image indexes it), once a step
-  // instead of once a pair. Each is the product the pair would have made: k's entries are
-  // integers of at most 2, so each term is exact, and the sum is the same with or without FMA.
-  Vec3 offsets[Contacts::kImages];
-  for (int i = 0; i < Contacts::kImages; ++i) {
-    const Vec3 k = Contacts::imageOf(i).cast<Real>();
-    offsets[i] = Sheared ? Vec3(hSize * k) : Vec3(k.cwiseProduct(h));
-  }
+  const Vec3 rate = L.diagonal();
   const Real dt = s.dt;
   const int nc = C.size(), nb = B.size();
   int nthreads = 1;
@@ -62,6 +54,12 @@ void ContactForces::compute(Scene& s, const HertzMindlin& law) {
   C.evaluation.sheared = Sheared;
   C.evaluation.pos.resize(nb);
   Vec3* const evaluatedPos = C.evaluation.pos.data();
+  // The offset of every image a pair may have (Contacts::image indexes it) in this cell, once a
+  // step instead of once a pair, by the evaluation's own arithmetic (Contacts::branch uses it too):
+  // k's entries are integers of at most 2, so each term is exact, and the sum is the same with or
+  // without FMA.
+  Vec3 offsets[Contacts::kImages];
+  for (int i = 0; i < Contacts::kImages; ++i) offsets[i] = C.evaluation.image(Contacts::imageOf(i));
 
 #pragma omp parallel reduction(+ : sliding) if (worthThreads(nc))
   {
