@@ -1,4 +1,4 @@
-"""docs/studies/paper-size.md, "Size series, seed 1": the two tables are what trueaniso.analysis.seeds
+"""docs/studies/paper-size.md, "Size series, seed 1": the three tables are what trueaniso.analysis.seeds
 writes from the committed studies (one column a size, seed 1), and what the readings say of them holds."""
 import os
 
@@ -9,7 +9,8 @@ DATA = os.path.join(REPO, "docs", "data")
 SERIES = {"size-series-spheres": ("spheres", ["spheres-1000/s1", "spheres-4000/s1", "spheres-16000/s1",
                                              "spheres-53004-s1"]),
           "size-series-clump2": ("clump2", ["clump2-1000/s1", "clump2-2000/s1", "clump2-4000/s1",
-                                            "clump2-16000/s1"])}
+                                            "clump2-16000/s1"]),
+          "size-series-clump1": ("clump1", ["clump1-2000/s1", "clump1-4000/s1", "clump1-16000/s1"])}
 
 
 def headlines(block):
@@ -33,9 +34,26 @@ def test_what_the_readings_say_of_clump2_holds():
     assert all(0.45 < x["Zm_drop"] < 0.6 for x in h)
 
 
+def test_what_the_readings_say_of_clump1_holds():
+    """Size moves nothing beyond the 2000-clump seeds' scatter (e within 0.004 of each other and of the
+    paper's 0.445, E_z/E_x within 0.05, Table B1's ratios within 0.002); the preparation's steps grow
+    with size."""
+    h = headlines("size-series-clump1")
+    e = [x["e"] for x in h]
+    assert max(e) - min(e) < 0.004 and all(abs(x - 0.445) < 0.004 for x in e)
+    ez = [x["Ez_Ex"] for x in h]
+    assert max(ez) - min(ez) < 0.05 and all(x < 1.9 for x in ez)
+    for i in range(3):
+        r = [x["B1_ratio"][i] for x in h]
+        assert max(r) - min(r) <= 0.002
+    steps = [x["prep_steps"] for x in h]
+    assert steps[0] < steps[1] < steps[2]
+
+
 def test_the_cost_table_is_that_of_its_data(tmp_path):
     from trueaniso.analysis import cost
-    studies = [os.path.join(REPO, "docs", "data", d) for d in ("spheres-16000/s1", "spheres-53004-s1", "clump2-16000/s1")]
+    studies = [os.path.join(REPO, "docs", "data", d) for d in ("spheres-16000/s1", "spheres-53004-s1", "clump2-16000/s1",
+                                                                 "clump1-16000/s1")]
     assert_page_is_its_data(tmp_path, "studies/paper-size.md",
                             lambda doc: cost.main(studies + ["--doc", doc, "--block", "paper-size-cost"]))
     # What the reading says: the longest path and the static solves' growth.
