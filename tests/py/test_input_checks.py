@@ -356,7 +356,7 @@ import os, signal, sys, time
 sys.path.insert(0, %r)
 from trueaniso import cli
 def main():
-    cli.saves_work_in(lambda: True, complete=lambda: %s)
+    cli.saves_work_in(lambda: True, complete=lambda: %s, resumes=cli.RESUMES_PREPARATION)
     %s
     print("last line", flush=True)
     os.kill(os.getpid(), signal.SIGINT)  # the key pressed between the last line and the end of main
@@ -380,6 +380,33 @@ def test_signal_between_the_last_line_and_the_end_of_main(tmp_path, complete, ma
         assert proc.returncode == 0 and proc.stderr == "", (proc.returncode, proc.stderr)
     else:
         assert proc.returncode == 130 and "interrupted; the same command resumes" in proc.stderr, proc.stderr
+
+
+def test_the_interrupted_line_says_what_the_rerun_does(monkeypatch):
+    """A preparation resumes mid-stage from its checkpoint; a study from what it finished, the state
+    or probe under way redone (run_study.py is the one, then the other, once its specimen exists)."""
+    for name in ("_saved_work", "_work_complete", "_resumes"):
+        monkeypatch.setattr(cli, name, getattr(cli, name))
+    cli.saves_work_in(lambda: True, resumes=cli.RESUMES_PREPARATION)
+    assert cli._interrupted_line() == "interrupted; the same command resumes the preparation from its last checkpoint"
+    cli.saves_work_in(lambda: True, resumes=cli.RESUMES_STUDY)
+    assert cli._interrupted_line() == ("interrupted; the same command resumes from the finished states and probes; one "
+                                       "cut short starts again from the last state finished before it on its path, or "
+                                       "from the specimen")
+    specimen_written = []
+    cli.saves_work_in(lambda: True,
+                      resumes=lambda: cli.RESUMES_STUDY if specimen_written else cli.RESUMES_PREPARATION)
+    assert cli._interrupted_line().endswith(cli.RESUMES_PREPARATION)
+    specimen_written.append(True)
+    assert cli._interrupted_line().endswith(cli.RESUMES_STUDY)
+    cli.saves_work_in(lambda: False, resumes=cli.RESUMES_STUDY)
+    assert cli._interrupted_line() == "interrupted before the first checkpoint; the same command starts over"
+
+    def unreadable():
+        raise OSError("cannot look")
+    cli.saves_work_in(unreadable, resumes=cli.RESUMES_PREPARATION)
+    assert cli._interrupted_line() == ("interrupted; the same command resumes the preparation from its last "
+                                       "checkpoint, if any was written (else it starts over)")
 
 
 SIGNAL_IN_A_FINALIZER = """
