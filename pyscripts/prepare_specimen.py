@@ -179,7 +179,7 @@ def main():
     dist = validate(o)
     cli.resolve_time_step(o)
     o.given = dict(threads=o.threads, checkpoint_every=o.checkpoint_every)  # before a resumed preparation's
-    cli.saves_work_in(lambda: os.path.exists(prep_checkpoint.path_for(o.out)))
+    cli.saves_work_in(lambda: os.path.exists(prep_checkpoint.path_for(o.out)), resumes=cli.RESUMES_PREPARATION)
     directory, name = os.path.split(os.path.abspath(o.out))
     # One preparation per output at a time; under the lock, the temporary files of an
     # interrupted preparation of this output are removed.

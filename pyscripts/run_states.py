@@ -199,7 +199,8 @@ def main(argv=None):
     o = cli.parse(parser(), argv)
     states = validate(o)
     cli.saves_work_in(lambda: study_dir.has_saved_work(o.out),
-                      complete=lambda: study_dir.has_rows(o.out, [i for i, _, _ in states], o.probe_axes))
+                      complete=lambda: study_dir.has_rows(o.out, [i for i, _, _ in states], o.probe_axes),
+                      resumes=cli.RESUMES_STUDY)
     executor = mpi_executor(o)
     if o.threads:
         from trueaniso import resources

@@ -284,7 +284,8 @@ def main(argv=None):
     states = validate(o)
     specimen_path = o.specimen or os.path.join(o.out, SPECIMEN)
     cli.saves_work_in(lambda: study_dir.has_saved_work(o.out) or (
-        not o.specimen and (os.path.exists(specimen_path) or os.path.exists(prep_checkpoint.path_for(specimen_path)))))
+        not o.specimen and (os.path.exists(specimen_path) or os.path.exists(prep_checkpoint.path_for(specimen_path)))),
+        resumes=lambda: cli.RESUMES_STUDY if os.path.exists(specimen_path) else cli.RESUMES_PREPARATION)
     if o.threads:
         resources.use_threads(o.threads)
 

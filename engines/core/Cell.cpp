@@ -1,6 +1,7 @@
 #include "core/Cell.hpp"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <unsupported/Eigen/MatrixFunctions>
 
@@ -14,13 +15,35 @@ Real skewness(const Mat3& h) {
   return norms > 0 ? h.determinant() / norms : 0.0;
 }
 
-void requireCellMatrix(const Mat3& h, const char* name) {
+// Pairwise size reduction of the columns of h: a_j -= k a_i, k = round(mu), while |mu| > 1/2, with
+// mu = a_j . a_i / |a_i|^2; step(i, j, k) is told of every step. Each step shortens a_j strictly
+// (by |a_i|^2 k (2 mu - k) > 0), and the lattice has finitely many shorter vectors, so this ends;
+// the cap is a guard against round-off only. h ends as another basis of the same lattice.
+template <class Step>
+void sizeReduce(Mat3& h, Step&& step) {
+  for (int iter = 0; iter < 100; ++iter) {
+    bool changed = false;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        if (i == j) continue;
+        const Real mu = h.col(j).dot(h.col(i)) / h.col(i).squaredNorm();
+        if (!(std::abs(mu) > 0.5 + 1e-9)) continue;
+        const Real k = std::round(mu);
+        h.col(j) -= k * h.col(i);
+        step(i, j, k);
+        changed = true;
+      }
+    if (!changed) break;
+  }
+}
+
+void requireCellMatrix(const Mat3& h, const char* name, Real skew) {
   std::ostringstream m;
   if (!h.allFinite()) m << "the cell matrix " << name << " has non-finite entries";
-  else if (skewness(h) < 0)
+  else if (skew < 0)
     m << "the cell matrix " << name << " is inverted (det = " << h.determinant()
       << " < 0: its columns, the cell vectors, must form a right-handed set)";
-  else if (skewness(h) < 1e-6)
+  else if (skew < 1e-6)
     m << "the cell matrix " << name << " is singular (det = " << h.determinant()
       << ": its columns, the cell vectors, are coplanar or zero)";
   if (!m.str().empty()) throw InputError(m.str());
@@ -38,8 +61,29 @@ Vec3 Cell::widths() const {
 }
 
 void Cell::validate() const {
-  requireCellMatrix(hSize, "hSize");
-  requireCellMatrix(refHSize, "refHSize");
+  requireCellMatrix(hSize, "hSize", skewness(hSize));
+  // The reference cell is judged by its lattice, then by the round-off of F. Every flip maps
+  // refHSize by the flip's M, as it maps hSize, so that F = hSize refHSize^-1 is the motion alone;
+  // unlike hSize it is never reduced back, so its vectors skew as the product of the flips grows
+  // (simple shears of 1 alternating between the xz and zx planes, 15 in all: skewness 5e-7).
+  // Those vectors still span the reference cell's lattice, and a size-reduced basis of it, the
+  // same after any flips, says whether the reference is degenerate. What the skew of the vectors
+  // themselves costs is accuracy: F's relative round-off grows as eps / skewness (measured 0.07-0.8
+  // of it down to skewness 1e-16), so below 1e-9 F, every strain and the servo's strain guard would
+  // carry up to 2e-7 of round-off and more.
+  Mat3 reduced = refHSize;
+  if (refHSize.allFinite()) sizeReduce(reduced, [](int, int, Real) {});
+  requireCellMatrix(refHSize, "refHSize", skewness(reduced));
+  if (skewness(refHSize) < 1e-9) {
+    std::ostringstream m;
+    m << "the cell matrix refHSize has vectors so skewed (det / |a_1||a_2||a_3| = " << skewness(refHSize)
+      << ", as many cell flips leave them; a reduced basis of their lattice has " << skewness(reduced)
+      << ") that the deformation gradient "
+      << "hSize refHSize^-1 would carry a relative round-off of "
+      << std::numeric_limits<Real>::epsilon() / skewness(refHSize)
+      << "; take the present cell as the reference (refHSize = hSize, in Python Scene.cell_ref = Scene.cell) to go on";
+    throw InputError(m.str());
+  }
   require(velGrad.allFinite(), "the cell's velocity gradient has non-finite entries");
 }
 
@@ -52,23 +96,7 @@ Mat3i Cell::reduction(Real threshold) const {
       if (i != j && std::abs(coefficient(i, j)) > threshold) needed = true;
   Mat3i M = Mat3i::Identity();
   if (!needed) return M;
-  // Pairwise size reduction: a_j -= round(mu) a_i while |mu| > 1/2. Each step shortens a_j
-  // strictly (by |a_i|^2 k (2 mu - k) > 0), and the lattice has finitely many shorter vectors,
-  // so this ends; the cap is a guard against round-off only.
-  for (int iter = 0; iter < 100; ++iter) {
-    bool changed = false;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) {
-        if (i == j) continue;
-        const Real mu = coefficient(i, j);
-        if (std::abs(mu) <= 0.5 + 1e-9) continue;
-        const int k = static_cast<int>(std::lround(mu));
-        h.col(j) -= k * h.col(i);
-        M.col(j) -= k * M.col(i);
-        changed = true;
-      }
-    if (!changed) break;
-  }
+  sizeReduce(h, [&](int i, int j, Real k) { M.col(j) -= static_cast<int>(k) * M.col(i); });
   return M;
 }
 

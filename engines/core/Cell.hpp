@@ -44,8 +44,9 @@ struct Cell {
   Vec3 widths() const;
 
   // Throws InputError for a cell that cannot be simulated: non-finite, singular (vectors nearly
-  // coplanar) or inverted (a left-handed set of vectors, det hSize < 0), the same for refHSize,
-  // or a non-finite velGrad.
+  // coplanar) or inverted (a left-handed set of vectors, det hSize < 0), the same for the lattice
+  // of refHSize (its vectors themselves skew with every flip, refused only where F = hSize
+  // refHSize^-1 would lose more than about 2e-7 to round-off), or a non-finite velGrad.
   void validate() const;
 
   // The unimodular integer M that size-reduces the cell vectors (|a_i . a_j| <= |a_i|^2 / 2 for

@@ -490,18 +490,30 @@ def release_start_guard():
 
 _saved_work = None  # set by a resumable script once it knows where its work goes (saves_work_in)
 _work_complete = None  # ... and how to see that all of it is written (saves_work_in's complete)
+_resumes = None  # ... and what its rerun does with that work (saves_work_in's resumes)
 _done = False  # set by work_done()
 
+# What the same command does with the work an interrupted run saved, by the kind of work. A
+# preparation continues from its last checkpoint, mid-stage. A study continues from what it
+# finished: a state or probe cut short leaves nothing, and is redone from the checkpoint of the
+# last state before it on its path, or from the specimen (study.run_states, docs/runs.md).
+RESUMES_PREPARATION = "resumes the preparation from its last checkpoint"
+RESUMES_STUDY = ("resumes from the finished states and probes; one cut short starts again from the last state "
+                 "finished before it on its path, or from the specimen")
 
-def saves_work_in(check, complete=None):
+
+def saves_work_in(check, *, resumes, complete=None):
     """Tell guarded() how to see whether an interrupted run has anything to resume from: check()
     is True when a checkpoint or a finished row of this command's work is on disk. Without it, an
     interruption before the first checkpoint promised a resume, and the rerun started over.
     complete(), when given, is True once all of the command's work is written: a Ctrl-C then (in
-    the few milliseconds between the last line and the end of main) ends the run as finished."""
-    global _saved_work, _work_complete
+    the few milliseconds between the last line and the end of main) ends the run as finished.
+    resumes: what the rerun then does (RESUMES_PREPARATION, RESUMES_STUDY), or a function that
+    says it at the time (a study that prepares its specimen first is one, then the other)."""
+    global _saved_work, _work_complete, _resumes
     _saved_work = check
     _work_complete = complete
+    _resumes = resumes
 
 
 def work_done():
@@ -522,14 +534,21 @@ def _complete_already():
         return False
 
 
+def _resume_words():
+    try:
+        return _resumes() if callable(_resumes) else _resumes
+    except Exception:  # cannot tell which: the words that hold for both
+        return "resumes from the last checkpoint of its preparation or the last state it finished"
+
+
 def _interrupted_line(what="interrupted"):
     if _saved_work is None:  # stopped before the script knew its output: nothing was saved
         return what + " before the first checkpoint; the same command starts over"
     try:
         saved = _saved_work()
     except Exception:  # cannot look (unreadable, undecodable): the promise that holds whenever one was written
-        return what + "; the same command resumes from the last checkpoint, if one was written"
-    return what + ("; the same command resumes from the last checkpoint" if saved
+        return what + "; the same command " + _resume_words() + ", if any was written (else it starts over)"
+    return what + ("; the same command " + _resume_words() if saved
                    else " before the first checkpoint; the same command starts over")
 
 
@@ -638,7 +657,7 @@ def io_error_line(exc, resumable=False):
            errno.EPERM: "make it writable for this user"}.get(exc.errno, "fix that")
     if resumable:
         return "%s; the results already written are kept; %s and run the same command again: %s" % (
-            where, fix, "it resumes from the last checkpoint" if _saved() else "it starts over")
+            where, fix, "it " + _resume_words() if _saved() else "it starts over")
     return "%s; files already written are kept; %s and run the same command again" % (where, fix)
 
 

@@ -1,8 +1,8 @@
 """What this machine can run: cores, memory, and the cost of a specimen of N spheres.
 
-The per-sphere costs are measured (docs/specimens.md, "Files" and "Preparation cost"), not derived; they are upper bounds
-with a margin so that a refusal is never wrong by a factor, and an estimate is printed before
-long work so a user can stop it.
+The per-sphere costs are measured (docs/specimens.md, "Files" and "Preparation cost"), not derived.
+The memory costs are upper bounds with a margin, so that a refusal is never wrong by a factor; the
+time is a central estimate, printed before long work so that a user can stop it.
 """
 import os
 
@@ -20,16 +20,21 @@ INTERPRETER_BYTES = {"python3": 60e6, "yade": 300e6}
 # The exact static solve (statics.static_stiffness, run by run_study.py on its specimen):
 # 7.6 GB at 53,004 spheres (docs/statics.md) = 143 kB per sphere; 160 kB with a margin.
 STATICS_BYTES_PER_SPHERE = 160e3
-# Preparation time: random placement ~3.5 ms per sphere (pure Python), then the recipe's steps at
-# ~0.45 us per member sphere on one thread: 53,004 spheres took 80 min of CPU for 180,000 steps
-# (0.50 us, beside other jobs), the 53,004-clump1 preparation 0.27-0.33 us a member
-# (docs/runs.md, "The paper's size"). A figure of a slower force loop (0.75 us) would give estimates 2-5 times the wall
-# time (51 s said, 11 s taken, at 300 spheres, whose recipe takes half the steps of a large one).
-PLACEMENT_SECONDS_PER_SPHERE = 3.5e-3
-STEP_SECONDS_PER_SPHERE = 0.45e-6
-# Steps of each recipe (docs/specimens.md, "Preparation cost"): spheres about 2e5; clump1's
-# rotation-free expansion creeps, 380,000 at 4000 clumps; clump2 215,500.
-PREPARATION_STEPS = {"sphere": 2.2e5, "clump1": 3.8e5, "clump2": 2.2e5}
+# Preparation time: the random placement, then the recipe's steps, each costing about the same per
+# member sphere at every size. Measured with prepare_specimen.py --threads 1, seed 1, x86-64-v3, on
+# the 2-core machine beside two jobs at nice 19 (docs/studies/specimens.md, "Preparation cost"):
+# placement 1.2-1.6 ms a sphere; 300 spheres 138,000 steps in 8.6 s, 1000 142,000 in 27.2 s, 4000
+# 186,000 in 160 s: 0.19-0.21 us a sphere and step; 300 clump1 (1500 members) 154,500 in 37.4 s,
+# 0.16 us. These estimate 1.24, 1.31 and 0.89 times those spheres' times and 1.9 times the clumps'.
+# A step of 64,000 spheres costs about 1.25 times a step of 4000 (docs/benchmarks.md), so the
+# paper's size takes somewhat longer than said.
+PLACEMENT_SECONDS_PER_SPHERE = 1.5e-3
+STEP_SECONDS_PER_SPHERE = 0.2e-6
+# Steps of each recipe at 4000 particles. Spheres' hardly grow with N: 138,000 at 300, 186,000 at
+# 4000 and 180,000 at 53,004. clump1's rotation-free expansion creeps longer in a larger packing:
+# 154,500 at 300 clumps, 210,000 at 2000, 230,000 at 4000, 276,500 at 16,000. clump2 215,500 at
+# 4000 (docs/studies/specimens.md, "Preparation cost"; docs/studies/paper-size.md, "Size series").
+PREPARATION_STEPS = {"sphere": 1.7e5, "clump1": 2.3e5, "clump2": 2.2e5}
 MEMORY_SHARE = 0.8  # what a run may plan to use of the machine's memory (the rest: OS, other users)
 
 
@@ -130,19 +135,17 @@ def preparation_estimate(n, threads, assembly="sphere"):
 
 
 # The largest clump count whose preparation's step count was measured, and what is known above it.
-# clump1's count grows: its preparation at 53,004 clumps had not converged after 402,000 steps, its
-# stress 844 Pa from the 100 Pa criterion (docs/studies/paper-size.md, "The paper's clump counts").
-# clump2's did not, up to 16,000 clumps: 136,500 steps against 154,500 at 4000 ("Size series").
-CLUMP_STEPS_MEASURED_UP_TO = {"clump1": 4000, "clump2": 16000}
-_BEYOND = {"clump1": " at least (the step count of 4000 clumps; larger clump1 specimens take more steps, docs/runs.md)",
+# clump1's count grows: 16,000 clumps took 1.2 times the steps of 4000 (docs/studies/paper-size.md,
+# "Size series"). clump2's did not, up to 16,000 clumps: 136,500 steps against 154,500 at 4000.
+CLUMP_STEPS_MEASURED_UP_TO = {"clump1": 16000, "clump2": 16000}
+_BEYOND = {"clump1": " at least (the step count of 4000 clumps; 16,000 took 1.2 times it, larger clump1 specimens "
+                     "take more steps: docs/studies/paper-size.md)",
            "clump2": " (the step count of 4000 clumps; 16,000 took 0.88 of it, larger clump2 specimens were not "
                      "measured: docs/studies/paper-size.md)"}
 
 
 def preparation_caveat(assembly, clumps):
-    """Words after a preparation's time estimate beyond the clump counts measured, else ''. The
-    estimate would say 7.7 h for the clump1 specimen of the paper's size, which ran 10 h without
-    converging."""
+    """Words after a preparation's time estimate beyond the clump counts measured, else ''."""
     if assembly == "sphere" or clumps <= CLUMP_STEPS_MEASURED_UP_TO[assembly]:
         return ""
     return _BEYOND[assembly]

@@ -344,6 +344,76 @@ TEST(ShearedCell, RefusesSingularAndInvertedCells) {
   EXPECT_EQ(detection.flips, 1);
 }
 
+// Simple shears of 1 alternating between the xz and zx planes (F = (S_xz S_zx)^n, whose lattice maps
+// onto itself), the cell flipped whenever detection would: hSize stays nearly orthogonal while
+// refHSize, mapped by every flip, skews as 2.6^n. After 16 legs (skewness of refHSize 5e-7, a check
+// on its vectors refused it as singular below 1e-6) the cell is valid and F = hSize refHSize^-1 is
+// still the motion; sheared on, it is refused where F's round-off would pass about 2e-7, saying so;
+// and a reference whose lattice is degenerate or inverted is still refused as such.
+TEST(ShearedCell, ManyFlipsKeepTheReferenceCellValid) {
+  Cell cell;
+  cell.setBox(Vec3(1.0, 1.1, 0.9));
+  Mat3 motion = Mat3::Identity();
+  auto skewness = [](const Mat3& h) { return h.determinant() / (h.col(0).norm() * h.col(1).norm() * h.col(2).norm()); };
+  auto message = [](const Cell& c) {
+    try {
+      c.validate();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  int flips = 0, leg = 0;
+  std::string refused;
+  Cell lastValid;
+  Mat3 lastMotion;
+  for (; leg < 40 && refused.empty(); ++leg) {
+    const Mat3 step = leg % 2 == 0 ? simpleShear(0, 2, 0.1) : simpleShear(2, 0, 0.1);
+    for (int k = 0; k < 10 && refused.empty(); ++k) {
+      cell.hSize = step * cell.hSize;
+      motion = step * motion;
+      const Mat3i M = cell.reduction(0.55);
+      if (M != Mat3i::Identity()) {
+        cell.flip(M);
+        ++flips;
+      }
+      refused = message(cell);
+      if (refused.empty()) {
+        lastValid = cell;
+        lastMotion = motion;
+      }
+    }
+    if (leg == 15) {
+      ASSERT_EQ(refused, "") << "after 16 legs";
+      EXPECT_LT(skewness(cell.refHSize), 1e-6) << "the flips did not skew the reference cell as far as they should";
+      EXPECT_GT(skewness(cell.hSize), 0.5);
+      EXPECT_GT(flips, 16);
+      EXPECT_LT((cell.deformation() - motion).norm(), 1e-8 * motion.norm());
+    }
+  }
+  EXPECT_GT(leg, 20);
+  EXPECT_NE(refused.find("refHSize has vectors so skewed"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("round-off"), std::string::npos) << refused;
+  EXPECT_LT((lastValid.deformation() - lastMotion).norm(), 2e-6 * lastMotion.norm());
+  EXPECT_NEAR(lastValid.refHSize.determinant(), 1.0 * 1.1 * 0.9, 1e-6);
+
+  Cell bad = lastValid;
+  bad.refHSize.col(2) = bad.refHSize.col(0) + bad.refHSize.col(1);  // coplanar
+  EXPECT_NE(message(bad).find("refHSize is singular"), std::string::npos) << message(bad);
+  bad.refHSize = lastValid.refHSize;
+  bad.refHSize.col(1).setZero();
+  EXPECT_NE(message(bad).find("refHSize is singular"), std::string::npos) << message(bad);
+  bad.refHSize = Mat3::Identity();
+  bad.refHSize.col(2) = Vec3(0.3, 0.4, 1e-12);  // nearly coplanar: F would be mostly round-off
+  EXPECT_NE(message(bad).find("refHSize has vectors so skewed"), std::string::npos) << message(bad);
+  bad.refHSize = lastValid.refHSize;
+  bad.refHSize.col(2) *= -1.0;
+  EXPECT_NE(message(bad).find("refHSize is inverted"), std::string::npos) << message(bad);
+  bad.refHSize = lastValid.refHSize;
+  bad.refHSize(1, 1) = std::numeric_limits<Real>::infinity();
+  EXPECT_NE(message(bad).find("refHSize has non-finite"), std::string::npos) << message(bad);
+}
+
 // The affine field of a full velocity gradient in the force loop: a simple cubic lattice (spacing
 // a, k_s of its contacts) under L = g e_x (x) e_z (v_x = g z), one force evaluation over dt with
 // rotations blocked. Only the z-contacts slide, by g a dt along x (the image contacts across the

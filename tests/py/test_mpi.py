@@ -11,6 +11,7 @@ import time
 
 import pytest
 from conftest import SCRIPTS, one_line_error, run_script
+from trueaniso import cli
 
 WALL = {"probe_wall_time", "state_wall_time"}
 IDS = "1,2,3,21"
@@ -155,7 +156,7 @@ def test_ctrl_c_on_mpiexec_says_the_job_resumes(specimen_100, tmp_path):
     # with the 13 states would fail when 7 states are done before mpiexec acts.
     done = {state for state, _ in values(out)} if (out / "probes.csv").exists() else set()
     assert len(done) < 13, "every state was done: the signal interrupted nothing"
-    assert "error: interrupted; the same command resumes from the last checkpoint" in err, err[-3000:]
+    assert "error: interrupted; the same command " + cli.RESUMES_STUDY in err, err[-3000:]
     # The workers load the script without running it: its start-up guard must not make each of them
     # say 'interrupted while starting; nothing was done' beside the master's line.
     assert "nothing was done" not in err, err[-3000:]

@@ -369,7 +369,7 @@ def _running(out, every, *extra):
 
 
 def test_sigterm_promises_a_resume_only_when_a_checkpoint_was_written(tmp_path):
-    """'the same command resumes from the last checkpoint' only when one was written (else the rerun
+    """'the same command resumes the preparation from its last checkpoint' only when one was written (else the rerun
     starts over)."""
     out = tmp_path / "none.npz"
     proc = _running(out, 0)  # --checkpoint-every 0: no checkpoint, ever
@@ -387,7 +387,7 @@ def test_sigterm_promises_a_resume_only_when_a_checkpoint_was_written(tmp_path):
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 143, err
-    assert err.splitlines()[-1] == "error: interrupted; the same command resumes from the last checkpoint", err
+    assert err.splitlines()[-1] == "error: interrupted; the same command resumes the preparation from its last checkpoint", err
 
 
 def test_closed_output_is_one_line_not_a_traceback(tmp_path):

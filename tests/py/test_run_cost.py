@@ -9,7 +9,7 @@ import pytest
 import threadpoolctl
 
 from conftest import REPO
-from trueaniso import engines, prep_checkpoint, resources, run_cost, specimen, specimen_file, statics, study, validate
+from trueaniso import cli, engines, prep_checkpoint, resources, run_cost, specimen, specimen_file, statics, study, validate
 from trueaniso.analysis import cost
 
 SPECIMEN = os.path.join(REPO, "tests", "data", "spheres-150-s4.npz")
@@ -170,5 +170,5 @@ def test_a_script_ended_by_sigterm_says_so_first_then_records_its_cost(tmp_path)
     p.send_signal(signal.SIGTERM)
     _, err = p.communicate(timeout=120)
     assert p.returncode == 143, "the study ended before the signal: %s" % err[-500:]
-    assert err.strip().endswith("error: interrupted; the same command resumes from the last checkpoint")
+    assert err.strip().endswith("error: interrupted; the same command " + cli.RESUMES_STUDY)
     assert json.load(open(out / "metadata.json"))["runs"][-1]["cost"]["ended"] == "interrupted"
