@@ -15,8 +15,11 @@ Real skewness(const Mat3& h) {
   return norms > 0 ? h.determinant() / norms : 0.0;
 }
 
+// The size-reduction coefficient of column j on column i: a_j . a_i / |a_i|^2.
+Real reductionCoefficient(const Mat3& h, int i, int j) { return h.col(j).dot(h.col(i)) / h.col(i).squaredNorm(); }
+
 // Pairwise size reduction of the columns of h: a_j -= k a_i, k = round(mu), while |mu| > 1/2, with
-// mu = a_j . a_i / |a_i|^2; step(i, j, k) is told of every step. Each step shortens a_j strictly
+// mu = reductionCoefficient(h, i, j); step(i, j, k) is told of every step. Each step shortens a_j strictly
 // (by |a_i|^2 k (2 mu - k) > 0), and the lattice has finitely many shorter vectors, so this ends;
 // the cap is a guard against round-off only. h ends as another basis of the same lattice.
 template <class Step>
@@ -26,7 +29,7 @@ void sizeReduce(Mat3& h, Step&& step) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) {
         if (i == j) continue;
-        const Real mu = h.col(j).dot(h.col(i)) / h.col(i).squaredNorm();
+        const Real mu = reductionCoefficient(h, i, j);
         if (!(std::abs(mu) > 0.5 + 1e-9)) continue;
         const Real k = std::round(mu);
         h.col(j) -= k * h.col(i);
@@ -74,13 +77,14 @@ void Cell::validate() const {
   Mat3 reduced = refHSize;
   if (refHSize.allFinite()) sizeReduce(reduced, [](int, int, Real) {});
   requireCellMatrix(refHSize, "refHSize", skewness(reduced));
-  if (skewness(refHSize) < 1e-9) {
+  const Real skew = skewness(refHSize);
+  if (skew < 1e-9) {
     std::ostringstream m;
-    m << "the cell matrix refHSize has vectors so skewed (det / |a_1||a_2||a_3| = " << skewness(refHSize)
+    m << "the cell matrix refHSize has vectors so skewed (det / |a_1||a_2||a_3| = " << skew
       << ", as many cell flips leave them; a reduced basis of their lattice has " << skewness(reduced)
       << ") that the deformation gradient "
       << "hSize refHSize^-1 would carry a relative round-off of "
-      << std::numeric_limits<Real>::epsilon() / skewness(refHSize)
+      << std::numeric_limits<Real>::epsilon() / skew
       << "; take the present cell as the reference (refHSize = hSize, in Python Scene.cell_ref = Scene.cell) to go on";
     throw InputError(m.str());
   }
@@ -89,11 +93,10 @@ void Cell::validate() const {
 
 Mat3i Cell::reduction(Real threshold) const {
   Mat3 h = hSize;
-  auto coefficient = [&](int i, int j) { return h.col(j).dot(h.col(i)) / h.col(i).squaredNorm(); };
   bool needed = false;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
-      if (i != j && std::abs(coefficient(i, j)) > threshold) needed = true;
+      if (i != j && std::abs(reductionCoefficient(h, i, j)) > threshold) needed = true;
   Mat3i M = Mat3i::Identity();
   if (!needed) return M;
   sizeReduce(h, [&](int i, int j, Real k) { M.col(j) -= static_cast<int>(k) * M.col(i); });

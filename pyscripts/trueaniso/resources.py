@@ -30,10 +30,10 @@ STATICS_BYTES_PER_SPHERE = 160e3
 # paper's size takes somewhat longer than said.
 PLACEMENT_SECONDS_PER_SPHERE = 1.5e-3
 STEP_SECONDS_PER_SPHERE = 0.2e-6
-# Steps of each recipe at 4000 particles. Spheres' hardly grow with N: 138,000 at 300, 186,000 at
-# 4000 and 180,000 at 53,004. clump1's rotation-free expansion creeps longer in a larger packing:
-# 154,500 at 300 clumps, 210,000 at 2000, 230,000 at 4000, 276,500 at 16,000. clump2 215,500 at
-# 4000 (docs/studies/specimens.md, "Preparation cost"; docs/studies/paper-size.md, "Size series").
+# Steps of each recipe. Spheres' hardly grow with N: 138,000 at 300, 186,000 at 4000 and 180,000 at
+# 53,004; 170,000 is taken. clump1's rotation-free expansion creeps longer in a larger packing:
+# 154,500 at 300 clumps, 210,000 at 2000, 230,000 at 4000 (taken), 276,500 at 16,000. clump2 215,500
+# at 4000 (docs/studies/specimens.md, "Preparation cost"; docs/studies/paper-size.md, "Size series").
 PREPARATION_STEPS = {"sphere": 1.7e5, "clump1": 2.3e5, "clump2": 2.2e5}
 MEMORY_SHARE = 0.8  # what a run may plan to use of the machine's memory (the rest: OS, other users)
 
