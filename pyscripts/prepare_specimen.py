@@ -74,7 +74,9 @@ def options(argv=None):
     p.add_argument("--checkpoint-every", type=cli.count, default=None,
                    help="steps between checkpoints of the preparation, from which an interrupted run resumes; "
                         "default %d, or an interrupted preparation's own (0: none; the specimen is then bit for "
-                        "bit what versions before checkpoints made). A checkpoint is written between the stages' "
+                        "bit what versions before checkpoints made). An interrupted preparation resumes only at "
+                        "its own interval, which is part of its recipe (the engines restart from each checkpoint), "
+                        "so another is refused. A checkpoint is written between the stages' "
                         "chunks of %d steps (%d in a clump preparation's first stages), at the first chunk's end "
                         "at least this many steps after the last" % (prep_checkpoint.EVERY, prep_checkpoint.CHUNK,
                                                                      prep_checkpoint.FIRST_STAGES_CHUNK))
