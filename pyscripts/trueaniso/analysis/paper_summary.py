@@ -1,0 +1,199 @@
+r"""The paper-size summary: each assembly's largest study against the paper, judged by the scatter
+between seeds, and the departures that remain.
+
+    /usr/bin/python3 -m trueaniso.analysis.paper_summary \
+        --study docs/data/spheres-53004-s1 --seeds docs/data/spheres-4000/s1 docs/data/spheres-4000/s2 ... \
+        --study docs/data/clump1-16000/s1 --seeds ... [--doc docs/paper-size-summary.md --block summary]
+
+Each --study is one study directory (trueaniso.analysis.seeds reads its headlines), the --seeds after it
+the same recipe's studies of other seeds, at any size. For each study a table puts its headline
+numbers beside the seeds' mean +/- sample sd and the paper's value, and says how far the study is
+from the paper in units of the seeds' sd: the scatter between packings of one recipe, which a single
+seed cannot tell from a departure. Size is not in that sd: the size series
+(docs/studies/paper-size.md) is what says whether size moves a number.
+
+The judgement (``against_paper``): a number more than LIMIT sd from the paper's departs from it. From
+few seeds the sd is itself uncertain: at 95 % confidence the true sd is at most ``sd_bound`` times the
+sample's (the chi-square bound: 4.4 for three seeds), so a number more than LIMIT times that bound
+away departs whatever the true scatter is; one between the two is said as a departure not established.
+A paper's range ("5.94-5.99") or bound ("<= 0.05") is judged from its nearest edge.
+"""
+import math
+import re
+import sys
+
+import numpy as np
+
+from . import seeds
+from .results import ResultsError
+
+LIMIT = 2.0  # sd: outside it, about 5 % of seeds would fall were the scatter normal
+CONFIDENCE = 0.95
+# The paper's specimens (section 2.1). Our clump2 is four copies of one layer, so 69,532 (a multiple of 4)
+# stands for its 69,531 (docs/studies/paper-size.md).
+PAPER_SIZE = dict(spheres=53004, clump1=53004, clump2=69532)
+_RANGE = re.compile(r"^\s*([-+0-9.eE]+)\s*-\s*([-+0-9.eE]+)")
+_BOUND = re.compile(r"^\s*<=\s*([-+0-9.eE]+)")
+
+
+def sd_bound(count, confidence=CONFIDENCE):
+    """How many times the sample sd of `count` values the true sd may be, at `confidence` (one-sided
+    chi-square bound, normal scatter): sqrt((n - 1) / chi2.ppf(1 - confidence, n - 1)). None below two values."""
+    if count < 2:
+        return None
+    from scipy.stats import chi2
+    return math.sqrt((count - 1) / chi2.ppf(1.0 - confidence, count - 1))
+
+
+def _paper_interval(paper):
+    """The paper's value as (low, high): a number, a range "a-b" or a bound "<= b"; None when it states none."""
+    if paper is None:
+        return None
+    if isinstance(paper, (int, float)):
+        return float(paper), float(paper)
+    m = _RANGE.match(paper)
+    if m:
+        return float(m.group(1)), float(m.group(2))
+    m = _BOUND.match(paper)
+    if m:
+        return -math.inf, float(m.group(1))
+    return None  # words ("approximately constant"): nothing to measure against
+
+
+def against_paper(ours, paper, sd=None, count=0):
+    """(words, verdict) for our value against the paper's (a number, a range or a bound, module doc),
+    with the seeds' sample sd over `count` seeds. verdict: None (not judged: no paper number or no sd),
+    "agrees", "departs" (beyond LIMIT sd, not beyond LIMIT times sd_bound) or "departs, established"."""
+    interval = _paper_interval(paper)
+    if ours is None or interval is None:
+        return "", None
+    low, high = interval
+    gap = ours - high if ours > high else (ours - low if ours < low else 0.0)
+    if not (sd and sd > 0 and count >= 2):
+        if gap == 0.0:
+            return "inside", None
+        ref = high if ours > high else low
+        return ("%+.1f %%" % (100.0 * gap / abs(ref)) if ref else "%+.3g" % gap), None
+    z = gap / sd
+    if abs(z) <= LIMIT:
+        return ("inside" if gap == 0.0 and low < high else "%+.1f sd" % z), "agrees"
+    verdict = "departs, established" if abs(z) > LIMIT * sd_bound(count) else "departs"
+    return "%+.1f sd" % z, verdict
+
+
+def _count(n):
+    """4000, 16,000: the manual's way (a comma from five digits)."""
+    return "?" if not n else ("{:,}".format(n) if n >= 10000 else str(n))
+
+
+def _size_said(h, assembly):
+    n, paper_n = h["n"], PAPER_SIZE[assembly]
+    said = "%s, seed %s" % (_count(n), h["seed"])
+    return said if n == paper_n else said + "; the paper's %s not yet run to its end" % _count(paper_n)
+
+
+def assembly_table(study, seed_heads, assembly):
+    """Markdown table of one study's headlines (seeds.headlines) beside its seeds' and the paper's, and
+    the list of (row label, our value, paper cell, words, verdict) of the rows judged to depart."""
+    paper = seeds.paper_values(assembly)
+    sizes = sorted({h["n"] for h in seed_heads if h["n"]})
+    seeds_said = "%s, %d seeds" % ("/".join(_count(n) for n in sizes) or "?", len(seed_heads))
+    out = ["| | ours (%s) | seeds (%s) | paper | ours - paper |" % (_size_said(study, assembly), seeds_said),
+           "|---|---|---|---|---|"]
+    departures = []
+    bound = sd_bound(len(seed_heads))
+    for label, key, fmt in seeds.HEADLINE_ROWS:
+        ours = seeds._value(study, key)
+        values = [v for v in (seeds._value(h, key) for h in seed_heads) if v is not None]
+        if ours is None and not values:
+            continue
+        sd = float(np.std(values, ddof=1)) if len(values) >= 2 else None
+        p = seeds._value(paper, key)
+        paper_cell = seeds._paper_cell(paper, key, fmt)
+        if key in ("K_iso", "G_iso") and ours is not None:  # Table 2's quadratics where they hold, at our Zm
+            kg = seeds.paper_K_G(assembly, study["Zm_iso"])
+            if kg:
+                p = kg[0 if key == "K_iso" else 1]
+                paper_cell = "%.1f (Table 2 at Zm %.2f)" % (p, study["Zm_iso"])
+        words, verdict = against_paper(ours, p, sd, len(values))
+        if verdict is not None:
+            words = "%s: %s" % (words, verdict)
+        out.append("| %s | %s | %s | %s | %s |" % (label, "-" if ours is None else fmt % ours,
+                                                   seeds.mean_sd(values, fmt), paper_cell, words))
+        if verdict and verdict.startswith("departs"):
+            departures.append((label, fmt % ours, paper_cell, words))
+    if bound:
+        out.append("")
+        out.append("%d seeds: the true sd may be up to %.1f times theirs (%d %%), so a departure is established "
+                   "beyond %.1f sd." % (len(seed_heads), bound, round(100 * CONFIDENCE), LIMIT * bound))
+    return "\n".join(out), departures
+
+
+def summary(groups):
+    """Markdown for [(study headlines, [seed headlines])]: a section per assembly, then the departures."""
+    parts, remain = [], []
+    for study, seed_heads in groups:
+        assembly = {"sphere": "spheres"}.get(study["assembly"], study["assembly"])
+        if assembly not in PAPER_SIZE:
+            raise ResultsError("%s: assembly %r has no paper values" % (study["study"], assembly))
+        if any({"sphere": "spheres"}.get(h["assembly"], h["assembly"]) != assembly for h in seed_heads):
+            raise ResultsError("%s: its --seeds are of another assembly" % study["study"])
+        text, departures = assembly_table(study, seed_heads, assembly)
+        parts.append("### %s\n\n%s" % (assembly, text))
+        remain += [(assembly,) + d for d in departures]
+    lines = ["### The departures that remain", ""]
+    if not remain:
+        lines.append("None beyond %.0f sd of the seeds." % LIMIT)
+    for assembly, label, ours, paper, words in remain:
+        lines.append("- %s, %s: %s against the paper's %s (%s)" % (assembly, label.replace("\\|", "|"), ours, paper,
+                                                                  words))
+    return "\n\n".join(parts) + "\n\n" + "\n".join(lines)
+
+
+def main(argv=None):
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help"):
+        print(__doc__.strip())
+        return 0 if argv else 2
+    groups, doc, block, target = [], None, None, None
+    try:
+        it = iter(argv)
+        for a in it:
+            if a in ("--study", "--seeds", "--doc", "--block"):
+                if a == "--seeds":
+                    if not groups:
+                        raise ResultsError("--seeds comes after the --study they belong to")
+                    target = groups[-1][1]
+                    continue
+                value = next(it, None)
+                if value is None or value.startswith("--"):
+                    raise ResultsError("%s needs a value" % a)
+                if a == "--study":
+                    groups.append((seeds.headlines(value), []))
+                    target = None
+                elif a == "--doc":
+                    doc = value
+                else:
+                    block = value
+                continue
+            if target is None:
+                raise ResultsError("%s: a study directory goes after --study, a seed's after --seeds" % a)
+            target.append(seeds.headlines(a))
+        if not groups:
+            raise ResultsError("no --study given")
+        text = summary(groups)
+        if doc or block:
+            if not (doc and block):
+                raise ResultsError("--doc and --block go together")
+            seeds.write_block(doc, block, text)
+            print("wrote the %s block of %s" % (block, doc))
+        else:
+            print(text)
+    except ResultsError as exc:
+        sys.stderr.write("error: %s\n" % exc)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
