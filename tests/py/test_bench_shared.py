@@ -163,3 +163,55 @@ def test_bench_stepper_times_the_study_step_beside_the_bare_one(specimen_100):
     assert proc.returncode == 0, proc.stderr
     rows = [ln.split(" | ")[1] for ln in proc.stdout.splitlines() if ln.startswith("| 1 |")]
     assert rows == ["bare", "with the servo"]
+
+
+def test_expansion_creep_steps_on_as_the_preparation_does(tmp_path, specimen_100):
+    """bench/expansion_creep.py continues a preparation's expansion from its checkpoint with the
+    preparation's own servo: 2000 steps from the checkpoint at 2000 end at the mean stress the
+    preparation itself reached at 4000, to the bit; the checkpoint is only read."""
+    import json
+    from conftest import one_line_error, run_script
+    from trueaniso import engines, prep_checkpoint, specimen
+
+    class Stop(Exception):
+        pass
+
+    ck = str(tmp_path / "prep.ck")
+    seen = {}
+
+    def hook(label, scene, engine, steps):
+        if label == "expansion":
+            seen[steps] = float(engine.pressure)
+            if steps >= 4000:
+                raise Stop()
+    threads = engines.threads()
+    engines.set_threads(1)  # as the script runs (the packing depends on the count)
+    try:
+        from trueaniso import psd  # the settings prepare_specimen.py binds its checkpoints to, in part
+        recipe = dict(assembly="sphere", pressure=1e5, d50=psd.PAPER_SPHERES.d50, inertial_number=0.01)
+        specimen.prepare_spheres(100, seed=7, checkpoints=prep_checkpoint.Checkpoints(ck, recipe, 2000),
+                                 progress=hook)
+    except Stop:
+        pass
+    finally:
+        engines.set_threads(threads)
+    assert 2000 in seen and 4000 in seen
+    with open(ck, "rb") as f:
+        before = f.read()
+    # The checkpoint on disk is the one written at 2000 steps (the next was due at 4000, after the stop).
+    proc = run_script(os.path.join("bench", "expansion_creep.py"), "--checkpoint", ck, "--steps", 2000, "--every",
+                      500, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    lines = [json.loads(x) for x in proc.stdout.strip().splitlines()]
+    samples, summary = lines[:-1], lines[-1]
+    assert [s["step"] for s in samples] == [500, 1000, 1500, 2000]
+    assert samples[-1]["error"] == round(1e5 - seen[4000], 2)
+    assert summary["expansion_steps_before"] == 2000 and summary["steps"] == 2000
+    assert summary["error_min"] == min(s["error"] for s in samples) and summary["gain"] == 0.002
+    assert summary["growth_per_step"] == (samples[-1]["scale"] - 1.0) / 2000
+    with open(ck, "rb") as f:
+        assert f.read() == before
+    for args, words in ((["--checkpoint", ck, "--steps", "10", "--every", "20"], "--every (20) is more than --steps"),
+                        (["--checkpoint", str(tmp_path / "none.ck")], "no such file"),
+                        (["--checkpoint", str(specimen_100)], "is a specimen, not a preparation checkpoint")):
+        one_line_error(run_script(os.path.join("bench", "expansion_creep.py"), *args, timeout=60), words)

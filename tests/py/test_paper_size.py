@@ -60,3 +60,17 @@ def test_the_cost_table_is_that_of_its_data(tmp_path):
     c = {cost.name(s): cost.study_cost(s) for s in studies}
     assert round(c["spheres-53004-s1"]["paths"][0] / 60) == 46
     assert round(c["spheres-53004-s1"]["statics"][0] / c["spheres-16000/s1"]["statics"][0]) == 77
+
+
+def test_what_the_creep_paragraph_says_holds():
+    """The clump2-69532 free expansion stepped on from its checkpoint: below the target in every sample,
+    by 180-245 Pa (mean 209), the radii growing by 1.09e-9 a step (bench/expansion_creep.py's record)."""
+    import json
+    with open(os.path.join(DATA, "expansion-creep", "clump2-69532-s1-at-222000.jsonl")) as f:
+        lines = [json.loads(x) for x in f]
+    samples, summary = lines[:-1], lines[-1]
+    errors = [s["error"] for s in samples]
+    assert len(samples) == 32 and all(e > 0 for e in errors) and summary["one_sign"]
+    assert round(min(errors)) == 180 and round(max(errors)) == 245 and round(summary["error_mean"]) == 209
+    assert round(summary["growth_per_step"], 11) == 1.09e-9 and summary["expansion_steps_before"] == 222000
+    assert summary["gain"] == 0.002 and summary["stress_tolerance"] == 100.0
