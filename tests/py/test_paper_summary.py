@@ -1,4 +1,4 @@
-"""docs/paper-size-summary.md: its tables are what trueaniso.analysis.paper_summary writes from the
+"""docs/report-paper-size/summary.md: its tables are what trueaniso.analysis.paper_summary writes from the
 committed studies, the judgement against the paper is the one its page states, and what its
 reading says of the departures holds."""
 import math
@@ -23,7 +23,7 @@ def argv():
 
 
 def test_the_page_is_its_data(tmp_path):
-    assert_page_is_its_data(tmp_path, "paper-size-summary.md",
+    assert_page_is_its_data(tmp_path, "report-paper-size/summary.md",
                             lambda doc: paper_summary.main(argv() + ["--doc", doc, "--block", "summary"]))
 
 

@@ -3,7 +3,7 @@ between seeds, and the departures that remain.
 
     /usr/bin/python3 -m trueaniso.analysis.paper_summary \
         --study docs/data/spheres-53004-s1 --seeds docs/data/spheres-4000/s1 docs/data/spheres-4000/s2 ... \
-        --study docs/data/clump1-16000/s1 --seeds ... [--doc docs/paper-size-summary.md --block summary]
+        --study docs/data/clump1-16000/s1 --seeds ... [--doc docs/report-paper-size/summary.md --block summary]
 
 Each --study is one study directory (trueaniso.analysis.seeds reads its headlines), the --seeds after it
 the same recipe's studies of other seeds, at any size. For each study a table puts its headline
@@ -37,8 +37,8 @@ _BOUND = re.compile(r"^\s*<=\s*([-+0-9.eE]+)")
 
 
 def sd_bound(count, confidence=CONFIDENCE):
-    """How many times the sample sd of `count` values the true sd may be, at `confidence` (one-sided
-    chi-square bound, normal scatter): sqrt((n - 1) / chi2.ppf(1 - confidence, n - 1)). None below two values."""
+    """How many times the sample sd of `count` values the true sd may be, at `confidence`: the one-sided
+    chi-square bound of a normal sample's variance, its square root. None below two values."""
     if count < 2:
         return None
     from scipy.stats import chi2
@@ -139,9 +139,9 @@ def summary(groups):
         if any({"sphere": "spheres"}.get(h["assembly"], h["assembly"]) != assembly for h in seed_heads):
             raise ResultsError("%s: its --seeds are of another assembly" % study["study"])
         text, departures = assembly_table(study, seed_heads, assembly)
-        parts.append("### %s\n\n%s" % (assembly, text))
+        parts.append("## %s\n\n%s" % (assembly, text))
         remain += [(assembly,) + d for d in departures]
-    lines = ["### The departures that remain", ""]
+    lines = ["## The departures that remain", ""]
     if not remain:
         lines.append("None beyond %.0f sd of the seeds." % LIMIT)
     for assembly, label, ours, paper, words in remain:
