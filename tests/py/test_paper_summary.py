@@ -89,6 +89,23 @@ def test_bad_arguments_are_refused_in_a_line():
                        (["--study", os.path.join(DATA, "spheres-53004-s1"), "--seeds",
                          os.path.join(DATA, "clump1-2000", "s1")], "its --seeds are of another assembly"),
                        (["--study", os.path.join(DATA, "spheres-53004-s1"), "--doc", "x.md"], "--doc and --block go together"),
-                       (["--study"], "--study needs a value")):
+                       (["--study"], "--study needs a value"),
+                       (["--study", os.path.join(DATA, "spheres-53004-s1"), "--seeds"], "--seeds names no study directory"),
+                       (["--study", os.path.join(DATA, "spheres-53004-s1"), "--seeds", os.path.join(DATA, "spheres-4000", "s1"),
+                         "--seeds"], "--seeds given twice"),
+                       (["--study", os.path.join(DATA, "spheres-53004-s1"), "--doc", os.path.join(DATA, "none.md"),
+                         "--block", "summary"], "none.md: cannot read it")):
         proc = subprocess.run(script + args, capture_output=True, text=True, env=env)
         assert proc.returncode == 2 and said in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_one_seed_or_none_is_not_judged():
+    """Without two seeds there is no sd: the table gives the difference in per cent, no verdict, and
+    the departures say which assembly was not judged."""
+    one = seeds.headlines(os.path.join(DATA, "spheres-4000", "s1"))
+    study = seeds.headlines(os.path.join(DATA, "spheres-53004-s1"))
+    for seed_heads, said in (([one], "4000, 1 seed"), ([], "none given")):
+        text = paper_summary.summary([(study, seed_heads)])
+        assert "seeds (%s)" % said in text and "departs" not in text and "agrees" not in text
+        assert "| e | 0.5795 | %s | 0.5840 | -0.8 %% |" % ("0.5770" if seed_heads else "-") in text
+        assert text.endswith("Not judged, for want of two seeds or more: spheres.\n")

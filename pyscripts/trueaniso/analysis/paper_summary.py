@@ -97,7 +97,8 @@ def assembly_table(study, seed_heads, assembly):
     the list of (row label, our value, paper cell, words, verdict) of the rows judged to depart."""
     paper = seeds.paper_values(assembly)
     sizes = sorted({h["n"] for h in seed_heads if h["n"]})
-    seeds_said = "%s, %d seeds" % ("/".join(_count(n) for n in sizes) or "?", len(seed_heads))
+    seeds_said = ("%s, %d seed%s" % ("/".join(_count(n) for n in sizes), len(seed_heads), "s" * (len(seed_heads) > 1))
+                  if seed_heads else "none given")
     out = ["| | ours (%s) | seeds (%s) | paper | ours - paper |" % (_size_said(study, assembly), seeds_said),
            "|---|---|---|---|---|"]
     departures = []
@@ -131,7 +132,7 @@ def assembly_table(study, seed_heads, assembly):
 
 def summary(groups):
     """Markdown for [(study headlines, [seed headlines])]: a section per assembly, then the departures."""
-    parts, remain = [], []
+    parts, remain, unjudged = [], [], []
     for study, seed_heads in groups:
         assembly = {"sphere": "spheres"}.get(study["assembly"], study["assembly"])
         if assembly not in PAPER_SIZE:
@@ -141,9 +142,13 @@ def summary(groups):
         text, departures = assembly_table(study, seed_heads, assembly)
         parts.append("## %s\n\n%s" % (assembly, text))
         remain += [(assembly,) + d for d in departures]
+        if len(seed_heads) < 2:
+            unjudged.append(assembly)
     lines = ["## The departures that remain", ""]
-    if not remain:
-        lines.append("None beyond %.0f sd of the seeds." % LIMIT)
+    if unjudged:  # no sd to judge by: the table says the differences only
+        lines += ["Not judged, for want of two seeds or more: %s." % ", ".join(unjudged), ""]
+    if not remain and len(unjudged) < len(groups):
+        lines.append("None beyond %.0f sd of the seeds%s." % (LIMIT, " among the others" if unjudged else ""))
     for assembly, label, ours, paper, words in remain:
         lines.append("- %s, %s: %s against the paper's %s (%s)" % (assembly, label.replace("\\|", "|"), ours, paper,
                                                                   words))
@@ -163,6 +168,8 @@ def main(argv=None):
                 if a == "--seeds":
                     if not groups:
                         raise ResultsError("--seeds comes after the --study they belong to")
+                    if target is not None:
+                        raise ResultsError("--seeds given twice for %s" % groups[-1][0]["study"])
                     target = groups[-1][1]
                     continue
                 value = next(it, None)
@@ -181,6 +188,8 @@ def main(argv=None):
             target.append(seeds.headlines(a))
         if not groups:
             raise ResultsError("no --study given")
+        if target is not None and not target:
+            raise ResultsError("--seeds names no study directory")
         text = summary(groups)
         if doc or block:
             if not (doc and block):

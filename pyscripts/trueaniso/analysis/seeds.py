@@ -286,8 +286,11 @@ def write_block(path, name, body):
     """`body` between the <!-- NAME:begin --> and <!-- NAME:end --> lines of the Markdown file `path`
     (which must hold them), written atomically."""
     begin, end = "<!-- %s:begin -->" % name, "<!-- %s:end -->" % name
-    with open(path) as f:
-        text = f.read()
+    try:
+        with open(path) as f:
+            text = f.read()
+    except OSError as exc:
+        raise ResultsError("%s: cannot read it (%s)" % (path, exc.strerror or exc)) from None
     if begin not in text or end not in text:
         raise ResultsError("%s has no %s ... %s block" % (path, begin, end))
     head, rest = text.split(begin, 1)
