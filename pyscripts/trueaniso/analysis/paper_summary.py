@@ -12,11 +12,15 @@ from the paper in units of the seeds' sd: the scatter between packings of one re
 seed cannot tell from a departure. Size is not in that sd: the size series
 (docs/studies/paper-size.md) is what says whether size moves a number.
 
-The judgement (``against_paper``): a number more than LIMIT sd from the paper's departs from it. From
-few seeds the sd is itself uncertain: at 95 % confidence the true sd is at most ``sd_bound`` times the
-sample's (the chi-square bound: 4.4 for three seeds), so a number more than LIMIT times that bound
-away departs whatever the true scatter is; one between the two is said as a departure not established.
-A paper's range ("5.94-5.99") or bound ("<= 0.05") is judged from its nearest edge.
+The judgement (``against_paper``): our study is one packing and the paper's number is one too, so
+their difference scatters by the square root of 2 times the seeds' sd; a difference more than LIMIT
+times that departs. From few seeds the sd is itself uncertain: at 95 % confidence the true sd is at most
+``sd_bound`` times the sample's (the chi-square bound: 4.4 for three seeds), so a difference beyond
+LIMIT times that bound departs whatever the true scatter is ("established"); one between the two is a
+departure not established, of which about one in twenty numbers judged shows by chance. A paper's
+range ("5.94-5.99") or bound ("<= 0.05") is judged from its nearest edge. The spheres' K and G are
+shown beside the paper's Table 2 quadratics but not judged: our Zm lies below the quadratics' minima
+(Zm 5.94), outside the paper's data, where the fits rise as Zm falls.
 """
 import math
 import re
@@ -27,7 +31,8 @@ import numpy as np
 from . import seeds
 from .results import ResultsError
 
-LIMIT = 2.0  # sd: outside it, about 5 % of seeds would fall were the scatter normal
+LIMIT = 2.0  # sd of a difference of two packings: outside it, about 5 % would fall were the scatter normal
+PAIR = math.sqrt(2.0)  # the sd of a difference of two packings, in the seeds' sd
 CONFIDENCE = 0.95
 # The paper's specimens (section 2.1). Our clump2 is four copies of one layer, so 69,532 (a multiple of 4)
 # stands for its 69,531 (docs/studies/paper-size.md).
@@ -73,12 +78,17 @@ def against_paper(ours, paper, sd=None, count=0):
         if gap == 0.0:
             return "inside", None
         ref = high if ours > high else low
-        return ("%+.1f %%" % (100.0 * gap / abs(ref)) if ref else "%+.3g" % gap), None
-    z = gap / sd
+        return ("%s %%" % _signed(100.0 * gap / abs(ref)) if ref else "%+.3g" % gap), None
+    z = gap / (PAIR * sd)
     if abs(z) <= LIMIT:
-        return ("inside" if gap == 0.0 and low < high else "%+.1f sd" % z), "agrees"
+        return ("inside" if gap == 0.0 and low < high else "%s sd" % _signed(z)), "agrees"
     verdict = "departs, established" if abs(z) > LIMIT * sd_bound(count) else "departs"
-    return "%+.1f sd" % z, verdict
+    return "%s sd" % _signed(z), verdict
+
+
+def _signed(x):
+    """+1.3, -0.4, 0.0 (no "-0.0")."""
+    return "0.0" if abs(x) < 0.05 else "%+.1f" % x
 
 
 def _count(n):
@@ -89,7 +99,7 @@ def _count(n):
 def _size_said(h, assembly):
     n, paper_n = h["n"], PAPER_SIZE[assembly]
     said = "%s, seed %s" % (_count(n), h["seed"])
-    return said if n == paper_n else said + "; the paper's %s not yet run to its end" % _count(paper_n)
+    return said if n == paper_n else said + "; the paper's is %s" % _count(paper_n)
 
 
 def assembly_table(study, seed_heads, assembly):
@@ -111,34 +121,49 @@ def assembly_table(study, seed_heads, assembly):
         sd = float(np.std(values, ddof=1)) if len(values) >= 2 else None
         p = seeds._value(paper, key)
         paper_cell = seeds._paper_cell(paper, key, fmt)
-        if key in ("K_iso", "G_iso") and ours is not None:  # Table 2's quadratics where they hold, at our Zm
+        if key in ("K_iso", "G_iso") and ours is not None:  # Table 2's quadratics at our Zm: shown, not judged
             kg = seeds.paper_K_G(assembly, study["Zm_iso"])
             if kg:
-                p = kg[0 if key == "K_iso" else 1]
-                paper_cell = "%.1f (Table 2 at Zm %.2f)" % (p, study["Zm_iso"])
+                paper_cell = "%.1f (Table 2 at Zm %.3f, below its data)" % (kg[0 if key == "K_iso" else 1],
+                                                                        study["Zm_iso"])
         words, verdict = against_paper(ours, p, sd, len(values))
         if verdict is not None:
             words = "%s: %s" % (words, verdict)
         out.append("| %s | %s | %s | %s | %s |" % (label, "-" if ours is None else fmt % ours,
-                                                   seeds.mean_sd(values, fmt), paper_cell, words))
+                                                   seeds.mean_sd(values, fmt, count=0 < len(values) < len(seed_heads)),
+                                                   paper_cell, words))
         if verdict and verdict.startswith("departs"):
             departures.append((label, fmt % ours, paper_cell, words))
     if bound:
         out.append("")
-        out.append("%d seeds: the true sd may be up to %.1f times theirs (%d %%), so a departure is established "
-                   "beyond %.1f sd." % (len(seed_heads), bound, round(100 * CONFIDENCE), LIMIT * bound))
+        out.append("sd: of the difference of two packings, sqrt(2) times the seeds'. %d seeds: the true sd may be up "
+                   "to %.1f times theirs (%d %%), so a departure is established beyond %.1f sd."
+                   % (len(seed_heads), bound, round(100 * CONFIDENCE), LIMIT * bound))
     return "\n".join(out), departures
 
 
 def summary(groups):
     """Markdown for [(study headlines, [seed headlines])]: a section per assembly, then the departures."""
-    parts, remain, unjudged = [], [], []
+    parts, remain, unjudged, seen = [], [], [], {}
     for study, seed_heads in groups:
         assembly = {"sphere": "spheres"}.get(study["assembly"], study["assembly"])
         if assembly not in PAPER_SIZE:
             raise ResultsError("%s: assembly %r has no paper values" % (study["study"], assembly))
+        if assembly in seen:
+            raise ResultsError("%s and %s are both of %s: one --study an assembly" % (seen[assembly], study["study"],
+                                                                                    assembly))
+        seen[assembly] = study["study"]
         if any({"sphere": "spheres"}.get(h["assembly"], h["assembly"]) != assembly for h in seed_heads):
             raise ResultsError("%s: its --seeds are of another assembly" % study["study"])
+        # The seeds' sd stands for the study's scatter only if they are packings of its recipe, each once:
+        # so each must record its recipe (specimen.json), which recipe_problem compares.
+        unknown = [h["study"] for h in [study] + seed_heads if not h["recipe_settings"]]
+        if unknown:
+            raise ResultsError("%s records no recipe (no specimen.json with its preparation's settings): its seeds "
+                               "cannot be shown to be packings of one recipe" % unknown[0])
+        problem = seeds.recipe_problem([study] + seed_heads)
+        if problem:
+            raise ResultsError("--study %s and its --seeds: %s" % (study["study"], problem))
         text, departures = assembly_table(study, seed_heads, assembly)
         parts.append("## %s\n\n%s" % (assembly, text))
         remain += [(assembly,) + d for d in departures]
@@ -155,45 +180,59 @@ def summary(groups):
     return "\n\n".join(parts) + "\n\n" + "\n".join(lines)
 
 
+def parse(argv):
+    """([(study directory, [seed directories])], doc, block) from the command line (module doc)."""
+    groups, doc, block = [], None, None
+    target = None  # the list a bare directory goes to: the last --seeds', until another option
+    it = iter(argv)
+    for a in it:
+        if a == "--seeds":
+            if not groups:
+                raise ResultsError("--seeds comes after the --study they belong to")
+            if groups[-1][2]:
+                raise ResultsError("--seeds given twice for %s" % groups[-1][0])
+            groups[-1][2] = True
+            target = groups[-1][1]
+            continue
+        if a in ("--study", "--doc", "--block"):
+            value = next(it, None)
+            if value is None or value.startswith("--"):
+                raise ResultsError("%s needs a value" % a)
+            if a == "--study":
+                groups.append([value, [], False])
+            elif a == "--doc":
+                doc = value
+            else:
+                block = value
+            target = None
+            continue
+        if a.startswith("--"):
+            raise ResultsError("%s: no such option (--study, --seeds, --doc, --block)" % a)
+        if target is None:
+            raise ResultsError("%s: a study directory goes after --study, a seed's after --seeds (and before --doc, "
+                               "--block)" % a)
+        target.append(a)
+    if not groups:
+        raise ResultsError("no --study given")
+    empty = [g[0] for g in groups if g[2] and not g[1]]
+    if empty:
+        raise ResultsError("--seeds names no study directory (after --study %s)" % empty[0])
+    if bool(doc) != bool(block):
+        raise ResultsError("--doc and --block go together")
+    return [(g[0], g[1]) for g in groups], doc, block
+
+
 def main(argv=None):
     argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or argv[0] in ("-h", "--help"):
+    if not argv or any(a in ("-h", "--help") for a in argv):
         print(__doc__.strip())
+        print("\nOptions: --study DIR (one an assembly) [--seeds DIR ...] ...; --doc FILE --block NAME: the text written "
+              "between that block's markers in FILE instead of printed.")
         return 0 if argv else 2
-    groups, doc, block, target = [], None, None, None
     try:
-        it = iter(argv)
-        for a in it:
-            if a in ("--study", "--seeds", "--doc", "--block"):
-                if a == "--seeds":
-                    if not groups:
-                        raise ResultsError("--seeds comes after the --study they belong to")
-                    if target is not None:
-                        raise ResultsError("--seeds given twice for %s" % groups[-1][0]["study"])
-                    target = groups[-1][1]
-                    continue
-                value = next(it, None)
-                if value is None or value.startswith("--"):
-                    raise ResultsError("%s needs a value" % a)
-                if a == "--study":
-                    groups.append((seeds.headlines(value), []))
-                    target = None
-                elif a == "--doc":
-                    doc = value
-                else:
-                    block = value
-                continue
-            if target is None:
-                raise ResultsError("%s: a study directory goes after --study, a seed's after --seeds" % a)
-            target.append(seeds.headlines(a))
-        if not groups:
-            raise ResultsError("no --study given")
-        if target is not None and not target:
-            raise ResultsError("--seeds names no study directory")
-        text = summary(groups)
-        if doc or block:
-            if not (doc and block):
-                raise ResultsError("--doc and --block go together")
+        groups, doc, block = parse(argv)
+        text = summary([(seeds.headlines(study), [seeds.headlines(d) for d in dirs]) for study, dirs in groups])
+        if doc:
             seeds.write_block(doc, block, text)
             print("wrote the %s block of %s" % (block, doc))
         else:

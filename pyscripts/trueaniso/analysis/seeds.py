@@ -295,9 +295,17 @@ def write_block(path, name, body):
         raise ResultsError("%s has no %s ... %s block" % (path, begin, end))
     head, rest = text.split(begin, 1)
     tail = rest.split(end, 1)[1]
+    # The new file replaces the old by a rename, which a read-only file does not stop (nor, for root,
+    # its permissions): its write bits are asked first.
+    import stat
+    if not os.stat(path).st_mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH) or not os.access(path, os.W_OK):
+        raise ResultsError("%s is read-only: not rewritten" % path)
     from trueaniso import atomic
-    with atomic.atomic_open(path) as f:
-        f.write(head + begin + "\n" + body.rstrip("\n") + "\n" + end + tail)
+    try:
+        with atomic.atomic_open(path) as f:
+            f.write(head + begin + "\n" + body.rstrip("\n") + "\n" + end + tail)
+    except OSError as exc:
+        raise ResultsError("%s: cannot write it (%s)" % (path, exc.strerror or exc)) from None
 
 
 def main(argv=None):
