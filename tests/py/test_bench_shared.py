@@ -209,9 +209,35 @@ def test_expansion_creep_steps_on_as_the_preparation_does(tmp_path, specimen_100
     assert summary["expansion_steps_before"] == 2000 and summary["steps"] == 2000
     assert summary["error_min"] == min(s["error"] for s in samples) and summary["gain"] == 0.002
     assert summary["growth_per_step"] == (samples[-1]["scale"] - 1.0) / 2000
+    assert summary["criterion_met_at"] is None and not any(s["criterion"] for s in samples)
+    # Stepped on long enough, it stops at the first sample at which the expansion's end criterion holds.
+    proc = run_script(os.path.join("bench", "expansion_creep.py"), "--checkpoint", ck, "--steps", 400000, "--every",
+                      2000, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    lines = [json.loads(x) for x in proc.stdout.strip().splitlines()]
+    samples, summary = lines[:-1], lines[-1]
+    assert summary["criterion_met_at"] == samples[-1]["step"] == summary["steps"] < 400000
+    assert samples[-1]["criterion"] and not any(s["criterion"] for s in samples[:-1])
+    assert abs(samples[-1]["error"]) < 100.0 and samples[-1]["unbalanced"] < 0.01
+    assert summary["trend_per_1000_steps"] < 0  # an approach: the error falls
     with open(ck, "rb") as f:
         assert f.read() == before
     for args, words in ((["--checkpoint", ck, "--steps", "10", "--every", "20"], "--every (20) is more than --steps"),
                         (["--checkpoint", str(tmp_path / "none.ck")], "no such file"),
+                        (["--checkpoint", str(tmp_path)], "is a directory"),
                         (["--checkpoint", str(specimen_100)], "is a specimen, not a preparation checkpoint")):
         one_line_error(run_script(os.path.join("bench", "expansion_creep.py"), *args, timeout=60), words)
+
+
+def test_expansion_creep_takes_the_recipe_s_target_and_servo():
+    """The sphere recipe grown to its switch pressure expands to it, not to the final pressure; a named
+    variant's gain and deviator hold are its own, the defaults else (prepare_spheres', prepare_clumps')."""
+    import expansion_creep
+    base = dict(assembly="sphere", pressure=1e5, d50=1.95e-4, inertial_number=0.01)
+    d = expansion_creep.servo_settings(base)
+    assert d["target"] == 1e5 and d["gain"] == 0.002 and d["hold_deviator"] is None and d["damping"] == 0.4
+    assert expansion_creep.servo_settings(dict(base, recipe="grown-to-switch", switch_pressure=5000.0))["target"] == 5000.0
+    assert expansion_creep.servo_settings(dict(base, recipe="unloaded-to-5kPa", switch_pressure=5000.0))["target"] == 1e5
+    clump1 = dict(base, assembly="clump1")
+    assert expansion_creep.servo_settings(dict(clump1, recipe="hold-deviator"))["hold_deviator"] == 0.05
+    assert expansion_creep.servo_settings(dict(clump1, recipe="fast-growth"))["gain"] == 0.1

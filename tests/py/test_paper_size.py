@@ -73,4 +73,5 @@ def test_what_the_creep_paragraph_says_holds():
     assert len(samples) == 32 and all(e > 0 for e in errors) and summary["one_sign"]
     assert round(min(errors)) == 180 and round(max(errors)) == 245 and round(summary["error_mean"]) == 209
     assert round(summary["growth_per_step"], 11) == 1.09e-9 and summary["expansion_steps_before"] == 222000
-    assert summary["gain"] == 0.002 and summary["stress_tolerance"] == 100.0
+    assert summary["gain"] == 0.002 and summary["stress_tolerance"] == 100.0 and summary["target"] == 1e5
+    assert round(summary["trend_per_1000_steps"], 1) == -2.9 and summary["criterion_met_at"] is None
