@@ -8,8 +8,8 @@ between seeds, and the departures that remain.
 Each --study is one study directory (trueaniso.analysis.seeds reads its headlines), the --seeds after it
 the same recipe's studies of other seeds, at any size. For each study a table puts its headline
 numbers beside the seeds' mean +/- sample sd and the paper's value, and says how far the study is
-from the paper in units of the seeds' sd: the scatter between packings of one recipe, which a single
-seed cannot tell from a departure. Size is not in that sd: the size series
+from the paper in units of that sd (the scatter between packings of one recipe, which a single seed
+cannot tell from a departure) made a difference's, below. Size is not in that sd: the size series
 (docs/studies/paper-size.md) is what says whether size moves a number.
 
 The judgement (``against_paper``): our study is one packing and the paper's number is one too, so
