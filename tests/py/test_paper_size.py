@@ -75,3 +75,36 @@ def test_what_the_creep_paragraph_says_holds():
     assert round(summary["growth_per_step"], 11) == 1.09e-9 and summary["expansion_steps_before"] == 222000
     assert summary["gain"] == 0.002 and summary["stress_tolerance"] == 100.0 and summary["target"] == 1e5
     assert round(summary["trend_per_1000_steps"], 1) == -2.9 and summary["criterion_met_at"] is None
+
+
+def test_what_the_fig16_section_says_holds():
+    """Fig. 16 at 53,004 spheres: the Table C1 study's packing (e and Zm of the specimen the same to the
+    last digit), eleven states each reached within 17 steps of the 4000-sphere count, G_hh/G_vh within
+    1.2 % of (E_h/E_v)^0.5 (4000: 2.4 %), the calibrated prediction within 0.3 % (0.4 %)."""
+    import json
+    from trueaniso.analysis import cross_anisotropy, results
+    big, small = os.path.join(DATA, "fig16-spheres-53004-s1"), os.path.join(DATA, "spheres-4000", "fig16-s1")
+    with open(os.path.join(DATA, "spheres-53004-s1", "specimen.json")) as f:
+        table_c1 = json.load(f)["summary"]
+    fig16 = results.read_metadata(big, required=True)["specimen"]["summary"]
+    assert (fig16["void_ratio"], fig16["Zm"], fig16["Nc"]) == (table_c1["void_ratio"], table_c1["Zm"], table_c1["Nc"])
+
+    def steps(d):
+        return {r["state"]: int(r["state_steps"]) for r in results.read_probes(os.path.join(d, "probes.csv"),
+                                                                             ("state", "state_steps"))}
+    a, b = steps(big), steps(small)
+    assert sorted(a) == sorted(b) and len(a) == 11 and a["sv90"] == b["sv90"] == 3323
+    assert max(abs(a[k] - b[k]) for k in a) == 17
+
+    def worst(d, study):
+        """G_hh/G_vh's and the prediction's largest gaps to (E_h/E_v)^0.5, at the zeta_h and zeta_v
+        calibrated on the Table C1 study of the same size (as the report's Fig. 16 section)."""
+        rows = cross_anisotropy.states(d)
+        h = seeds.headlines(os.path.join(DATA, study))
+        pred = cross_anisotropy.predicted_ratios(d, 18e9, 0.15, h["zeta_h"], h["zeta_v"])
+        return (max(abs(r["G_ratio"] / r["E_ratio_root"] - 1) for r in rows),
+                max(abs(pred[r["state"]] / r["E_ratio_root"] - 1) for r in rows))
+    g_big, p_big = worst(big, "spheres-53004-s1")
+    g_small, p_small = worst(small, "spheres-4000/s1")
+    assert round(100 * g_big, 1) == 1.2 and round(100 * g_small, 1) == 2.4
+    assert round(100 * p_big, 1) == 0.3 and round(100 * p_small, 1) == 0.4
