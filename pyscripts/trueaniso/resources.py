@@ -137,13 +137,13 @@ def preparation_estimate(n, threads, assembly="sphere"):
 # The largest clump count whose preparation's step count was measured, and what is known above it.
 # clump1's count grows: 16,000 clumps took 1.2 times the steps of 4000 (docs/studies/paper-size.md,
 # "Size series"). clump2's did not, up to 16,000 clumps (136,500 steps against 154,500 at 4000), but
-# at 69,532 its free expansion creeps: 264,000 steps in all had not ended it (paper-size.md, "Where
-# the clump preparations wait").
+# at 69,532 its free expansion crept: 334,000 steps in all (paper-size.md, "Where the clump
+# preparations wait").
 CLUMP_STEPS_MEASURED_UP_TO = {"clump1": 16000, "clump2": 16000}
 _BEYOND = {"clump1": " at least (the step count of 4000 clumps; 16,000 took 1.2 times it, larger clump1 specimens "
                      "take more steps: docs/studies/paper-size.md)",
-           "clump2": " at least (the step count of 4000 clumps; 16,000 took 0.88 of it, but 69,532 ran 1.2 times it "
-                     "and more, its expansion creeping: docs/studies/paper-size.md)"}
+           "clump2": " at least (the step count of 4000 clumps; 16,000 took 0.88 of it, but 69,532 took 1.5 times it, "
+                     "its expansion creeping: docs/studies/paper-size.md)"}
 
 
 def preparation_caveat(assembly, clumps):

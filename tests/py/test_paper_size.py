@@ -108,3 +108,17 @@ def test_what_the_fig16_section_says_holds():
     g_small, p_small = worst(small, "spheres-4000/s1")
     assert round(100 * g_big, 1) == 1.2 and round(100 * g_small, 1) == 2.4
     assert round(100 * p_big, 1) == 0.3 and round(100 * p_small, 1) == 0.4
+
+
+def test_what_the_clump2_69532_preparation_says_holds():
+    """334,000 steps in all (302,000 of them the free expansion after 30,000 of the first stages), 1.5
+    times the 4000-clump count the estimate takes; 34,165 s of wall time; e 0.6278, Zm 6.280."""
+    import json
+    from trueaniso import resources
+    with open(os.path.join(DATA, "clump2-69532", "s1", "specimen.json")) as f:
+        rec = json.load(f)
+    p, s = rec["parameters"], rec["summary"]
+    assert p["n"] == 69532 and p["seed"] == 1 and p["steps_expansion"] == 332000 and p["steps_consolidation"] == 2000
+    assert round((p["steps_expansion"] + p["steps_consolidation"]) / resources.PREPARATION_STEPS["clump2"], 1) == 1.5
+    assert round(p["wall_time"]) == 34165
+    assert (round(s["void_ratio"], 4), round(s["Zm"], 3), s["Np0"]) == (0.6278, 6.280, 8226)
