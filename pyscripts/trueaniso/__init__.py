@@ -71,7 +71,8 @@ def _find_extension():
     except ImportError as exc:  # pragma: no cover - message for users, tested by hand
         raise ImportError(
             "trueaniso: the compiled module _trueaniso was not found in %s; build it first "
-            "(./main.sh or ./test.sh do, or: cmake -S . -B build && cmake --build build)" % candidates
+            "(./main.sh or ./test.sh do, or: cmake -S . -B build && cmake --build build), or set "
+            "TRUEANISO_BUILD to a build directory that has it" % candidates
         ) from exc
     if found is not None and found.origin:
         buildarch.refuse_mismatch(os.path.dirname(found.origin), _trueaniso)

@@ -320,6 +320,7 @@ def test_unbuilt_module_is_one_line(tmp_path, name):
     proc = subprocess.run([sys.executable, str(tmp_path / "pyscripts" / name), "--help"], capture_output=True,
                           text=True, timeout=120, cwd=tmp_path, env=env)
     one_line_error(proc, "compiled module _trueaniso was not found", "build it first")
+    assert "or set TRUEANISO_BUILD to a build directory that has it" in proc.stderr
 
 
 def test_analysis_without_the_build(tmp_path):
