@@ -201,13 +201,8 @@ def main(argv=None):
             raise ResultsError("no study directory given")
         if doc and not block:
             raise ResultsError("--doc needs --block NAME")
-        text = table([study_cost(s) for s in studies])
-        if doc:
-            from .seeds import write_block
-            write_block(doc, block, text)
-            print("wrote the %s block of %s" % (block, doc))
-        else:
-            print(text)
+        from .seeds import publish
+        publish(table([study_cost(s) for s in studies]), doc, block)
     except (ResultsError, OSError, ValueError, KeyError) as exc:
         sys.stderr.write("error: %s\n" % exc)
         return 2

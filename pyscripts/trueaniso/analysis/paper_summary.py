@@ -104,7 +104,7 @@ def _size_said(h, assembly):
 
 def assembly_table(study, seed_heads, assembly):
     """Markdown table of one study's headlines (seeds.headlines) beside its seeds' and the paper's, and
-    the list of (row label, our value, paper cell, words, verdict) of the rows judged to depart."""
+    the list of (row label, our value, paper cell, words with the verdict) of the rows judged to depart."""
     paper = seeds.paper_values(assembly)
     sizes = sorted({h["n"] for h in seed_heads if h["n"]})
     seeds_said = ("%s, %d seed%s" % ("/".join(_count(n) for n in sizes), len(seed_heads), "s" * (len(seed_heads) > 1))
@@ -142,18 +142,23 @@ def assembly_table(study, seed_heads, assembly):
     return "\n".join(out), departures
 
 
+def _paper_name(h):
+    """The paper's name of a study's assembly (the scripts say "sphere", the paper "spheres")."""
+    return {"sphere": "spheres"}.get(h["assembly"], h["assembly"])
+
+
 def summary(groups):
     """Markdown for [(study headlines, [seed headlines])]: a section per assembly, then the departures."""
     parts, remain, unjudged, seen = [], [], [], {}
     for study, seed_heads in groups:
-        assembly = {"sphere": "spheres"}.get(study["assembly"], study["assembly"])
+        assembly = _paper_name(study)
         if assembly not in PAPER_SIZE:
             raise ResultsError("%s: assembly %r has no paper values" % (study["study"], assembly))
         if assembly in seen:
             raise ResultsError("%s and %s are both of %s: one --study an assembly" % (seen[assembly], study["study"],
                                                                                     assembly))
         seen[assembly] = study["study"]
-        if any({"sphere": "spheres"}.get(h["assembly"], h["assembly"]) != assembly for h in seed_heads):
+        if any(_paper_name(h) != assembly for h in seed_heads):
             raise ResultsError("%s: its --seeds are of another assembly" % study["study"])
         # The seeds' sd stands for the study's scatter only if they are packings of its recipe, each once:
         # so each must record its recipe (specimen.json), which recipe_problem compares.
@@ -231,12 +236,8 @@ def main(argv=None):
         return 0 if argv else 2
     try:
         groups, doc, block = parse(argv)
-        text = summary([(seeds.headlines(study), [seeds.headlines(d) for d in dirs]) for study, dirs in groups])
-        if doc:
-            seeds.write_block(doc, block, text)
-            print("wrote the %s block of %s" % (block, doc))
-        else:
-            print(text)
+        seeds.publish(summary([(seeds.headlines(study), [seeds.headlines(d) for d in dirs]) for study, dirs in groups]),
+                      doc, block)
     except ResultsError as exc:
         sys.stderr.write("error: %s\n" % exc)
         return 2

@@ -308,6 +308,16 @@ def write_block(path, name, body):
         raise ResultsError("%s: cannot write it (%s)" % (path, exc.strerror or exc)) from None
 
 
+def publish(text, doc=None, block=None):
+    """A tool's table: written between the markers of `block` in the page `doc` (write_block), and said
+    so, when a page is given; else printed."""
+    if doc:
+        write_block(doc, block, text)
+        print("wrote the %s block of %s" % (block, doc))
+    else:
+        print(text)
+
+
 def main(argv=None):
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help"):
@@ -351,10 +361,7 @@ def main(argv=None):
         if doc:
             if not block:
                 raise ResultsError("--doc needs --block NAME")
-            write_block(doc, block, text)
-            print("wrote the %s block of %s" % (block, doc))
-        else:
-            print(text)
+        publish(text, doc, block)
     except ResultsError as exc:
         sys.stderr.write("error: %s\n" % exc)
         return 2
