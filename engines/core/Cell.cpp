@@ -99,7 +99,17 @@ Mat3i Cell::reduction(Real threshold) const {
       if (i != j && std::abs(reductionCoefficient(h, i, j)) > threshold) needed = true;
   Mat3i M = Mat3i::Identity();
   if (!needed) return M;
-  sizeReduce(h, [&](int i, int j, Real k) { M.col(j) -= static_cast<int>(k) * M.col(i); });
+  // A flip's entries are ints: a multiple beyond their range (a cell some 1e9 times longer along
+  // one vector than across it) is refused rather than cast, which would be undefined.
+  sizeReduce(h, [&](int i, int j, Real k) {
+    if (!(std::abs(k) <= 1 << 30)) {
+      std::ostringstream m;
+      m << "the cell's vectors are too unequal to flip: vector " << j + 1 << " is " << k << " times vector " << i + 1
+        << " along it, past what a flip's whole numbers hold";
+      throw InputError(m.str());
+    }
+    M.col(j) -= static_cast<int>(k) * M.col(i);
+  });
   return M;
 }
 

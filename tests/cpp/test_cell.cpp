@@ -419,6 +419,24 @@ TEST(ShearedCell, ManyFlipsKeepTheReferenceCellValid) {
 // rotations blocked. Only the z-contacts slide, by g a dt along x (the image contacts across the
 // cell's z faces included), so sigma_xz = k_s g dt a^2 / a^3 in magnitude and sigma_zx = 0; with
 // the orthorhombic path (L's off-diagonal ignored) both would be zero.
+TEST(ShearedCell, AFlipBeyondWholeNumbersIsRefused) {
+  // Vector 2 leans 1e10 lengths of vector 1 along it: the rounded multiple is beyond an int.
+  Cell cell;
+  cell.hSize << 1e-10, 1.0, 0.0,
+                0.0, 1.0, 0.0,
+                0.0, 0.0, 1.0;
+  try {
+    cell.reduction(0.55);
+    FAIL() << "a flip of 1e10 times a vector was not refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("too unequal to flip"), std::string::npos) << e.what();
+  }
+  // 1e6 times is within an int, and flips to the orthogonal basis.
+  cell.hSize(0, 0) = 1e-6;
+  const Mat3i M = cell.reduction(0.55);
+  EXPECT_EQ(M(0, 1), -1000000);
+}
+
 TEST(ShearedCell, AffineVelocityOfAFullGradient) {
   const Real r = 1e-4, delta = 2e-7, a = 2 * r - delta;
   const int n = 3;
