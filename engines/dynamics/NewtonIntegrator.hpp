@@ -12,8 +12,9 @@ namespace trueaniso {
 class NewtonIntegrator : public Engine {
  public:
   Real damping = 0.2;  // YADE's default
-  // The step is checked against the two-body stability limit of every contact whenever it
-  // changes and at least every `checkEvery` steps; an unstable step is refused with an error.
+  // The step is checked against the two-body stability limit of every contact at least every
+  // `checkEvery` steps, and at once when it comes above half the limit last found; an unstable
+  // step is refused with an error.
   long checkEvery = 100;
 
   void apply(Scene& scene) override;
@@ -25,7 +26,7 @@ class NewtonIntegrator : public Engine {
   static constexpr int kClumpLanes = 4;  // clumps rotated side by side (NewtonIntegrator.cpp)
   static void advanceClumps(Bodies& bodies, const int* b, int count, Real dt, Real damping);
   void checkStability(const Scene& scene);
-  Real checkedDt_ = -1;
+  Real checkedLimit_ = 0;
   long checkedStep_ = -1;
 };
 

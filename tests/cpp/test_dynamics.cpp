@@ -305,6 +305,11 @@ TEST(NewtonIntegrator, RefusesUnstableStep) {
   EXPECT_EQ(s->bodies.pos[1], before);  // nothing moved
   s->dt = 0.5 * limit;
   EXPECT_NO_THROW(chain.sim.run(10));
+  // Raised within the check interval, past the limit: refused at the next step, not at the interval's end.
+  s->dt = 1.01 * TimeStepper::criticalPairStep(*s);
+  const Vec3 now = s->bodies.pos[1];
+  EXPECT_THROW(chain.sim.run(1), InputError);
+  EXPECT_EQ(s->bodies.pos[1], now);
 }
 
 // The time stepper's choice is stable: an undamped, loaded random packing keeps its energy
