@@ -5,6 +5,7 @@
 #include <type_traits>
 
 #include "core/Parallel.hpp"
+#include "dynamics/HalfAngle.hpp"
 #include "dynamics/TimeStepper.hpp"
 
 namespace trueaniso {
@@ -38,7 +39,9 @@ inline void dampTorque(Vec3& torque, const Vec3& angVel, Real damping) {
 // ~15 % of the clump rotation, perf). The same values, so the same bits.
 template <int Axis>
 inline void turnAboutAxis(Quat& q, Vec3& Lbody, Real angle) {
-  Real c = std::cos(0.5 * angle), s = std::sin(0.5 * angle);
+  const Real half = 0.5 * angle;
+  Real c, s;
+  halfAngleCosSin(half, c, s);
 #if defined(__GNUC__) && defined(__SSE2__)
   // GCC computes both with one sincos call that stores them to memory; read back as one pair,
   // they stalled like r did. Each taken into its own register first: the same values.

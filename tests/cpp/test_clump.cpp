@@ -9,6 +9,7 @@
 #include "UnionReference.hpp"
 #include "clump/ClumpTemplate.hpp"
 #include "clump/UnionOfBalls.hpp"
+#include "dynamics/HalfAngle.hpp"
 #include "dynamics/NewtonIntegrator.hpp"
 #include "dynamics/Simulation.hpp"
 #include "measure/Coordination.hpp"
@@ -324,4 +325,26 @@ TEST(ClumpTemplate, MembersOfOneClumpAreNotContacts) {
   EXPECT_EQ(coordination(*s).contacts, 0);
   EXPECT_EQ(s->bodies.force[0], Vec3::Zero());
   EXPECT_EQ(s->bodies.torque[0], Vec3::Zero());
+}
+
+// The rotation's small-angle branch gives the bits of the library's cos and sin: below 2^-27 cos
+// rounds to 1 and sin to the angle (the next terms of their series are below half an ulp). A
+// threshold set too high (2^-26 already) would give cos 1 where it is 1 - 2^-53.
+TEST(ClumpRotation, SmallHalfAnglesGiveTheLibrarysCosAndSin) {
+  const auto same = [](Real v) {
+    Real c, s;
+    halfAngleCosSin(v, c, s);
+    return c == std::cos(v) && s == std::sin(v);
+  };
+  int checked = 0;
+  for (Real x = 1e-300; x < 1e-6; x *= 1.01, checked += 2) {
+    ASSERT_TRUE(same(x)) << x;
+    ASSERT_TRUE(same(-x)) << x;
+  }
+  EXPECT_GT(checked, 100000);
+  for (Real v : {std::nextafter(Real(0x1p-27), 0.0), Real(0x1p-27), Real(0.0)}) {
+    EXPECT_TRUE(same(v)) << v;
+    EXPECT_TRUE(same(-v)) << v;
+  }
+  EXPECT_NE(std::cos(Real(0x1p-26)), 1.0);  // why the branch stops at 2^-27
 }
