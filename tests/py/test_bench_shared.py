@@ -241,3 +241,19 @@ def test_expansion_creep_takes_the_recipe_s_target_and_servo():
     clump1 = dict(base, assembly="clump1")
     assert expansion_creep.servo_settings(dict(clump1, recipe="hold-deviator"))["hold_deviator"] == 0.05
     assert expansion_creep.servo_settings(dict(clump1, recipe="fast-growth"))["gain"] == 0.1
+
+
+def test_chain_steps_times_a_clump_chain_with_its_time_stepper():
+    """bench/chain_steps.py (docs/studies/benchmarks.md, "Stepper changes") steps a clump specimen
+    under each rule and says what it timed; a missing specimen or no step is one line, exit 2."""
+    import json
+    from conftest import one_line_error, run_script
+    clumps = os.path.join(REPO, "tests", "data", "clump1-200-s4.npz")
+    for rule in ("per-axis", "smallest-inertia"):
+        r = run_script(os.path.join("bench", "chain_steps.py"), "--specimen", clumps, "--steps", "20", "--rule", rule,
+                       timeout=120)
+        assert r.returncode == 0, r.stderr
+        line = json.loads(r.stdout.strip().splitlines()[-1])
+        assert line["rule"] == rule and line["steps"] == 20 and line["bodies"] == 200 and line["cpu_ms_a_step"] > 0
+    one_line_error(run_script(os.path.join("bench", "chain_steps.py"), "--specimen", clumps + ".missing"), "no such file")
+    one_line_error(run_script(os.path.join("bench", "chain_steps.py"), "--specimen", clumps, "--steps", "0"), "--steps")
