@@ -144,11 +144,11 @@ void NewtonIntegrator::integrate(Scene& s) const {
 
 // A time stepper below its cap changes the step every tenth step (clumps under the smallest-inertia
 // rule, a preparation's default), and the walk over the contacts (a 3 x 3 eigenvalue a clump
-// contact) costs 1.3-1.7 steps of a clump packing timed alone: checking each change took 5.6 % of
-// the instructions of a clump2 chain and about 10 % of perf's samples of a clump1 preparation. A
-// step at most half the last limit found is checked on the regular interval only: the stiffest
-// contact would have to stiffen fourfold (a Hertz contact's overlap sixteenfold) within it to reach
-// the step. A time stepper's step lies at 0.24-0.34 of the limit in packed specimens (per-axis;
+// contact) costs 1.3-1.7 steps of a clump packing timed alone: a check at each change would be
+// 5.6 % of the instructions of a clump2 chain and about 10 % of perf's samples of a clump1
+// preparation. A step at most half the last limit found is checked on the regular interval only:
+// the stiffest contact would have to stiffen fourfold (a Hertz contact's overlap sixteenfold)
+// within it to reach the step. A time stepper's step lies at 0.24-0.34 of the limit in packed specimens (per-axis;
 // smallest-inertia 0.08-0.20); a packing's loosest states bring it nearer, and each change is
 // checked again there.
 void NewtonIntegrator::checkStability(const Scene& s) {

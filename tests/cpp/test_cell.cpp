@@ -414,11 +414,6 @@ TEST(ShearedCell, ManyFlipsKeepTheReferenceCellValid) {
   EXPECT_NE(message(bad).find("refHSize has non-finite"), std::string::npos) << message(bad);
 }
 
-// The affine field of a full velocity gradient in the force loop: a simple cubic lattice (spacing
-// a, k_s of its contacts) under L = g e_x (x) e_z (v_x = g z), one force evaluation over dt with
-// rotations blocked. Only the z-contacts slide, by g a dt along x (the image contacts across the
-// cell's z faces included), so sigma_xz = k_s g dt a^2 / a^3 in magnitude and sigma_zx = 0; with
-// the orthorhombic path (L's off-diagonal ignored) both would be zero.
 TEST(ShearedCell, AFlipBeyondWholeNumbersIsRefused) {
   // Vector 2 leans 1e10 lengths of vector 1 along it: the rounded multiple is beyond an int.
   Cell cell;
@@ -437,6 +432,11 @@ TEST(ShearedCell, AFlipBeyondWholeNumbersIsRefused) {
   EXPECT_EQ(M(0, 1), -1000000);
 }
 
+// The affine field of a full velocity gradient in the force loop: a simple cubic lattice (spacing
+// a, k_s of its contacts) under L = g e_x (x) e_z (v_x = g z), one force evaluation over dt with
+// rotations blocked. Only the z-contacts slide, by g a dt along x (the image contacts across the
+// cell's z faces included), so sigma_xz = k_s g dt a^2 / a^3 in magnitude and sigma_zx = 0; with
+// the orthorhombic path (L's off-diagonal ignored) both would be zero.
 TEST(ShearedCell, AffineVelocityOfAFullGradient) {
   const Real r = 1e-4, delta = 2e-7, a = 2 * r - delta;
   const int n = 3;

@@ -250,10 +250,10 @@ def test_chain_steps_times_a_clump_chain_with_its_time_stepper():
     from conftest import one_line_error, run_script
     clumps = os.path.join(REPO, "tests", "data", "clump1-200-s4.npz")
     for rule in ("per-axis", "smallest-inertia"):
-        r = run_script(os.path.join("bench", "chain_steps.py"), "--specimen", clumps, "--steps", "20", "--rule", rule,
+        r = run_script(os.path.join("bench", "chain_steps.py"), "--specimen", clumps, "--steps", "20", "--time-step", rule,
                        timeout=120)
         assert r.returncode == 0, r.stderr
         line = json.loads(r.stdout.strip().splitlines()[-1])
-        assert line["rule"] == rule and line["steps"] == 20 and line["bodies"] == 200 and line["cpu_ms_a_step"] > 0
+        assert line["time_step"] == rule and line["steps"] == 20 and line["bodies"] == 200 and line["cpu_ms_a_step"] > 0
     one_line_error(run_script(os.path.join("bench", "chain_steps.py"), "--specimen", clumps + ".missing"), "no such file")
     one_line_error(run_script(os.path.join("bench", "chain_steps.py"), "--specimen", clumps, "--steps", "0"), "--steps")

@@ -26,17 +26,17 @@ def _burn(seconds):
 
 
 def test_the_meter_counts_this_runs_work_on_top_of_what_earlier_runs_carried():
-    # The meter against what the test sees around the same work, not against the burn's 0.2 s of
-    # CPU alone: a thread the process left spinning (OpenBLAS, an OpenMP team) adds CPU time faster
-    # than the wall clock runs, so the burn can end after less than 0.2 s of wall time.
+    # The wall time against what the test measures around the same work: a thread the process left
+    # spinning (OpenBLAS, an OpenMP team) adds CPU time faster than the wall clock runs, so 0.2 s of
+    # CPU can take less than 0.2 s of wall time.
     m = run_cost.Meter()
     wall0, cpu0 = time.monotonic(), run_cost.cpu_seconds()
     _burn(0.2)
     wall, cpu = time.monotonic() - wall0, run_cost.cpu_seconds() - cpu0
     s = m.spent()
     # 0.0015: the meter rounds to 1 ms
-    assert s["cpu_time"] >= cpu - 0.0015 and s["cpu_time"] >= 0.2 - 0.0015 and s["wall_time"] >= wall - 0.0015
-    assert s["cpu_time"] < cpu + 5 and s["wall_time"] < wall + 5 and s["peak_memory_mb"] > 10
+    assert 0.2 <= s["cpu_time"] < 5 and s["cpu_time"] >= cpu - 0.0015 and s["wall_time"] >= wall - 0.0015
+    assert s["peak_memory_mb"] > 10
     carried = dict(wall_time=100.0, cpu_time=50.0, peak_memory_mb=1e6, load_min=0.0, load_max=1e3, runs=2)
     t = run_cost.Meter(carried).totals()
     assert t["runs"] == 3 and t["wall_time"] >= 100 and t["cpu_time"] >= 50
